@@ -1,0 +1,32 @@
+// Read access to a chunked geometry store, as the stages see it: a spatial
+// query over chunk bounds and loading of one chunk's geometry. Implemented by
+// storage::GeometryStore (SQLite R*Tree) and by in-memory fixtures in tests.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "stages/geometry.h"
+
+namespace cellbake {
+
+struct ChunkRef {
+  std::int64_t id = 0;
+  Box3d bounds;  // conservative world bounds of the chunk's triangles
+  std::uint32_t triangle_count = 0;
+};
+
+class ChunkSource {
+ public:
+  virtual ~ChunkSource() = default;
+  // Every chunk whose bounds overlap `box` (touching counts), sorted by id.
+  virtual std::vector<ChunkRef> query(const Box3d& box) const = 0;
+  // The chunk's geometry; throws std::runtime_error naming the chunk when it is
+  // missing or its blob is corrupt. Safe to call from several threads.
+  virtual std::shared_ptr<const Chunk> load(std::int64_t id) const = 0;
+  // World bounds of the whole model (empty box for an empty model).
+  virtual Box3d model_bounds() const = 0;
+};
+
+}  // namespace cellbake
