@@ -1,0 +1,220 @@
+#include "pipeline/ingest.h"
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <limits>
+#include <cstdio>
+#include <fstream>
+#include <stdexcept>
+
+#include "pipeline/input_error.h"
+#include "pipeline/readers/model_reader.h"
+#include "stages/chunking.h"
+#include "stages/hashing.h"
+#include "storage/geometry_store.h"
+
+namespace cellbake {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// Appends triangles to a temporary file and maps it back for random access.
+class TriangleSpill {
+ public:
+  explicit TriangleSpill(const std::filesystem::path& file) : path_(file) {
+    out_ = std::fopen(file.c_str(), "wb");
+    if (!out_) throw std::runtime_error(file.string() + ": cannot create spill file");
+    buffer_.reserve(kBuffer);
+  }
+  ~TriangleSpill() {
+    if (out_) std::fclose(out_);
+    if (map_) munmap(map_, map_bytes_);
+    std::error_code ec;
+    std::filesystem::remove(path_, ec);
+  }
+  void add(const Triangle& t) {
+    buffer_.push_back(t);
+    if (buffer_.size() == kBuffer) flush();
+    ++count_;
+  }
+  std::uint64_t count() const { return count_; }
+  // Finishes writing and maps the file; triangles are then readable by index.
+  void map() {
+    flush();
+    if (std::fclose(out_) != 0) throw std::runtime_error(path_.string() + ": cannot write spill file");
+    out_ = nullptr;
+    if (count_ == 0) return;
+    int fd = ::open(path_.c_str(), O_RDONLY);
+    if (fd < 0) throw std::runtime_error(path_.string() + ": cannot reopen spill file");
+    map_bytes_ = count_ * sizeof(Triangle);
+    map_ = mmap(nullptr, map_bytes_, PROT_READ, MAP_SHARED, fd, 0);
+    ::close(fd);
+    if (map_ == MAP_FAILED) {
+      map_ = nullptr;
+      throw std::runtime_error(path_.string() + ": cannot map spill file");
+    }
+  }
+  const Triangle& operator[](std::size_t i) const { return static_cast<const Triangle*>(map_)[i]; }
+
+ private:
+  static constexpr std::size_t kBuffer = 1 << 14;
+  void flush() {
+    if (!buffer_.empty() && std::fwrite(buffer_.data(), sizeof(Triangle), buffer_.size(), out_) != buffer_.size())
+      throw std::runtime_error(path_.string() + ": cannot write spill file (disk full?)");
+    buffer_.clear();
+  }
+  std::filesystem::path path_;
+  std::FILE* out_ = nullptr;
+  std::vector<Triangle> buffer_;
+  std::uint64_t count_ = 0;
+  void* map_ = nullptr;
+  std::size_t map_bytes_ = 0;
+};
+
+std::string hash_file(const std::filesystem::path& file, std::uint64_t& bytes) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file.string(), "", "cannot open file");
+  Hasher h;
+  std::vector<char> buf(1 << 20);
+  bytes = 0;
+  while (in) {
+    in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+    const auto n = static_cast<std::size_t>(in.gcount());
+    h.bytes(buf.data(), n);
+    bytes += n;
+  }
+  return h.hex();
+}
+
+}  // namespace
+
+IngestReport ingest_models(const std::vector<std::filesystem::path>& models, const std::filesystem::path& store,
+                           const IngestParams& params, const ParallelFor& parallel_for,
+                           const ProgressCallback& progress) {
+  if (models.empty()) throw std::invalid_argument("ingest: no model files given");
+  if (params.max_chunk_triangles < 1) throw std::invalid_argument("ingest: max_chunk_triangles must be >= 1");
+  IngestReport report;
+  const auto t_read = Clock::now();
+  const std::filesystem::path temp_dir =
+      params.temp_dir.empty() ? std::filesystem::absolute(store).parent_path() : params.temp_dir;
+  std::filesystem::create_directories(temp_dir);
+  TriangleSpill spill(temp_dir / (store.filename().string() + ".spill-" + std::to_string(::getpid())));
+
+  std::vector<Material> materials;
+  std::vector<SourceFileRecord> sources;
+  std::vector<TriangleKey> keys;
+  Hasher content;
+  content.text("cellbake-store-v1").u64(params.max_chunk_triangles);
+  content.f64(params.translate.x).f64(params.translate.y).f64(params.translate.z);
+  for (const auto& model : models) {
+    SourceFileRecord src;
+    src.path = model.string();
+    if (!std::filesystem::is_regular_file(model)) throw InputError(model.string(), "", "no such file");
+    src.hash = hash_file(model, src.bytes);
+    content.text(src.hash);
+    const auto material_offset = static_cast<std::uint32_t>(materials.size());
+    std::uint64_t file_triangles = 0;
+    const bool translate = params.translate != Vec3d{0, 0, 0};
+    ModelInfo info = read_model(model, [&](const Triangle& in) {
+      Triangle t = in;
+      ++report.triangles_read;
+      if (translate)
+        for (auto& p : t.p) p = p + params.translate;
+      for (const auto& p : t.p)
+        if (!is_finite(p)) throw InputError(model.string(), "", "non-finite coordinate after translation");
+      if (is_degenerate(t)) {
+        ++report.skipped_degenerate;
+        return;
+      }
+      if (spill.count() >= std::numeric_limits<std::uint32_t>::max())
+        throw InputError(model.string(), "", "more than 4294967295 triangles are not supported");
+      t.material += material_offset;
+      keys.push_back(make_triangle_key(t, static_cast<std::uint32_t>(spill.count())));
+      spill.add(t);
+      ++file_triangles;
+      if (progress && (report.triangles_read & 0xFFFFF) == 0) progress("read " + model.filename().string(), -1);
+    });
+    for (const auto& m : info.materials) materials.push_back(m);
+    report.polygons_triangulated += info.polygons_triangulated;
+    src.triangles = file_triangles;
+    sources.push_back(src);
+  }
+  spill.map();
+  if (spill.count() == 0)
+    throw InputError(models.front().string(), "",
+                     report.triangles_read ? "model has only degenerate triangles" : "model contains no triangles");
+  report.read_seconds = seconds_since(t_read);
+
+  const auto t_chunk = Clock::now();
+  if (progress) progress("chunk", 0);
+  const std::vector<ChunkRange> ranges = split_into_chunks(keys, params.max_chunk_triangles);
+  report.chunk_seconds = seconds_since(t_chunk);
+
+  const auto t_write = Clock::now();
+  GeometryStoreWriter writer(store);
+  for (std::size_t i = 0; i < materials.size(); ++i) writer.add_material(static_cast<std::uint32_t>(i), materials[i]);
+  for (const auto& s : sources) writer.add_source(s);
+  // Build chunks in parallel batches, write them in order (deterministic ids).
+  constexpr std::size_t kBatch = 256;
+  std::vector<Chunk> batch;
+  for (std::size_t first = 0; first < ranges.size(); first += kBatch) {
+    const std::size_t n = std::min(kBatch, ranges.size() - first);
+    batch.assign(n, Chunk{});
+    parallel_for(n, [&](std::size_t j) {
+      const ChunkRange& r = ranges[first + j];
+      // Exact duplicates share shape hash and centroid; keep the first copy (lowest index).
+      std::vector<std::size_t> order;
+      order.reserve(r.end - r.begin);
+      for (std::size_t k = r.begin; k < r.end; ++k) order.push_back(k);
+      std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+        if (keys[a].shape_hash != keys[b].shape_hash) return keys[a].shape_hash < keys[b].shape_hash;
+        return keys[a].index < keys[b].index;
+      });
+      std::vector<char> drop(r.end - r.begin, 0);
+      for (std::size_t i = 0; i < order.size(); ++i) {
+        if (drop[order[i] - r.begin]) continue;
+        for (std::size_t j2 = i + 1; j2 < order.size() && keys[order[j2]].shape_hash == keys[order[i]].shape_hash; ++j2)
+          if (keys[order[j2]].centroid == keys[order[i]].centroid &&
+              same_corners(spill[keys[order[i]].index], spill[keys[order[j2]].index]))
+            drop[order[j2] - r.begin] = 1;
+      }
+      std::vector<const Triangle*> tris;
+      tris.reserve(r.end - r.begin);
+      for (std::size_t k = r.begin; k < r.end; ++k)
+        if (!drop[k - r.begin]) tris.push_back(&spill[keys[k].index]);
+      batch[j] = build_chunk(tris);
+    });
+    for (Chunk& c : batch) {
+      if (c.indices.empty()) continue;
+      report.triangles_stored += c.triangle_count();
+      report.vertices += c.positions.size();
+      report.bounds.expand(c.bounds);
+      writer.add_chunk(c);
+      ++report.chunks;
+    }
+    if (progress) progress("write", double(first + n) / double(ranges.size()));
+  }
+  report.skipped_duplicate = spill.count() - report.triangles_stored;
+  content.u64(report.triangles_stored);
+  report.content_hash = content.hex();
+
+  StoreSummary summary;
+  summary.bounds = report.bounds;
+  summary.triangles = report.triangles_stored;
+  summary.vertices = report.vertices;
+  summary.chunks = report.chunks;
+  summary.skipped_degenerate = report.skipped_degenerate;
+  summary.skipped_duplicate = report.skipped_duplicate;
+  summary.units = params.units;
+  summary.content_hash = report.content_hash;
+  writer.finish(summary);
+  report.write_seconds = seconds_since(t_write);
+  return report;
+}
+
+}  // namespace cellbake

@@ -1,0 +1,53 @@
+// Ingest: reads model files, drops degenerate and duplicate triangles (counted),
+// splits the rest into spatially coherent chunks and writes a geometry store.
+// Memory is bounded: triangles are spilled to a temporary file (112 bytes each)
+// and only 40-byte sort keys per triangle are held in memory.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "stages/geometry.h"
+
+namespace cellbake {
+
+// Runs fn(i) for i in [0, n), possibly in parallel; the runner supplies a TBB
+// implementation, tests may pass a serial one. Results must not depend on it.
+using ParallelFor = std::function<void(std::size_t n, const std::function<void(std::size_t)>& fn)>;
+
+// Reports progress: phase name and fraction done in [0, 1].
+using ProgressCallback = std::function<void(const std::string& phase, double fraction)>;
+
+struct IngestParams {
+  std::size_t max_chunk_triangles = 4096;  // chunks hold (max/2, max] triangles, except runs of duplicates
+  Vec3d translate{0, 0, 0};                // added to every coordinate (tests, survey offsets)
+  std::string units = "m";
+  std::filesystem::path temp_dir;          // for the spill file; empty = next to the store
+};
+
+struct IngestReport {
+  std::uint64_t triangles_read = 0;
+  std::uint64_t triangles_stored = 0;
+  std::uint64_t skipped_degenerate = 0;
+  std::uint64_t skipped_duplicate = 0;
+  std::uint64_t polygons_triangulated = 0;
+  std::uint64_t chunks = 0;
+  std::uint64_t vertices = 0;
+  Box3d bounds;
+  double read_seconds = 0, chunk_seconds = 0, write_seconds = 0;
+  std::string content_hash;
+};
+
+// Ingests `models` into a new store at `store` (replacing an existing one only
+// on success; on any error the old store is untouched and no temp file stays).
+// Throws InputError for bad input (naming file and location) and
+// std::runtime_error for I/O failures. An empty model set is an error.
+// Deterministic: the same files and params give the same chunks.
+IngestReport ingest_models(const std::vector<std::filesystem::path>& models, const std::filesystem::path& store,
+                           const IngestParams& params, const ParallelFor& parallel_for,
+                           const ProgressCallback& progress = {});
+
+}  // namespace cellbake

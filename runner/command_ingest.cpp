@@ -1,0 +1,40 @@
+// `cellbake ingest MODEL... --store STORE.db`
+#include <CLI/CLI.hpp>
+
+#include "pipeline/ingest.h"
+#include "runner/commands.h"
+#include "runner/ingest_summary.h"
+#include "runner/parallel.h"
+
+namespace cellbake {
+
+void add_ingest_command(CLI::App& app) {
+  struct Options {
+    std::vector<std::string> models;
+    std::string store;
+    std::size_t chunk = 4096;
+    std::vector<double> translate;
+    std::string units = "m";
+  };
+  auto opt = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand(
+      "ingest", "Import model files (OBJ, PLY, glTF/GLB, OFF, STL, .gz, anything assimp reads) into a geometry store");
+  cmd->add_option("models", opt->models, "Model files")->required();
+  cmd->add_option("--store", opt->store, "Geometry store to write (replaced only on success)")->required();
+  cmd->add_option("--chunk-triangles", opt->chunk, "Maximum triangles per chunk")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t(16), std::size_t(1) << 20));
+  cmd->add_option("--translate", opt->translate, "Offset X,Y,Z added to every coordinate")->delimiter(',')->expected(3);
+  cmd->add_option("--units", opt->units, "Unit name recorded in the store")->capture_default_str();
+  cmd->callback([opt] {
+    std::vector<std::filesystem::path> models(opt->models.begin(), opt->models.end());
+    IngestParams params;
+    params.max_chunk_triangles = opt->chunk;
+    params.units = opt->units;
+    if (opt->translate.size() == 3) params.translate = {opt->translate[0], opt->translate[1], opt->translate[2]};
+    const IngestReport r = ingest_models(models, opt->store, params, tbb_parallel_for(), ingest_progress());
+    print_ingest_summary(r, opt->store);
+  });
+}
+
+}  // namespace cellbake

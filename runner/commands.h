@@ -1,0 +1,15 @@
+// Subcommand registration for the `cellbake` executable: each add_* function
+// registers one subcommand (options, --help text and the callback that runs it).
+// Callbacks throw on failure; main() turns that into a message and exit code 1.
+#pragma once
+
+namespace CLI {
+class App;
+}
+
+namespace cellbake {
+
+void add_generate_command(CLI::App& app);
+void add_ingest_command(CLI::App& app);
+
+}  // namespace cellbake

@@ -1,0 +1,38 @@
+#include "runner/ingest_summary.h"
+
+#include <cstdio>
+#include <memory>
+
+#include "runner/progress.h"
+
+namespace cellbake {
+
+ProgressCallback ingest_progress() {
+  auto last_phase = std::make_shared<std::string>();
+  auto bar = std::make_shared<std::unique_ptr<ProgressBar>>();
+  return [last_phase, bar](const std::string& phase, double fraction) {
+    if (phase != *last_phase) {
+      if (*bar) (*bar)->finish();
+      *last_phase = phase;
+      *bar = std::make_unique<ProgressBar>("ingest " + phase, fraction >= 0 ? 1000 : 0, fraction >= 0 ? "‰" : "M tris");
+    }
+    if (fraction >= 0) (*bar)->update(static_cast<std::uint64_t>(fraction * 1000));
+  };
+}
+
+void print_ingest_summary(const IngestReport& r, const std::string& store) {
+  const double total = r.read_seconds + r.chunk_seconds + r.write_seconds;
+  std::printf("ingested %llu triangles into %s\n", (unsigned long long)r.triangles_stored, store.c_str());
+  std::printf("  read %llu triangles (%llu polygons triangulated)\n", (unsigned long long)r.triangles_read,
+              (unsigned long long)r.polygons_triangulated);
+  std::printf("  skipped %llu degenerate (zero-area) and %llu duplicate triangles\n",
+              (unsigned long long)r.skipped_degenerate, (unsigned long long)r.skipped_duplicate);
+  std::printf("  %llu chunks, %llu vertices, bounds (%.3f %.3f %.3f)-(%.3f %.3f %.3f)\n", (unsigned long long)r.chunks,
+              (unsigned long long)r.vertices, r.bounds.lo.x, r.bounds.lo.y, r.bounds.lo.z, r.bounds.hi.x,
+              r.bounds.hi.y, r.bounds.hi.z);
+  std::printf("  time: read %.2f s, chunk %.2f s, write %.2f s, total %.2f s (%.2f M triangles/s)\n", r.read_seconds,
+              r.chunk_seconds, r.write_seconds, total, total > 0 ? r.triangles_read / total / 1e6 : 0.0);
+  std::printf("  content hash %s\n", r.content_hash.c_str());
+}
+
+}  // namespace cellbake

@@ -1,0 +1,313 @@
+#include "storage/geometry_store.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <stdexcept>
+
+#include "storage/chunk_codec.h"
+#include "storage/sqlite_db.h"
+
+namespace cellbake {
+namespace {
+
+constexpr int kStoreSchemaVersion = 1;
+constexpr std::size_t kChunksPerTransaction = 256;
+
+const char* kSchema = R"sql(
+CREATE TABLE meta(key TEXT PRIMARY KEY, value TEXT NOT NULL);
+CREATE TABLE sources(id INTEGER PRIMARY KEY, path TEXT NOT NULL, bytes INTEGER NOT NULL,
+                     hash TEXT NOT NULL, triangles INTEGER NOT NULL);
+CREATE TABLE materials(id INTEGER PRIMARY KEY, name TEXT NOT NULL, r INTEGER, g INTEGER, b INTEGER, a INTEGER,
+                       texture TEXT NOT NULL);
+CREATE TABLE chunks(id INTEGER PRIMARY KEY,
+                    origin_x REAL NOT NULL, origin_y REAL NOT NULL, origin_z REAL NOT NULL,
+                    min_x REAL NOT NULL, min_y REAL NOT NULL, min_z REAL NOT NULL,
+                    max_x REAL NOT NULL, max_y REAL NOT NULL, max_z REAL NOT NULL,
+                    triangle_count INTEGER NOT NULL, vertex_count INTEGER NOT NULL,
+                    geometry BLOB NOT NULL);
+CREATE VIRTUAL TABLE chunk_rtree USING rtree(id, min_x, max_x, min_y, max_y, min_z, max_z);
+)sql";
+
+std::string fmt_double(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- writer
+
+GeometryStoreWriter::GeometryStoreWriter(const std::filesystem::path& final_path)
+    : final_path_(final_path),
+      temp_path_(final_path.string() + ".tmp-" + std::to_string(::getpid())) {
+  std::error_code ec;
+  std::filesystem::remove(temp_path_, ec);
+  db_ = std::make_unique<SqliteDb>(temp_path_, SqliteDb::Mode::read_write_create);
+  db_->exec("PRAGMA journal_mode=OFF; PRAGMA synchronous=OFF; PRAGMA page_size=16384;");
+  db_->exec(kSchema);
+  insert_chunk_ = std::make_unique<SqliteStatement>(
+      *db_, "INSERT INTO chunks VALUES(?,?,?,?,?,?,?,?,?,?,?,?,?)");
+  insert_rtree_ = std::make_unique<SqliteStatement>(*db_, "INSERT INTO chunk_rtree VALUES(?,?,?,?,?,?,?)");
+  db_->exec("BEGIN");
+}
+
+GeometryStoreWriter::~GeometryStoreWriter() {
+  if (finished_) return;
+  insert_chunk_.reset();
+  insert_rtree_.reset();
+  db_.reset();
+  std::error_code ec;
+  std::filesystem::remove(temp_path_, ec);
+}
+
+void GeometryStoreWriter::add_material(std::uint32_t index, const Material& m) {
+  SqliteStatement s(*db_, "INSERT INTO materials VALUES(?,?,?,?,?,?,?)");
+  s.bind(1, std::int64_t(index)).bind(2, m.name).bind(3, std::int64_t(m.color.r)).bind(4, std::int64_t(m.color.g));
+  s.bind(5, std::int64_t(m.color.b)).bind(6, std::int64_t(m.color.a)).bind(7, m.texture);
+  s.run();
+}
+
+void GeometryStoreWriter::add_source(const SourceFileRecord& src) {
+  SqliteStatement s(*db_, "INSERT INTO sources(path, bytes, hash, triangles) VALUES(?,?,?,?)");
+  s.bind(1, src.path).bind(2, std::int64_t(src.bytes)).bind(3, src.hash).bind(4, std::int64_t(src.triangles));
+  s.run();
+}
+
+std::int64_t GeometryStoreWriter::add_chunk(const Chunk& chunk) {
+  const std::int64_t id = next_id_++;
+  const std::vector<std::uint8_t> blob = encode_chunk_blob(chunk);
+  auto& s = *insert_chunk_;
+  s.bind(1, id);
+  s.bind(2, chunk.origin.x).bind(3, chunk.origin.y).bind(4, chunk.origin.z);
+  s.bind(5, chunk.bounds.lo.x).bind(6, chunk.bounds.lo.y).bind(7, chunk.bounds.lo.z);
+  s.bind(8, chunk.bounds.hi.x).bind(9, chunk.bounds.hi.y).bind(10, chunk.bounds.hi.z);
+  s.bind(11, std::int64_t(chunk.triangle_count())).bind(12, std::int64_t(chunk.positions.size()));
+  s.bind_blob(13, blob.data(), blob.size());
+  s.run();
+  // SQLite's R*Tree stores float32 and rounds outward, so its boxes stay conservative.
+  auto& r = *insert_rtree_;
+  r.bind(1, id);
+  r.bind(2, chunk.bounds.lo.x).bind(3, chunk.bounds.hi.x);
+  r.bind(4, chunk.bounds.lo.y).bind(5, chunk.bounds.hi.y);
+  r.bind(6, chunk.bounds.lo.z).bind(7, chunk.bounds.hi.z);
+  r.run();
+  if (++pending_ >= kChunksPerTransaction) {
+    db_->exec("COMMIT; BEGIN");
+    pending_ = 0;
+  }
+  return id;
+}
+
+void GeometryStoreWriter::finish(const StoreSummary& sum) {
+  SqliteStatement s(*db_, "INSERT INTO meta VALUES(?,?)");
+  auto put = [&](const std::string& k, const std::string& v) { s.bind(1, k).bind(2, v).run(); };
+  put("schema_version", std::to_string(kStoreSchemaVersion));
+  put("kind", "cellbake-geometry-store");
+  put("bounds", fmt_double(sum.bounds.lo.x) + " " + fmt_double(sum.bounds.lo.y) + " " + fmt_double(sum.bounds.lo.z) +
+                    " " + fmt_double(sum.bounds.hi.x) + " " + fmt_double(sum.bounds.hi.y) + " " +
+                    fmt_double(sum.bounds.hi.z));
+  put("triangles", std::to_string(sum.triangles));
+  put("vertices", std::to_string(sum.vertices));
+  put("chunks", std::to_string(sum.chunks));
+  put("skipped_degenerate", std::to_string(sum.skipped_degenerate));
+  put("skipped_duplicate", std::to_string(sum.skipped_duplicate));
+  put("units", sum.units);
+  put("content_hash", sum.content_hash);
+  db_->exec("COMMIT");
+  insert_chunk_.reset();
+  insert_rtree_.reset();
+  db_->exec("PRAGMA journal_mode=DELETE");
+  db_.reset();
+  std::filesystem::rename(temp_path_, final_path_);
+  finished_ = true;
+}
+
+// ---------------------------------------------------------------- reader
+
+struct GeometryStore::Connection {
+  explicit Connection(const std::filesystem::path& p)
+      : db(p, SqliteDb::Mode::read_only),
+        query(db,
+              "SELECT c.id, c.min_x, c.min_y, c.min_z, c.max_x, c.max_y, c.max_z, c.triangle_count "
+              "FROM chunk_rtree r JOIN chunks c ON c.id = r.id "
+              "WHERE r.max_x >= ?1 AND r.min_x <= ?2 AND r.max_y >= ?3 AND r.min_y <= ?4 "
+              "AND r.max_z >= ?5 AND r.min_z <= ?6 ORDER BY c.id"),
+        load(db, "SELECT origin_x, origin_y, origin_z, min_x, min_y, min_z, max_x, max_y, max_z, geometry "
+                 "FROM chunks WHERE id = ?") {}
+  SqliteDb db;
+  SqliteStatement query;
+  SqliteStatement load;
+};
+
+GeometryStore::GeometryStore(const std::filesystem::path& path, std::size_t cache_bytes)
+    : path_(path), cache_cap_(cache_bytes) {
+  if (!std::filesystem::exists(path)) throw std::runtime_error(path.string() + ": geometry store does not exist");
+  auto c = std::make_unique<Connection>(path);
+  std::map<std::string, std::string> meta;
+  try {
+    SqliteStatement s(c->db, "SELECT key, value FROM meta");
+    while (s.step()) meta[s.column_text(0)] = s.column_text(1);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(path.string() + ": not a cellbake geometry store (" + e.what() + ")");
+  }
+  if (meta["kind"] != "cellbake-geometry-store")
+    throw std::runtime_error(path.string() + ": not a cellbake geometry store");
+  if (meta["schema_version"] != std::to_string(kStoreSchemaVersion))
+    throw std::runtime_error(path.string() + ": unsupported geometry store schema version " + meta["schema_version"]);
+  double b[6] = {0, 0, 0, 0, 0, 0};
+  if (std::sscanf(meta["bounds"].c_str(), "%lf %lf %lf %lf %lf %lf", &b[0], &b[1], &b[2], &b[3], &b[4], &b[5]) != 6)
+    throw std::runtime_error(path.string() + ": geometry store metadata has no bounds");
+  summary_.triangles = std::stoull(meta["triangles"]);
+  if (summary_.triangles > 0) summary_.bounds = {{b[0], b[1], b[2]}, {b[3], b[4], b[5]}};
+  summary_.vertices = std::stoull(meta["vertices"]);
+  summary_.chunks = std::stoull(meta["chunks"]);
+  summary_.skipped_degenerate = std::stoull(meta["skipped_degenerate"]);
+  summary_.skipped_duplicate = std::stoull(meta["skipped_duplicate"]);
+  summary_.units = meta["units"];
+  summary_.content_hash = meta["content_hash"];
+  release(std::move(c));
+}
+
+GeometryStore::~GeometryStore() = default;
+
+std::unique_ptr<GeometryStore::Connection> GeometryStore::acquire() const {
+  {
+    std::lock_guard<std::mutex> lock(pool_mutex_);
+    if (!pool_.empty()) {
+      auto c = std::move(pool_.back());
+      pool_.pop_back();
+      return c;
+    }
+  }
+  return std::make_unique<Connection>(path_);
+}
+
+void GeometryStore::release(std::unique_ptr<Connection> c) const {
+  std::lock_guard<std::mutex> lock(pool_mutex_);
+  pool_.push_back(std::move(c));
+}
+
+std::vector<ChunkRef> GeometryStore::query(const Box3d& box) const {
+  std::vector<ChunkRef> out;
+  if (box.empty()) return out;
+  auto c = acquire();
+  auto& q = c->query;
+  q.bind(1, box.lo.x).bind(2, box.hi.x).bind(3, box.lo.y).bind(4, box.hi.y).bind(5, box.lo.z).bind(6, box.hi.z);
+  while (q.step()) {
+    ChunkRef r;
+    r.id = q.column_int(0);
+    r.bounds = {{q.column_double(1), q.column_double(2), q.column_double(3)},
+                {q.column_double(4), q.column_double(5), q.column_double(6)}};
+    r.triangle_count = static_cast<std::uint32_t>(q.column_int(7));
+    // The R*Tree is float32 and conservative; refine with the exact double bounds.
+    if (r.bounds.overlaps(box)) out.push_back(r);
+  }
+  q.reset();
+  release(std::move(c));
+  return out;
+}
+
+std::shared_ptr<const Chunk> GeometryStore::load(std::int64_t id) const {
+  {
+    std::lock_guard<std::mutex> lock(cache_mutex_);
+    auto it = cache_.find(id);
+    if (it != cache_.end()) {
+      lru_.splice(lru_.begin(), lru_, it->second.pos);
+      return it->second.chunk;
+    }
+  }
+  auto chunk = std::make_shared<Chunk>();
+  chunk->id = id;
+  {
+    auto c = acquire();
+    auto& q = c->load;
+    q.bind(1, id);
+    if (!q.step()) {
+      q.reset();
+      release(std::move(c));
+      throw std::runtime_error(path_.string() + ": chunk " + std::to_string(id) + " does not exist");
+    }
+    chunk->origin = {q.column_double(0), q.column_double(1), q.column_double(2)};
+    chunk->bounds = {{q.column_double(3), q.column_double(4), q.column_double(5)},
+                     {q.column_double(6), q.column_double(7), q.column_double(8)}};
+    std::size_t size = 0;
+    const std::uint8_t* data = q.column_blob_data(9, size);
+    try {
+      decode_chunk_blob(data, size, *chunk);
+    } catch (const std::exception& e) {
+      q.reset();
+      release(std::move(c));
+      throw std::runtime_error(path_.string() + ": chunk " + std::to_string(id) + ": " + e.what());
+    }
+    q.reset();
+    release(std::move(c));
+  }
+  const std::size_t bytes = chunk->positions.size() * (sizeof(Vec3f) + sizeof(Rgba8) + sizeof(Uv)) +
+                            chunk->indices.size() * 4 + chunk->materials.size() * 4 + sizeof(Chunk);
+  std::lock_guard<std::mutex> lock(cache_mutex_);
+  auto it = cache_.find(id);
+  if (it != cache_.end()) return it->second.chunk;
+  lru_.push_front(id);
+  cache_[id] = {chunk, lru_.begin(), bytes};
+  cache_bytes_ += bytes;
+  while (cache_bytes_ > cache_cap_ && lru_.size() > 1) {
+    auto victim = cache_.find(lru_.back());
+    cache_bytes_ -= victim->second.bytes;
+    cache_.erase(victim);
+    lru_.pop_back();
+  }
+  return chunk;
+}
+
+std::vector<SourceFileRecord> GeometryStore::sources() const {
+  auto c = acquire();
+  std::vector<SourceFileRecord> out;
+  {
+    SqliteStatement s(c->db, "SELECT path, bytes, hash, triangles FROM sources ORDER BY id");
+    while (s.step())
+      out.push_back({s.column_text(0), std::uint64_t(s.column_int(1)), s.column_text(2), std::uint64_t(s.column_int(3))});
+  }
+  release(std::move(c));
+  return out;
+}
+
+std::vector<Material> GeometryStore::materials() const {
+  auto c = acquire();
+  std::vector<Material> out;
+  {
+    SqliteStatement s(c->db, "SELECT name, r, g, b, a, texture FROM materials ORDER BY id");
+    while (s.step()) {
+      Material m;
+      m.name = s.column_text(0);
+      m.color = {std::uint8_t(s.column_int(1)), std::uint8_t(s.column_int(2)), std::uint8_t(s.column_int(3)),
+                 std::uint8_t(s.column_int(4))};
+      m.texture = s.column_text(5);
+      out.push_back(m);
+    }
+  }
+  release(std::move(c));
+  return out;
+}
+
+std::vector<ChunkRef> GeometryStore::all_chunks() const {
+  auto c = acquire();
+  std::vector<ChunkRef> out;
+  {
+    SqliteStatement s(c->db,
+                      "SELECT id, min_x, min_y, min_z, max_x, max_y, max_z, triangle_count FROM chunks ORDER BY id");
+    while (s.step()) {
+      ChunkRef r;
+      r.id = s.column_int(0);
+      r.bounds = {{s.column_double(1), s.column_double(2), s.column_double(3)},
+                  {s.column_double(4), s.column_double(5), s.column_double(6)}};
+      r.triangle_count = static_cast<std::uint32_t>(s.column_int(7));
+      out.push_back(r);
+    }
+  }
+  release(std::move(c));
+  return out;
+}
+
+}  // namespace cellbake

@@ -1,0 +1,105 @@
+// The chunked geometry store: an SQLite file with one row per chunk (geometry
+// blob + exact double bounds and origin), an R*Tree over chunk bounds, model
+// metadata, source files and materials. Schema: docs/database.md.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <list>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "stages/chunk_source.h"
+#include "stages/geometry.h"
+
+namespace cellbake {
+
+class SqliteDb;
+class SqliteStatement;
+
+struct SourceFileRecord {
+  std::string path;
+  std::uint64_t bytes = 0;
+  std::string hash;  // xxh3-128 of the file bytes, hex
+  std::uint64_t triangles = 0;
+};
+
+struct StoreSummary {
+  Box3d bounds;
+  std::uint64_t triangles = 0;
+  std::uint64_t vertices = 0;
+  std::uint64_t chunks = 0;
+  std::uint64_t skipped_degenerate = 0;
+  std::uint64_t skipped_duplicate = 0;
+  std::string units = "m";
+  std::string content_hash;  // hash over sources and ingest parameters, hex
+};
+
+// Writes a new store into a temporary file next to `final_path` and renames it
+// over `final_path` only in finish(): an interrupted ingest never leaves a
+// half-written store that looks valid, and an existing store stays untouched.
+class GeometryStoreWriter {
+ public:
+  explicit GeometryStoreWriter(const std::filesystem::path& final_path);
+  ~GeometryStoreWriter();  // removes the temporary file unless finished
+
+  void add_material(std::uint32_t index, const Material& material);
+  void add_source(const SourceFileRecord& source);
+  // Adds a chunk (its id is assigned here, 1, 2, 3 ... in call order).
+  std::int64_t add_chunk(const Chunk& chunk);
+  // Writes the metadata, commits, and atomically renames onto the final path.
+  void finish(const StoreSummary& summary);
+
+ private:
+  std::filesystem::path final_path_, temp_path_;
+  std::unique_ptr<SqliteDb> db_;
+  std::unique_ptr<SqliteStatement> insert_chunk_, insert_rtree_;
+  std::int64_t next_id_ = 1;
+  std::size_t pending_ = 0;
+  bool finished_ = false;
+};
+
+// Read-only access; a ChunkSource for the stages. Thread-safe: a small pool of
+// connections plus an LRU cache of decoded chunks capped at `cache_bytes`.
+class GeometryStore : public ChunkSource {
+ public:
+  explicit GeometryStore(const std::filesystem::path& path, std::size_t cache_bytes = 512u << 20);
+  ~GeometryStore() override;
+
+  std::vector<ChunkRef> query(const Box3d& box) const override;
+  std::shared_ptr<const Chunk> load(std::int64_t id) const override;
+  Box3d model_bounds() const override { return summary_.bounds; }
+
+  const StoreSummary& summary() const { return summary_; }
+  std::vector<SourceFileRecord> sources() const;
+  std::vector<Material> materials() const;
+  std::vector<ChunkRef> all_chunks() const;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  struct Connection;
+  std::unique_ptr<Connection> acquire() const;
+  void release(std::unique_ptr<Connection> c) const;
+
+  std::filesystem::path path_;
+  StoreSummary summary_;
+  mutable std::mutex pool_mutex_;
+  mutable std::vector<std::unique_ptr<Connection>> pool_;
+
+  std::size_t cache_cap_;
+  mutable std::mutex cache_mutex_;
+  mutable std::size_t cache_bytes_ = 0;
+  mutable std::list<std::int64_t> lru_;
+  struct CacheEntry {
+    std::shared_ptr<const Chunk> chunk;
+    std::list<std::int64_t>::iterator pos;
+    std::size_t bytes;
+  };
+  mutable std::unordered_map<std::int64_t, CacheEntry> cache_;
+};
+
+}  // namespace cellbake

@@ -1,0 +1,121 @@
+#include "storage/sqlite_db.h"
+
+#include <sqlite3.h>
+
+#include <stdexcept>
+
+namespace cellbake {
+
+SqliteDb::SqliteDb(const std::filesystem::path& file, Mode mode) : file_(file) {
+  int flags = mode == Mode::read_only ? SQLITE_OPEN_READONLY : (SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+  flags |= SQLITE_OPEN_NOMUTEX;
+  if (sqlite3_open_v2(file.c_str(), &db_, flags, nullptr) != SQLITE_OK) {
+    std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw std::runtime_error(file.string() + ": cannot open database: " + msg);
+  }
+  sqlite3_busy_timeout(db_, 60000);
+  sqlite3_extended_result_codes(db_, 1);
+}
+
+SqliteDb::~SqliteDb() { sqlite3_close_v2(db_); }
+
+void SqliteDb::fail(const std::string& what) const {
+  throw std::runtime_error(file_.string() + ": " + what + ": " + sqlite3_errmsg(db_));
+}
+
+void SqliteDb::exec(std::string_view sql) {
+  char* err = nullptr;
+  std::string s(sql);
+  if (sqlite3_exec(db_, s.c_str(), nullptr, nullptr, &err) != SQLITE_OK) {
+    std::string msg = err ? err : "unknown error";
+    sqlite3_free(err);
+    throw std::runtime_error(file_.string() + ": " + msg + " (in: " + s.substr(0, 80) + ")");
+  }
+}
+
+std::int64_t SqliteDb::last_insert_rowid() const { return sqlite3_last_insert_rowid(db_); }
+
+SqliteStatement::SqliteStatement(SqliteDb& db, std::string_view sql) : db_(db) {
+  if (sqlite3_prepare_v2(db.handle(), sql.data(), static_cast<int>(sql.size()), &stmt_, nullptr) != SQLITE_OK)
+    db_.fail("cannot prepare '" + std::string(sql.substr(0, 80)) + "'");
+}
+
+SqliteStatement::~SqliteStatement() { sqlite3_finalize(stmt_); }
+
+SqliteStatement& SqliteStatement::bind(int index, std::int64_t value) {
+  if (sqlite3_bind_int64(stmt_, index, value) != SQLITE_OK) db_.fail("bind");
+  return *this;
+}
+SqliteStatement& SqliteStatement::bind(int index, double value) {
+  if (sqlite3_bind_double(stmt_, index, value) != SQLITE_OK) db_.fail("bind");
+  return *this;
+}
+SqliteStatement& SqliteStatement::bind(int index, std::string_view text) {
+  if (sqlite3_bind_text(stmt_, index, text.data(), static_cast<int>(text.size()), SQLITE_TRANSIENT) != SQLITE_OK)
+    db_.fail("bind");
+  return *this;
+}
+SqliteStatement& SqliteStatement::bind_blob(int index, const void* data, std::size_t size) {
+  if (sqlite3_bind_blob64(stmt_, index, size ? data : "", size, SQLITE_TRANSIENT) != SQLITE_OK) db_.fail("bind");
+  return *this;
+}
+SqliteStatement& SqliteStatement::bind_null(int index) {
+  if (sqlite3_bind_null(stmt_, index) != SQLITE_OK) db_.fail("bind");
+  return *this;
+}
+
+bool SqliteStatement::step() {
+  int rc = sqlite3_step(stmt_);
+  if (rc == SQLITE_ROW) return true;
+  if (rc == SQLITE_DONE) return false;
+  db_.fail("step");
+}
+
+void SqliteStatement::run() {
+  while (step()) {
+  }
+  reset();
+}
+
+void SqliteStatement::reset() {
+  sqlite3_reset(stmt_);
+  sqlite3_clear_bindings(stmt_);
+}
+
+std::int64_t SqliteStatement::column_int(int col) const { return sqlite3_column_int64(stmt_, col); }
+double SqliteStatement::column_double(int col) const { return sqlite3_column_double(stmt_, col); }
+std::string SqliteStatement::column_text(int col) const {
+  const unsigned char* t = sqlite3_column_text(stmt_, col);
+  return t ? std::string(reinterpret_cast<const char*>(t), sqlite3_column_bytes(stmt_, col)) : std::string();
+}
+const std::uint8_t* SqliteStatement::column_blob_data(int col, std::size_t& size) const {
+  const void* p = sqlite3_column_blob(stmt_, col);
+  size = static_cast<std::size_t>(sqlite3_column_bytes(stmt_, col));
+  return static_cast<const std::uint8_t*>(p);
+}
+std::vector<std::uint8_t> SqliteStatement::column_blob(int col) const {
+  std::size_t size = 0;
+  const std::uint8_t* p = column_blob_data(col, size);
+  return p ? std::vector<std::uint8_t>(p, p + size) : std::vector<std::uint8_t>();
+}
+bool SqliteStatement::column_is_null(int col) const { return sqlite3_column_type(stmt_, col) == SQLITE_NULL; }
+
+SqliteTransaction::SqliteTransaction(SqliteDb& db, bool immediate) : db_(db) {
+  db_.exec(immediate ? "BEGIN IMMEDIATE" : "BEGIN");
+}
+SqliteTransaction::~SqliteTransaction() {
+  if (!done_) {
+    try {
+      db_.exec("ROLLBACK");
+    } catch (...) {
+    }
+  }
+}
+void SqliteTransaction::commit() {
+  db_.exec("COMMIT");
+  done_ = true;
+}
+
+}  // namespace cellbake
