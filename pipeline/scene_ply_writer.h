@@ -1,6 +1,6 @@
-// Writes a generated scene as a binary little-endian PLY (float x y z, uchar
-// RGBA, uint triangle lists), streaming: vertices go straight to the output,
-// faces through a temporary file; the result appears atomically (tmp + rename).
+// Writes a procedural scene (stages/scene_generator.h) straight to a binary
+// little-endian PLY file, streaming: vertices go to the output as parts
+// arrive, faces to a temporary file next to it that is appended at the end.
 #pragma once
 
 #include <filesystem>
@@ -9,8 +9,14 @@
 
 namespace cellbake {
 
-// Generates the scene described by `params` into `out`. Returns the summary;
-// throws std::runtime_error naming the file on I/O failure.
+// Generates the scene for `params` into `out` as binary_little_endian PLY 1.0:
+//   element vertex N: float x y z (metres), uchar red green blue alpha
+//   element face M:   list uchar uint vertex_indices (always 3)
+// The header's counts are padded to a fixed width (trailing spaces) and filled
+// in at the end. Writes `out` + ".tmp" (and a faces scratch file beside it)
+// and renames onto `out` only on success; on failure nothing is left behind
+// and the exception names the file. Same params -> identical bytes. Returns
+// the scene summary (triangles == M, vertices == N).
 SceneSummary generate_scene_to_ply(const SceneParams& params, const std::filesystem::path& out);
 
 }  // namespace cellbake

@@ -11,5 +11,8 @@ namespace cellbake {
 
 void add_generate_command(CLI::App& app);
 void add_ingest_command(CLI::App& app);
+void add_bake_command(CLI::App& app);
+void add_status_command(CLI::App& app);
+void add_demo_command(CLI::App& app);
 
 }  // namespace cellbake

@@ -12,6 +12,9 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   cellbake::add_generate_command(app);
   cellbake::add_ingest_command(app);
+  cellbake::add_bake_command(app);
+  cellbake::add_status_command(app);
+  cellbake::add_demo_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

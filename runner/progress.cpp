@@ -49,7 +49,7 @@ void ProgressBar::draw(bool final, const std::string& note) {
     const int filled = int(width * double(std::min(done_, total_)) / double(total_));
     bar = "[" + std::string(filled, '#') + std::string(width - filled, '.') + "] ";
   }
-  std::fprintf(stderr, "%s%s: %s%s (%.1f %s/s, %.1fs)%s%s%s", tty_ ? "\r\033[K" : "", label_.c_str(), bar.c_str(),
+  std::fprintf(stderr, "%s%s: %s%s (%.1f %s/s, %.1fs)%s%s%s%s", tty_ ? "\r\033[K" : "", label_.c_str(), bar.c_str(),
                counts, rate, unit_.c_str(), elapsed, eta, note.empty() ? "" : " ", note.c_str(),
                (tty_ && !final) ? "" : "\n");
   std::fflush(stderr);

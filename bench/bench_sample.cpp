@@ -1,0 +1,101 @@
+// Panoramic sampling speed (stages/sample.h): one 512^2 x 6 colour + depth cube
+// map of a random scene of ~1 M triangles in 1000 chunks, rendered offscreen
+// with OSMesa (llvmpipe). MISSION.md's reference figure on this machine is
+// ~0.19-0.24 s per cube map with LP_NUM_THREADS=2. Run as
+//   LP_NUM_THREADS=2 build/bench/bench_sample
+// (the llvmpipe thread count is read from the environment; the bench sets nothing).
+#include <benchmark/benchmark.h>
+
+#include <memory>
+#include <random>
+
+#include "stages/render/chunk_renderer.h"
+#include "stages/render/gl_context.h"
+#include "stages/sample.h"
+#include "tests/fixture_chunk_source.h"
+
+namespace cellbake {
+namespace {
+
+constexpr int kGrid = 10;                 // 10^3 chunks
+constexpr int kTrianglesPerChunk = 1000;  // 1 M triangles
+constexpr double kCell = 10.0;            // metres per chunk cell: a 100 m cube
+const Vec3d kEye{kGrid * kCell / 2 + 0.37, kGrid * kCell / 2 - 0.21, kGrid * kCell / 2 + 0.11};
+const Box3d kCullBox = Box3d::cube({kGrid * kCell / 2, kGrid * kCell / 2, kGrid * kCell / 2}, 2.0);
+
+// Random triangles of ~0.6 m edges filling each chunk cell; one colour per chunk. Fixed seed.
+const test::InMemoryChunkSource& scene() {
+  static const auto source = [] {
+    auto s = std::make_unique<test::InMemoryChunkSource>();
+    std::mt19937_64 rng(20020101);
+    std::uniform_real_distribution<double> unit(0.0, 1.0), edge(-0.6, 0.6);
+    std::int64_t id = 1;
+    for (int i = 0; i < kGrid; ++i)
+      for (int j = 0; j < kGrid; ++j)
+        for (int k = 0; k < kGrid; ++k, ++id) {
+          const Rgba8 color{static_cast<std::uint8_t>(rng() % 256), static_cast<std::uint8_t>(rng() % 256),
+                            static_cast<std::uint8_t>(rng() % 256), 255};
+          std::vector<Triangle> triangles;
+          triangles.reserve(kTrianglesPerChunk);
+          for (int t = 0; t < kTrianglesPerChunk; ++t) {
+            const Vec3d a{(i + unit(rng)) * kCell, (j + unit(rng)) * kCell, (k + unit(rng)) * kCell};
+            triangles.push_back(test::flat_triangle(a, a + Vec3d{edge(rng), edge(rng), edge(rng)},
+                                                    a + Vec3d{edge(rng), edge(rng), edge(rng)}, color));
+          }
+          s->add(test::chunk_from_triangles(id, triangles));
+        }
+    return s;
+  }();
+  return *source;
+}
+
+std::unique_ptr<ChunkRenderer> make_renderer() {
+  return std::make_unique<ChunkRenderer>(create_gl_context(GlBackend::osmesa, 1, 1));
+}
+
+void report(benchmark::State& state, const ChunkRenderer& renderer, std::uint64_t triangles_before) {
+  const double cube_maps = static_cast<double>(state.iterations());
+  state.counters["tris_drawn_per_cube"] =
+      static_cast<double>(renderer.stats().triangles_drawn - triangles_before) / cube_maps;
+  state.counters["reversed_z"] = renderer.reversed_z() ? 1 : 0;
+}
+
+// Chunks already cached in the renderer (the steady state of a worker thread).
+void BM_SampleCubeWarm(benchmark::State& state) {
+  const auto& source = scene();
+  SampleParams params;
+  params.face_size = static_cast<int>(state.range(0));
+  params.supersample = static_cast<int>(state.range(1));
+  auto renderer = make_renderer();
+  sample_cube(kEye, kCullBox, params, source, *renderer);  // upload everything once
+  const std::uint64_t before = renderer->stats().triangles_drawn;
+  for (auto _ : state) benchmark::DoNotOptimize(sample_cube(kEye, kCullBox, params, source, *renderer));
+  report(state, *renderer, before);
+}
+BENCHMARK(BM_SampleCubeWarm)->Args({512, 1})->Args({512, 2})->Args({64, 1})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+
+// A fresh renderer per cube map: uploads of every visible chunk included
+// (context creation and shader compilation excluded).
+void BM_SampleCubeCold(benchmark::State& state) {
+  const auto& source = scene();
+  SampleParams params;
+  params.face_size = static_cast<int>(state.range(0));
+  std::uint64_t triangles = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    auto renderer = make_renderer();
+    state.ResumeTiming();
+    benchmark::DoNotOptimize(sample_cube(kEye, kCullBox, params, source, *renderer));
+    triangles += renderer->stats().triangles_drawn;
+    state.PauseTiming();
+    renderer.reset();
+    state.ResumeTiming();
+  }
+  state.counters["tris_drawn_per_cube"] = static_cast<double>(triangles) / static_cast<double>(state.iterations());
+}
+BENCHMARK(BM_SampleCubeCold)->Arg(512)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+
+}  // namespace
+}  // namespace cellbake
+
+BENCHMARK_MAIN();

@@ -1,0 +1,251 @@
+#include "pipeline/bake_config.h"
+
+#include <toml++/toml.h>
+
+#include <functional>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+namespace cellbake {
+namespace {
+
+using Setter = std::function<void(BakeConfig&, const toml::node&, const std::string& where)>;
+
+std::string where_of(const std::string& file, const toml::node& n) {
+  const auto& src = n.source();
+  std::string w = file.empty() ? "<command line>" : file;
+  if (src.begin.line > 0) w += ":" + std::to_string(src.begin.line);
+  return w;
+}
+
+[[noreturn]] void fail(const std::string& where, const std::string& what) {
+  throw std::runtime_error(where + ": " + what);
+}
+
+double number(const toml::node& n, const std::string& where, const std::string& key, double lo, double hi) {
+  std::optional<double> v = n.value<double>();
+  if (!v) fail(where, "'" + key + "' must be a number");
+  if (!(*v >= lo && *v <= hi))
+    fail(where, "'" + key + "' = " + std::to_string(*v) + " is out of range [" + std::to_string(lo) + ", " +
+                    std::to_string(hi) + "]");
+  return *v;
+}
+
+std::int64_t integer(const toml::node& n, const std::string& where, const std::string& key, std::int64_t lo,
+                     std::int64_t hi) {
+  std::optional<std::int64_t> v = n.value<std::int64_t>();
+  if (!v || !n.is_integer()) fail(where, "'" + key + "' must be an integer");
+  if (*v < lo || *v > hi)
+    fail(where, "'" + key + "' = " + std::to_string(*v) + " is out of range [" + std::to_string(lo) + ", " +
+                    std::to_string(hi) + "]");
+  return *v;
+}
+
+std::string text(const toml::node& n, const std::string& where, const std::string& key,
+                 const std::vector<std::string>& allowed = {}) {
+  std::optional<std::string> v = n.value<std::string>();
+  if (!v) fail(where, "'" + key + "' must be a string");
+  if (!allowed.empty()) {
+    bool ok = false;
+    std::string list;
+    for (const auto& a : allowed) {
+      ok |= (*v == a);
+      list += (list.empty() ? "" : ", ") + a;
+    }
+    if (!ok) fail(where, "'" + key + "' = '" + *v + "' must be one of: " + list);
+  }
+  return *v;
+}
+
+Vec3d vec3(const toml::node& n, const std::string& where, const std::string& key) {
+  const toml::array* a = n.as_array();
+  if (!a || a->size() != 3) fail(where, "'" + key + "' must be an array of 3 numbers");
+  Vec3d v;
+  for (int i = 0; i < 3; ++i) {
+    std::optional<double> d = (*a)[i].value<double>();
+    if (!d || !std::isfinite(*d)) fail(where, "'" + key + "' must hold 3 finite numbers");
+    v[i] = *d;
+  }
+  return v;
+}
+
+std::filesystem::path resolve(const BakeConfig& c, const std::string& p) {
+  std::filesystem::path path(p);
+  if (path.is_relative() && !c.source.empty()) path = c.source.parent_path() / path;
+  return path;
+}
+
+const std::map<std::string, Setter>& setters() {
+  static const std::map<std::string, Setter> table = {
+      {"model.store", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.store = resolve(c, text(n, w, "model.store"));
+       }},
+      {"model.up", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.up = text(n, w, "model.up", {"z", "y"});
+       }},
+      {"cells.size", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.cell_size = number(n, w, "cells.size", 1e-6, 1e9);
+       }},
+      {"near.budget", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.near_budget = static_cast<std::uint64_t>(integer(n, w, "near.budget", 0, std::int64_t(1) << 40));
+       }},
+      {"sample.face_size", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.face_size = int(integer(n, w, "sample.face_size", 8, 4096));
+       }},
+      {"sample.supersample", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.supersample = int(integer(n, w, "sample.supersample", 1, 4));
+       }},
+      {"sample.near_plane", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.near_plane = number(n, w, "sample.near_plane", 1e-6, 1e3);
+       }},
+      {"depth_mesh.skin_angle_deg", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.skin_angle_deg = number(n, w, "depth_mesh.skin_angle_deg", 0, 45);
+       }},
+      {"depth_mesh.depth_jump", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.depth_jump = number(n, w, "depth_mesh.depth_jump", 1e-4, 10);
+       }},
+      {"simplify.depth_error_relative", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.depth_error_relative = number(n, w, "simplify.depth_error_relative", 0, 1);
+       }},
+      {"simplify.max_triangles", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.max_face_triangles = int(integer(n, w, "simplify.max_triangles", 2, 1 << 24));
+       }},
+      {"encode.image_format", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.image_format = text(n, w, "encode.image_format", {"jpeg", "webp", "png"});
+       }},
+      {"encode.quality", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.image_quality = int(integer(n, w, "encode.quality", 1, 100));
+       }},
+      {"encode.position_bits", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.position_bits = int(integer(n, w, "encode.position_bits", 8, 24));
+       }},
+      {"output.database", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.database = resolve(c, text(n, w, "output.database"));
+       }},
+  };
+  return table;
+}
+
+Box3d parse_region(const toml::table& t, const std::string& file) {
+  Box3d box;
+  bool has_min = false, has_max = false;
+  for (const auto& [k, v] : t) {
+    const std::string key(k.str());
+    const std::string w = where_of(file, v);
+    if (key == "min") {
+      box.lo = vec3(v, w, "regions.min");
+      has_min = true;
+    } else if (key == "max") {
+      box.hi = vec3(v, w, "regions.max");
+      has_max = true;
+    } else {
+      fail(w, "unknown key 'regions." + key + "' (expected min, max)");
+    }
+  }
+  const std::string w = where_of(file, t);
+  if (!has_min || !has_max) fail(w, "a region needs both 'min' and 'max'");
+  if (box.lo.x > box.hi.x || box.lo.y > box.hi.y || box.lo.z > box.hi.z)
+    fail(w, "region 'min' must be <= 'max' on every axis");
+  return box;
+}
+
+void apply_table(BakeConfig& c, const toml::table& root, const std::string& file) {
+  for (const auto& [section_key, section] : root) {
+    const std::string section_name(section_key.str());
+    const std::string w = where_of(file, section);
+    if (section_name == "regions") {
+      const toml::array* arr = section.as_array();
+      if (!arr) fail(w, "'regions' must be an array of tables ([[regions]])");
+      c.regions.clear();
+      for (const auto& r : *arr) {
+        const toml::table* t = r.as_table();
+        if (!t) fail(where_of(file, r), "each region must be a table with min and max");
+        c.regions.push_back(parse_region(*t, file));
+      }
+      continue;
+    }
+    const toml::table* t = section.as_table();
+    if (!t) fail(w, "unknown top-level key '" + section_name + "'");
+    for (const auto& [k, v] : *t) {
+      const std::string full = section_name + "." + std::string(k.str());
+      auto it = setters().find(full);
+      if (it == setters().end()) fail(where_of(file, v), "unknown key '" + full + "'");
+      it->second(c, v, where_of(file, v));
+    }
+  }
+}
+
+BakeConfig config_from_table(const toml::table& root, const std::filesystem::path& file) {
+  BakeConfig c;
+  c.source = file;
+  c.database = "";
+  apply_table(c, root, file.string());
+  if (c.database.empty()) c.database = resolve(c, "cells.db");
+  return c;
+}
+
+}  // namespace
+
+BakeConfig load_bake_config(const std::filesystem::path& file) {
+  toml::table root;
+  try {
+    root = toml::parse_file(file.string());
+  } catch (const toml::parse_error& e) {
+    throw std::runtime_error(file.string() + ":" + std::to_string(e.source().begin.line) + ": " +
+                             std::string(e.description()));
+  }
+  return config_from_table(root, file);
+}
+
+BakeConfig parse_bake_config(std::string_view text, const std::filesystem::path& file) {
+  toml::table root;
+  try {
+    root = toml::parse(text, file.string());
+  } catch (const toml::parse_error& e) {
+    throw std::runtime_error(file.string() + ":" + std::to_string(e.source().begin.line) + ": " +
+                             std::string(e.description()));
+  }
+  return config_from_table(root, file);
+}
+
+void apply_override(BakeConfig& c, const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos) throw std::runtime_error("--set '" + assignment + "': expected section.key=value");
+  const std::string key = assignment.substr(0, eq);
+  std::string value = assignment.substr(eq + 1);
+  auto it = setters().find(key);
+  if (it == setters().end()) throw std::runtime_error("--set '" + assignment + "': unknown key '" + key + "'");
+  toml::table t;
+  try {
+    t = toml::parse("v = " + value);
+  } catch (const toml::parse_error&) {
+    t = toml::table{{"v", value}};  // a bare word: take it as a string
+  }
+  it->second(c, *t.get("v"), "--set " + key);
+}
+
+void validate_bake_config(const BakeConfig& c) {
+  const std::string where = c.source.empty() ? "<command line>" : c.source.string();
+  if (c.store.empty()) throw std::runtime_error(where + ": no geometry store given ([model] store or --store)");
+  if (c.regions.empty()) throw std::runtime_error(where + ": no regions given ([[regions]] or --region)");
+  if (c.database.empty()) throw std::runtime_error(where + ": no output database given");
+}
+
+std::string describe_bake_config(const BakeConfig& c) {
+  std::ostringstream o;
+  o.precision(17);
+  o << "up=" << c.up << "\ncells.size=" << c.cell_size << "\nnear.budget=" << c.near_budget
+    << "\nsample.face_size=" << c.face_size << "\nsample.supersample=" << c.supersample
+    << "\nsample.near_plane=" << c.near_plane << "\ndepth_mesh.skin_angle_deg=" << c.skin_angle_deg
+    << "\ndepth_mesh.depth_jump=" << c.depth_jump
+    << "\nsimplify.depth_error_relative=" << c.depth_error_relative
+    << "\nsimplify.max_triangles=" << c.max_face_triangles << "\nencode.image_format=" << c.image_format
+    << "\nencode.quality=" << c.image_quality << "\nencode.position_bits=" << c.position_bits << "\n";
+  for (const auto& r : c.regions)
+    o << "region=" << r.lo.x << "," << r.lo.y << "," << r.lo.z << "," << r.hi.x << "," << r.hi.y << "," << r.hi.z
+      << "\n";
+  return o.str();
+}
+
+}  // namespace cellbake

@@ -1,0 +1,76 @@
+// Bake configuration: a TOML file (configs/*.toml) plus `--set section.key=value`
+// overrides, or command-line-only quick bakes. Unknown keys and out-of-range
+// values are errors naming the file and line. Keys are documented in
+// configs/plant-demo.toml and docs/configuration.md.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "stages/geometry.h"
+
+namespace cellbake {
+
+struct BakeConfig {
+  std::filesystem::path source;  // the config file ("" for command-line only)
+
+  // [model]
+  std::filesystem::path store;   // geometry store (relative paths: to the config file)
+  std::string up = "z";          // "z" or "y": the model's up axis (cell layers stack along it)
+
+  // [[regions]]: boxes of eye positions, model units; cells only exist inside them.
+  std::vector<Box3d> regions;
+
+  // [cells]
+  double cell_size = 2.0;        // edge of a cubic view cell, model units
+
+  // [near]
+  std::uint64_t near_budget = 100000;  // near-field triangle budget per cell (thesis: 100,000)
+
+  // [sample]
+  int face_size = 512;           // stored cube-face resolution, pixels
+  int supersample = 1;           // render at face_size * supersample, box-filter down
+  double near_plane = 0.01;      // model units
+
+  // [depth_mesh]
+  double skin_angle_deg = 3.0;   // edges within this angle of the eye ray are skins
+  double depth_jump = 0.1;       // relative depth jump beyond which an edge is a skin
+
+  // [simplify]
+  // Silhouettes, borders and skins never move (coverage is kept exactly);
+  // interior vertices move only along their eye ray, by at most this much.
+  double depth_error_relative = 0.01;  // relative to the depth
+  int max_face_triangles = 10000;      // per cube face (thesis VWALK cap)
+
+  // [encode]
+  std::string image_format = "jpeg";   // jpeg | webp | png
+  int image_quality = 85;              // 1..100 (jpeg, webp)
+  int position_bits = 16;              // mesh position quantisation per axis
+
+  // [output]
+  std::filesystem::path database = "cells.db";
+};
+
+// Parses a TOML config file. Throws std::runtime_error("FILE:LINE: ...") for
+// syntax errors, unknown keys, wrong types and out-of-range values.
+BakeConfig load_bake_config(const std::filesystem::path& file);
+
+// Parses TOML text as if it were the file `source` (relative paths resolve
+// against source's folder; messages name it).
+BakeConfig parse_bake_config(std::string_view text, const std::filesystem::path& source);
+
+// Applies one override "section.key=value" (value in TOML syntax; bare words
+// are taken as strings), validating as in a file. Throws naming the override.
+void apply_override(BakeConfig& config, const std::string& assignment);
+
+// Checks cross-field rules (at least one region, non-empty regions, store set).
+// Throws std::runtime_error naming the config source.
+void validate_bake_config(const BakeConfig& config);
+
+// A canonical text form of every parameter (for hashing and the database meta).
+std::string describe_bake_config(const BakeConfig& config);
+
+}  // namespace cellbake

@@ -1,0 +1,87 @@
+#include "pipeline/cell_grid.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace cellbake {
+namespace {
+
+int cells_along(double extent, double size) {
+  // Tolerate rounding: a 10 m region of 2 m cells is 5 cells, not 6.
+  const double n = std::ceil(extent / size - 1e-9);
+  return std::max(1, static_cast<int>(n));
+}
+
+}  // namespace
+
+std::vector<CellSpec> enumerate_cells(const std::vector<Box3d>& regions, double cell_size, std::uint64_t max_cells) {
+  if (!(cell_size > 0) || !std::isfinite(cell_size)) throw std::invalid_argument("cell size must be positive");
+  std::vector<CellSpec> cells;
+  std::uint64_t total = 0;
+  for (const auto& r : regions) {
+    const Vec3d e = r.extent();
+    total += std::uint64_t(cells_along(e.x, cell_size)) * cells_along(e.y, cell_size) * cells_along(e.z, cell_size);
+    if (total > max_cells)
+      throw std::invalid_argument("regions hold more than " + std::to_string(max_cells) + " cells of size " +
+                                  std::to_string(cell_size));
+  }
+  cells.reserve(total);
+  std::int64_t id = 1;
+  for (std::size_t ri = 0; ri < regions.size(); ++ri) {
+    const Box3d& r = regions[ri];
+    const Vec3d e = r.extent();
+    const int nx = cells_along(e.x, cell_size), ny = cells_along(e.y, cell_size), nz = cells_along(e.z, cell_size);
+    for (int z = 0; z < nz; ++z)
+      for (int y = 0; y < ny; ++y)
+        for (int x = 0; x < nx; ++x) {
+          CellSpec c;
+          c.id = id++;
+          c.region = static_cast<int>(ri);
+          c.gx = x;
+          c.gy = y;
+          c.gz = z;
+          // A region thinner than a cell: centre the single layer on the region.
+          Vec3d lo{r.lo.x + x * cell_size, r.lo.y + y * cell_size, r.lo.z + z * cell_size};
+          for (int a = 0; a < 3; ++a)
+            if (e[a] < cell_size) lo[a] = r.center()[a] - 0.5 * cell_size;
+          c.bounds = {lo, lo + Vec3d{cell_size, cell_size, cell_size}};
+          cells.push_back(c);
+        }
+  }
+  return cells;
+}
+
+std::vector<CellSpec> select_cells(const std::vector<CellSpec>& cells, const std::string& selection) {
+  if (selection.empty()) return cells;
+  std::vector<std::pair<std::int64_t, std::int64_t>> ranges;
+  std::stringstream ss(selection);
+  std::string part;
+  while (std::getline(ss, part, ',')) {
+    if (part.empty()) throw std::invalid_argument("--cells '" + selection + "': empty item");
+    try {
+      const auto dash = part.find('-');
+      if (dash == std::string::npos) {
+        const std::int64_t v = std::stoll(part);
+        ranges.push_back({v, v});
+      } else {
+        const std::int64_t a = dash == 0 ? 1 : std::stoll(part.substr(0, dash));
+        const std::int64_t b = dash + 1 == part.size() ? INT64_MAX : std::stoll(part.substr(dash + 1));
+        if (a > b) throw std::invalid_argument("reversed range");
+        ranges.push_back({a, b});
+      }
+    } catch (const std::exception&) {
+      throw std::invalid_argument("--cells '" + selection + "': cannot parse '" + part + "' (use e.g. 1-10,15,20-)");
+    }
+  }
+  std::vector<CellSpec> out;
+  for (const auto& c : cells)
+    for (const auto& [a, b] : ranges)
+      if (c.id >= a && c.id <= b) {
+        out.push_back(c);
+        break;
+      }
+  return out;
+}
+
+}  // namespace cellbake

@@ -1,0 +1,32 @@
+// View cells: cubes of side `cell_size` tiling each region from its minimum
+// corner (a region thinner than a cell on some axis gives one layer there).
+// Ids are 1, 2, 3 ... in region order, then z, y, x: deterministic for a config.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "stages/geometry.h"
+
+namespace cellbake {
+
+struct CellSpec {
+  std::int64_t id = 0;
+  int region = 0;
+  int gx = 0, gy = 0, gz = 0;
+  Box3d bounds;
+  Vec3d center() const { return bounds.center(); }
+  double half_size() const { return 0.5 * (bounds.hi.x - bounds.lo.x); }
+};
+
+// Enumerates every cell of every region. Throws std::invalid_argument when the
+// cell size is not positive or the cell count would exceed `max_cells`.
+std::vector<CellSpec> enumerate_cells(const std::vector<Box3d>& regions, double cell_size,
+                                      std::uint64_t max_cells = 50'000'000);
+
+// Parses a cell selection like "1-10,15,20-" (ranges inclusive, open end = to the
+// last id) and keeps only the cells it names. Throws std::invalid_argument on bad syntax.
+std::vector<CellSpec> select_cells(const std::vector<CellSpec>& cells, const std::string& selection);
+
+}  // namespace cellbake

@@ -1,0 +1,89 @@
+// The per-cell job: which stage feeds which, stage names and versions, the
+// parameter/input hashes that make reruns resumable, and the assembly of a
+// cell database row. Stages run in the order
+//   cull_box -> sample -> depth_mesh -> simplify -> encode
+// and the runner schedules them (sample needs a GL renderer; the others are
+// plain CPU work). A stage that throws turns the cell into a failed row whose
+// message names the cell and the stage.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+
+#include "pipeline/bake_config.h"
+#include "pipeline/cell_grid.h"
+#include "stages/chunk_source.h"
+#include "stages/cube_map.h"
+#include "stages/cull_box.h"
+#include "storage/cell_db.h"
+
+namespace cellbake {
+
+class ChunkRenderer;
+
+// Bump a stage's version when its output changes for the same inputs: every
+// cell that used it is then recomputed on the next bake.
+struct StageVersions {
+  static constexpr int cull_box = 1;
+  static constexpr int sample = 1;
+  static constexpr int depth_mesh = 1;
+  static constexpr int simplify = 1;
+  static constexpr int encode = 1;
+};
+
+// The stage names, in order, as used in stage_seconds and error messages.
+inline constexpr std::array<const char*, 5> kStageNames = {"cull_box", "sample", "depth_mesh", "simplify", "encode"};
+
+struct CellHashes {
+  std::string cull;   // store content + cull_box version and parameters + the cell
+  std::string input;  // cull + every later stage's version and parameters
+};
+
+// Hashes of what determines a cell's rows (not thread count, shard or timing).
+CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& config, const std::string& store_hash);
+
+// The work in flight for one cell, passed from stage to stage.
+struct CellWork {
+  CellSpec cell;
+  CellHashes hashes;
+  std::optional<CullBoxResult> cull;          // set by run_cull_box (or reused)
+  std::optional<CubeSample> sample;           // set by run_sample
+  std::array<FaceMesh, kCubeFaces> dense;     // set by run_depth_mesh
+  std::array<FaceMesh, kCubeFaces> simplified;
+  std::array<double, kCubeFaces> coverage_error{};
+  std::array<double, kCubeFaces> depth_error{};
+  std::map<std::string, double> seconds;
+  std::string failed_stage, error;  // set when a stage threw
+  CellRow row;                      // filled by run_encode / make_failed_row
+};
+
+// Stage steps. Each fills its part of `work` and records its own seconds;
+// each throws on failure (the runner catches via run_stage below).
+void run_cull_box(CellWork& work, const BakeConfig& config, const ChunkSource& source);
+void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& source, ChunkRenderer& renderer);
+void run_depth_mesh(CellWork& work, const BakeConfig& config);
+void run_simplify(CellWork& work, const BakeConfig& config);
+void run_encode(CellWork& work, const BakeConfig& config);
+
+// Runs `step` for `stage` unless the cell already failed; a throw is recorded
+// as "cell ID (gx,gy,gz): stage STAGE: message" and later stages are skipped.
+template <typename Step>
+void run_stage(CellWork& work, const char* stage, Step&& step) {
+  if (!work.failed_stage.empty()) return;
+  try {
+    step();
+  } catch (const std::exception& e) {
+    work.failed_stage = stage;
+    work.error = "cell " + std::to_string(work.cell.id) + " (" + std::to_string(work.cell.gx) + "," +
+                 std::to_string(work.cell.gy) + "," + std::to_string(work.cell.gz) + "): stage " + stage + ": " +
+                 e.what();
+  }
+}
+
+// The database row for the work: the encoded cell, or a failed row with the message.
+CellRow finish_cell_row(CellWork& work);
+
+}  // namespace cellbake

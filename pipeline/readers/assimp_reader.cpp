@@ -1,0 +1,111 @@
+// Every format without a streaming reader of our own goes through the Open
+// Asset Import Library (assimp), which loads the whole scene: node transforms
+// are baked into the vertices (aiProcess_PreTransformVertices), polygons are
+// triangulated, points and lines are dropped. Material i of the scene becomes
+// material i + 1 of ours (0 stays the default grey).
+#include <assimp/Importer.hpp>
+#include <assimp/config.h>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "pipeline/input_error.h"
+#include "pipeline/readers/buffered_input.h"
+#include "pipeline/readers/colour_math.h"
+#include "pipeline/readers/format_readers.h"
+
+namespace cellbake {
+namespace {
+
+constexpr unsigned kImportFlags =
+    aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType;
+
+Material convert_material(const aiMaterial& source) {
+  Material material;
+  aiString name;
+  if (source.Get(AI_MATKEY_NAME, name) == AI_SUCCESS) material.name = name.C_Str();
+  aiColor4D colour(1, 1, 1, 1);
+  if (source.Get(AI_MATKEY_BASE_COLOR, colour) != AI_SUCCESS) source.Get(AI_MATKEY_COLOR_DIFFUSE, colour);
+  float opacity = 1;
+  if (source.Get(AI_MATKEY_OPACITY, opacity) == AI_SUCCESS) colour.a *= opacity;
+  material.color = {unit_to_byte(colour.r), unit_to_byte(colour.g), unit_to_byte(colour.b), unit_to_byte(colour.a)};
+  aiString texture;
+  if (source.GetTexture(aiTextureType_BASE_COLOR, 0, &texture) == AI_SUCCESS ||
+      source.GetTexture(aiTextureType_DIFFUSE, 0, &texture) == AI_SUCCESS)
+    material.texture = texture.C_Str();
+  return material;
+}
+
+void emit_mesh(const std::string& file, unsigned mesh_index, const aiMesh& mesh, ModelInfo& info,
+               const TriangleCallback& emit) {
+  const std::uint32_t material_index = mesh.mMaterialIndex + 1;
+  const Rgba8 material_colour =
+      material_index < info.materials.size() ? info.materials[material_index].color : info.materials[0].color;
+  const aiColor4D* colours = mesh.mColors[0];
+  const aiVector3D* texcoords = mesh.mTextureCoords[0];
+  for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
+    const aiVector3D& p = mesh.mVertices[v];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      throw InputError(file, "mesh " + std::to_string(mesh_index) + " vertex " + std::to_string(v),
+                       "non-finite coordinate");
+  }
+  Triangle t;
+  t.material = material_index < info.materials.size() ? material_index : 0;
+  for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+    const aiFace& face = mesh.mFaces[f];
+    if (face.mNumIndices != 3) continue;  // points and lines carry no surface
+    for (int i = 0; i < 3; ++i) {
+      const unsigned v = face.mIndices[i];
+      if (v >= mesh.mNumVertices)
+        throw InputError(file, "mesh " + std::to_string(mesh_index) + " face " + std::to_string(f),
+                         "vertex index " + std::to_string(v) + " out of range");
+      t.p[i] = {mesh.mVertices[v].x, mesh.mVertices[v].y, mesh.mVertices[v].z};
+      Rgba8 vertex_colour;
+      if (colours)
+        vertex_colour = {unit_to_byte(colours[v].r), unit_to_byte(colours[v].g), unit_to_byte(colours[v].b),
+                         unit_to_byte(colours[v].a)};
+      t.color[i] = corner_colour(material_colour, t.material, colours ? &vertex_colour : nullptr);
+      if (texcoords) t.uv[i] = {texcoords[v].x, texcoords[v].y};
+    }
+    emit(t);
+    ++info.triangles_emitted;
+  }
+}
+
+}  // namespace
+
+bool assimp_supports(const std::string& extension) {
+  Assimp::Importer importer;
+  return importer.IsExtensionSupported("." + extension);
+}
+
+ModelInfo read_with_assimp(const std::filesystem::path& file, const std::string& extension, bool gzipped,
+                           const TriangleCallback& emit) {
+  const std::string name = file.string();
+  Assimp::Importer importer;
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  const aiScene* scene = nullptr;
+  if (gzipped) {
+    std::vector<char> bytes;
+    BufferedInput(file).read_rest(bytes);
+    scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags, extension.c_str());
+  } else {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(file, ec)) throw InputError(name, "", "cannot open: no such file");
+    scene = importer.ReadFile(name, kImportFlags);
+  }
+  if (!scene) throw InputError(name, "", std::string("assimp: ") + importer.GetErrorString());
+
+  ModelInfo info;
+  info.format = "assimp:" + extension;
+  info.materials.push_back(default_material());
+  for (unsigned m = 0; m < scene->mNumMaterials; ++m) info.materials.push_back(convert_material(*scene->mMaterials[m]));
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) emit_mesh(name, m, *scene->mMeshes[m], info, emit);
+  return info;
+}
+
+}  // namespace cellbake

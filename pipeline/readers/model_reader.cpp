@@ -1,0 +1,34 @@
+#include "pipeline/readers/model_reader.h"
+
+#include <algorithm>
+#include <cctype>
+
+#include "pipeline/input_error.h"
+#include "pipeline/readers/format_readers.h"
+
+namespace cellbake {
+namespace {
+
+std::string lower_extension(const std::filesystem::path& file) {
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+
+}  // namespace
+
+ModelInfo read_model(const std::filesystem::path& file, const TriangleCallback& emit) {
+  std::string ext = lower_extension(file);
+  const bool gzipped = ext == ".gz";
+  if (gzipped) ext = lower_extension(file.stem());
+  const std::string format = ext.empty() ? std::string() : ext.substr(1);
+
+  if (format == "obj") return read_obj(file, emit);
+  if (format == "ply") return read_ply(file, emit);
+  if (format == "off") return read_off(file, emit);
+  if (format == "stl") return read_stl(file, emit);
+  if (!format.empty() && assimp_supports(format)) return read_with_assimp(file, format, gzipped, emit);
+  throw InputError(file.string(), "", "unknown model format '" + ext + "'");
+}
+
+}  // namespace cellbake

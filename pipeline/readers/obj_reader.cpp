@@ -1,0 +1,202 @@
+// Wavefront OBJ reader: one pass over the lines, faces triangulated as fans and
+// emitted as soon as they are parsed. Supported statements: v (with optional
+// "r g b [a]" vertex colour extension, floats 0..1), vt, vn, f, mtllib, usemtl;
+// everything else (o, g, s, l, p, curves, ...) is ignored.
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "pipeline/input_error.h"
+#include "pipeline/readers/buffered_input.h"
+#include "pipeline/readers/colour_math.h"
+#include "pipeline/readers/format_readers.h"
+#include "pipeline/readers/mtl_reader.h"
+#include "pipeline/readers/text_scan.h"
+
+namespace cellbake {
+namespace {
+
+// One face corner after index resolution: a position index and an optional
+// texcoord index (-1 when absent).
+struct ObjCorner {
+  std::uint32_t vertex = 0;
+  std::int64_t texcoord = -1;
+};
+
+class ObjReader {
+ public:
+  ObjReader(const std::filesystem::path& file, const TriangleCallback& emit) : file_(file), in_(file), emit_(emit) {
+    info_.format = "obj";
+    info_.materials.push_back(default_material());
+  }
+
+  ModelInfo run() {
+    std::string_view line;
+    while (in_.next_line(line)) {
+      TextScan scan(line);
+      scan.skip_blanks();
+      if (scan.p == scan.end) continue;
+      const char c0 = scan.p[0];
+      const char c1 = scan.p + 1 < scan.end ? scan.p[1] : ' ';
+      if (c0 == 'v' && is_blank(c1)) {
+        ++scan.p;
+        parse_vertex(scan);
+      } else if (c0 == 'f' && is_blank(c1)) {
+        ++scan.p;
+        parse_face(scan);
+      } else if (c0 == 'v' && c1 == 't') {
+        scan.p += 2;
+        parse_texcoord(scan);
+      } else if (c0 == 'v' && c1 == 'n') {
+        ++normal_count_;
+      } else if (c0 == 'u' || c0 == 'm') {
+        const std::string_view key = scan.token();
+        if (key == "usemtl") use_material(std::string(scan.rest()));
+        if (key == "mtllib") load_libraries(scan.rest());
+      }
+    }
+    return std::move(info_);
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const {
+    throw InputError(in_.name(), at_line(in_.line_number()), what);
+  }
+
+  void parse_vertex(TextScan& scan) {
+    Vec3d p;
+    if (!scan.number(p.x) || !scan.number(p.y) || !scan.number(p.z)) fail("malformed vertex (expected 'v x y z')");
+    if (!is_finite(p)) fail("non-finite coordinate");
+    double extra[4];
+    int extras = 0;
+    while (extras < 4 && !scan.at_end()) {
+      if (!scan.number(extra[extras])) fail("malformed number in vertex");
+      ++extras;
+    }
+    if (!scan.at_end()) fail("too many values in vertex");
+    if (extras >= 3) {
+      if (vertex_colours_.empty()) {
+        vertex_colours_.resize(positions_.size());
+        has_colour_.resize(positions_.size(), 0);
+      }
+      const std::uint8_t alpha = extras == 4 ? unit_to_byte(extra[3]) : 255;
+      vertex_colours_.push_back({unit_to_byte(extra[0]), unit_to_byte(extra[1]), unit_to_byte(extra[2]), alpha});
+      has_colour_.push_back(1);
+    } else if (!vertex_colours_.empty()) {
+      vertex_colours_.emplace_back();
+      has_colour_.push_back(0);
+    }
+    positions_.push_back(p);
+  }
+
+  void parse_texcoord(TextScan& scan) {
+    double u = 0, v = 0;
+    if (!scan.number(u)) fail("malformed texture coordinate");
+    if (!scan.at_end() && !scan.number(v)) fail("malformed texture coordinate");
+    texcoords_.push_back({static_cast<float>(u), static_cast<float>(v)});
+  }
+
+  // Resolves a 1-based (or negative, relative) OBJ index against `count` items.
+  std::uint64_t resolve(std::int64_t raw, std::uint64_t count, const char* what) const {
+    if (raw == 0) fail(std::string(what) + " index 0 is invalid (OBJ indices start at 1)");
+    if (raw > 0) {
+      if (static_cast<std::uint64_t>(raw) > count)
+        fail(std::string(what) + " index " + std::to_string(raw) + " out of range (" + std::to_string(count) +
+             " defined so far)");
+      return static_cast<std::uint64_t>(raw - 1);
+    }
+    if (static_cast<std::uint64_t>(-(raw + 1)) >= count)
+      fail(std::string(what) + " index " + std::to_string(raw) + " out of range (" + std::to_string(count) +
+           " defined so far)");
+    return count - static_cast<std::uint64_t>(-raw);
+  }
+
+  ObjCorner parse_corner(TextScan& scan) {
+    std::int64_t raw;
+    if (!scan.integer_prefix(raw)) fail("malformed face corner");
+    ObjCorner corner;
+    corner.vertex = static_cast<std::uint32_t>(resolve(raw, positions_.size(), "vertex"));
+    if (scan.p < scan.end && *scan.p == '/') {
+      ++scan.p;
+      if (scan.p < scan.end && *scan.p != '/') {
+        if (!scan.integer_prefix(raw)) fail("malformed face corner");
+        corner.texcoord = static_cast<std::int64_t>(resolve(raw, texcoords_.size(), "texture coordinate"));
+      }
+      if (scan.p < scan.end && *scan.p == '/') {
+        ++scan.p;
+        if (!scan.integer_prefix(raw)) fail("malformed face corner");
+        resolve(raw, normal_count_, "normal");
+      }
+    }
+    if (scan.p < scan.end && !is_blank(*scan.p)) fail("malformed face corner");
+    return corner;
+  }
+
+  void parse_face(TextScan& scan) {
+    ObjCorner first, previous;
+    int corners = 0;
+    while (!scan.at_end()) {
+      const ObjCorner corner = parse_corner(scan);
+      if (corners >= 2) emit_triangle(first, previous, corner);
+      if (corners == 0) first = corner;
+      previous = corner;
+      ++corners;
+    }
+    if (corners < 3) fail("face with fewer than 3 vertices");
+    if (corners > 3) ++info_.polygons_triangulated;
+  }
+
+  void emit_triangle(const ObjCorner& a, const ObjCorner& b, const ObjCorner& c) {
+    Triangle t;
+    t.material = material_;
+    const Rgba8 material_colour = info_.materials[material_].color;
+    const ObjCorner* corners[3] = {&a, &b, &c};
+    for (int i = 0; i < 3; ++i) {
+      const std::uint32_t v = corners[i]->vertex;
+      t.p[i] = positions_[v];
+      const bool coloured = !has_colour_.empty() && has_colour_[v];
+      t.color[i] = corner_colour(material_colour, material_, coloured ? &vertex_colours_[v] : nullptr);
+      if (corners[i]->texcoord >= 0) t.uv[i] = texcoords_[static_cast<std::size_t>(corners[i]->texcoord)];
+    }
+    emit_(t);
+    ++info_.triangles_emitted;
+  }
+
+  void use_material(const std::string& name) {
+    const auto found = material_by_name_.find(name);
+    material_ = found == material_by_name_.end() ? 0 : found->second;
+  }
+
+  // "mtllib a.mtl [b.mtl ...]": names are resolved against the OBJ's folder; a
+  // single name containing blanks is tried first. Missing libraries are skipped.
+  void load_libraries(std::string_view operand) {
+    const std::filesystem::path folder = file_.parent_path();
+    if (operand.empty()) return;
+    if (read_mtl(folder / std::string(operand), info_.materials, material_by_name_)) return;
+    TextScan names(operand);
+    for (std::string_view name = names.token(); !name.empty(); name = names.token())
+      read_mtl(folder / std::string(name), info_.materials, material_by_name_);
+  }
+
+  std::filesystem::path file_;
+  BufferedInput in_;
+  const TriangleCallback& emit_;
+  ModelInfo info_;
+  std::vector<Vec3d> positions_;
+  std::vector<Rgba8> vertex_colours_;  // empty until the first coloured vertex
+  std::vector<std::uint8_t> has_colour_;
+  std::vector<Uv> texcoords_;
+  std::uint64_t normal_count_ = 0;
+  std::unordered_map<std::string, std::uint32_t> material_by_name_;
+  std::uint32_t material_ = 0;
+};
+
+}  // namespace
+
+ModelInfo read_obj(const std::filesystem::path& file, const TriangleCallback& emit) {
+  return ObjReader(file, emit).run();
+}
+
+}  // namespace cellbake

@@ -1,0 +1,141 @@
+#include "runner/bake_runner.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/flow_graph.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdlib>
+#include <memory>
+#include <thread>
+
+#include "pipeline/cell_job.h"
+#include "runner/progress.h"
+#include "runner/shards.h"
+#include "stages/render/chunk_renderer.h"
+#include "storage/cell_db.h"
+#include "storage/geometry_store.h"
+
+namespace cellbake {
+
+BakeSummary run_bake(const BakeConfig& config, const BakeOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  validate_bake_config(config);
+  const int threads = options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+  // Several single-threaded llvmpipe contexts use the cores better than one
+  // multi-threaded one (measured, MISSION.md); respect a user's own setting.
+  if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", threads > 1 ? "1" : "2", 1);
+
+  GeometryStore store(config.store);
+  std::filesystem::create_directories(std::filesystem::absolute(config.database).parent_path());
+  CellDb db(config.database, CellDb::Mode::read_write);
+  const std::string store_hash = store.summary().content_hash;
+  if (auto existing = db.meta("store_hash"); existing && *existing != store_hash)
+    std::fprintf(stderr, "note: %s was baked from a different geometry store; affected cells will be recomputed\n",
+                 config.database.c_str());
+  db.set_meta("store", std::filesystem::absolute(config.store).string());
+  db.set_meta("store_hash", store_hash);
+  db.set_meta("config", describe_bake_config(config));
+  db.set_meta("up", config.up);
+  db.set_meta("cell_size", std::to_string(config.cell_size));
+
+  std::vector<CellSpec> cells = select_cells(enumerate_cells(config.regions, config.cell_size), options.cells);
+  if (options.shard_count > 1) cells = shard_cells(cells, options.shard_index, options.shard_count, store);
+  db.set_meta("cells_total", std::to_string(cells.size()));
+
+  BakeSummary summary;
+  summary.cells_selected = cells.size();
+  const auto stamps = db.stamps();
+  std::vector<std::shared_ptr<CellWork>> todo;
+  for (const auto& c : cells) {
+    auto work = std::make_shared<CellWork>();
+    work->cell = c;
+    work->hashes = cell_hashes(c, config, store_hash);
+    auto it = stamps.find(c.id);
+    if (it != stamps.end() && !options.force && it->second.status == "done") {
+      if (it->second.input_hash == work->hashes.input) {
+        ++summary.cells_up_to_date;
+        continue;
+      }
+      if (it->second.cull_hash == work->hashes.cull) {
+        CullBoxResult r;
+        r.half_size = it->second.cull_half_size;
+        r.triangle_count = it->second.near_triangles;
+        for (const auto& n : it->second.near_chunks) r.near_field.push_back({n.chunk_id, n.triangles, n.whole});
+        work->cull = r;
+        ++summary.cull_reused;
+      }
+    }
+    todo.push_back(std::move(work));
+  }
+
+  using WorkPtr = std::shared_ptr<CellWork>;
+  ProgressBar progress("bake", todo.size(), "cells");
+  std::atomic<std::size_t> next{0};
+  std::uint64_t done = 0;
+
+  tbb::task_arena arena(threads);
+  arena.execute([&] {
+    tbb::enumerable_thread_specific<std::unique_ptr<ChunkRenderer>> renderers;
+    tbb::flow::graph g;
+    tbb::flow::input_node<WorkPtr> source(g, [&](tbb::flow_control& fc) -> WorkPtr {
+      const std::size_t i = next++;
+      if (i >= todo.size()) {
+        fc.stop();
+        return {};
+      }
+      return todo[i];
+    });
+    // Bound the cells in flight (each holds a cube map and dense meshes).
+    tbb::flow::limiter_node<WorkPtr> limiter(g, std::size_t(2 * threads));
+    tbb::flow::function_node<WorkPtr, WorkPtr> cull(g, tbb::flow::unlimited, [&](WorkPtr w) {
+      run_stage(*w, "cull_box", [&] { run_cull_box(*w, config, store); });
+      return w;
+    });
+    tbb::flow::function_node<WorkPtr, WorkPtr> sample(g, std::size_t(threads), [&](WorkPtr w) {
+      run_stage(*w, "sample", [&] {
+        auto& renderer = renderers.local();
+        if (!renderer) {
+          const int size = config.face_size * config.supersample;
+          renderer = std::make_unique<ChunkRenderer>(create_gl_context(GlBackend::osmesa, size, size));
+        }
+        run_sample(*w, config, store, *renderer);
+      });
+      return w;
+    });
+    tbb::flow::function_node<WorkPtr, WorkPtr> mesh(g, tbb::flow::unlimited, [&](WorkPtr w) {
+      run_stage(*w, "depth_mesh", [&] { run_depth_mesh(*w, config); });
+      run_stage(*w, "simplify", [&] { run_simplify(*w, config); });
+      run_stage(*w, "encode", [&] { run_encode(*w, config); });
+      return w;
+    });
+    tbb::flow::function_node<WorkPtr, tbb::flow::continue_msg> write(g, tbb::flow::serial, [&](WorkPtr w) {
+      const CellRow row = finish_cell_row(*w);
+      db.put_cell(row);
+      if (row.status == "done") {
+        ++summary.cells_baked;
+      } else {
+        ++summary.cells_failed;
+        std::fprintf(stderr, "\n%s\n", row.error.c_str());
+      }
+      *w = CellWork{};  // free memory now; the pointer may linger in the graph
+      if (!options.quiet) progress.update(++done);
+      return tbb::flow::continue_msg{};
+    });
+    tbb::flow::make_edge(source, limiter);
+    tbb::flow::make_edge(limiter, cull);
+    tbb::flow::make_edge(cull, sample);
+    tbb::flow::make_edge(sample, mesh);
+    tbb::flow::make_edge(mesh, write);
+    tbb::flow::make_edge(write, limiter.decrementer());
+    source.activate();
+    g.wait_for_all();
+  });
+  if (!options.quiet) progress.finish();
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return summary;
+}
+
+}  // namespace cellbake

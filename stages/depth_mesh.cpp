@@ -1,0 +1,317 @@
+// Dense depth meshes without skins (Wilson 2002, ch. 5 §5.2.2; skin heuristics
+// §3.4.2.1.1). See depth_mesh.h for the contract.
+//
+// Every pixel corner of the cube is a point of an integer lattice on the cube of
+// half-size N (N = face size): direction D = N forward + (2 ci - N) right +
+// (N - 2 cj) up. The pixels touching a lattice point are gathered from every
+// face containing it (4 inside a face or on a cube edge, 3 at a cube corner),
+// sorted, split into connected components by the skin test, and each component's
+// depth is the average of its pixels' planar depths summed in that sorted order.
+// The vertex is then D * (depth / N): the same arithmetic on the same numbers
+// for every face that shares the point, hence bit-identical positions.
+#include "stages/depth_mesh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace cellbake {
+namespace {
+
+using Lattice = std::array<long, 3>;
+
+struct PixelRef {
+  int face = 0, i = 0, j = 0;
+  friend bool operator<(const PixelRef& a, const PixelRef& b) {
+    if (a.face != b.face) return a.face < b.face;
+    if (a.j != b.j) return a.j < b.j;
+    return a.i < b.i;
+  }
+  friend bool operator==(const PixelRef&, const PixelRef&) = default;
+};
+
+struct IntBasis {
+  Lattice forward, right, up;
+};
+
+Lattice to_lattice(Vec3d v) { return {std::lround(v.x), std::lround(v.y), std::lround(v.z)}; }
+long dot(const Lattice& a, const Lattice& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+class CubeLattice {
+ public:
+  CubeLattice(const CubeSample& sample, const DepthMeshParams& params)
+      : sample_(sample), n_(sample.faces[0].size) {
+    for (int f = 0; f < kCubeFaces; ++f) {
+      const FaceBasis b = cube_face_basis(f);
+      basis_[f] = b;
+      ibasis_[f] = {to_lattice(b.forward), to_lattice(b.right), to_lattice(b.up)};
+    }
+    angle_limit_ = params.skin_angle_degrees * 3.14159265358979323846 / 180.0;
+    jump_limit_ = params.max_relative_depth_jump;
+  }
+
+  int size() const { return n_; }
+  float depth(const PixelRef& p) const { return sample_.faces[p.face].depth[std::size_t(p.j) * n_ + p.i]; }
+  bool background(const PixelRef& p) const { return !std::isfinite(depth(p)); }
+
+  // Surface point of a pixel centre relative to the eye.
+  Vec3d point(const PixelRef& p) const {
+    const double s = 2.0 * (p.i + 0.5) / n_ - 1.0;
+    const double t = 1.0 - 2.0 * (p.j + 0.5) / n_;
+    return cube_face_direction(basis_[p.face], s, t) * double(depth(p));
+  }
+
+  // Skin test between neighbouring pixels; symmetric and deterministic (the
+  // pair is put in canonical order before any arithmetic).
+  bool skin(PixelRef a, PixelRef b) const {
+    if (b < a) std::swap(a, b);
+    if (background(a) || background(b)) return true;
+    const Vec3d pa = point(a), pb = point(b);
+    const double da = length(pa), db = length(pb);
+    if (std::abs(da - db) > jump_limit_ * std::min(da, db)) return true;
+    const Vec3d e = pb - pa;
+    const Vec3d m = (pa + pb) * 0.5;
+    const double angle = std::atan2(length(cross(e, m)), std::abs(cellbake::dot(e, m)));
+    return angle < angle_limit_;
+  }
+
+  // Lattice direction of corner (ci, cj) of face f.
+  Lattice corner(int f, int ci, int cj) const {
+    const IntBasis& b = ibasis_[f];
+    Lattice d{};
+    for (int k = 0; k < 3; ++k) d[k] = long(n_) * b.forward[k] + long(2 * ci - n_) * b.right[k] + long(n_ - 2 * cj) * b.up[k];
+    return d;
+  }
+
+  // All pixels of all faces touching lattice point d, sorted.
+  void gather(const Lattice& d, std::vector<PixelRef>& out) const {
+    out.clear();
+    for (int g = 0; g < kCubeFaces; ++g) {
+      const IntBasis& b = ibasis_[g];
+      if (dot(d, b.forward) != n_) continue;
+      const long ci = (dot(d, b.right) + n_) / 2, cj = (n_ - dot(d, b.up)) / 2;
+      for (long j = cj - 1; j <= cj; ++j)
+        for (long i = ci - 1; i <= ci; ++i)
+          if (i >= 0 && j >= 0 && i < n_ && j < n_) out.push_back({g, int(i), int(j)});
+    }
+    std::sort(out.begin(), out.end());
+  }
+
+  // Whether lattice point d is on a cube edge (two coordinates at +-N).
+  bool on_cube_edge(const Lattice& d) const {
+    int at_n = 0;
+    for (long c : d) at_n += (std::abs(c) == n_);
+    return at_n >= 2;
+  }
+
+ private:
+  const CubeSample& sample_;
+  int n_;
+  double angle_limit_ = 0, jump_limit_ = 0;
+  std::array<FaceBasis, kCubeFaces> basis_;
+  std::array<IntBasis, kCubeFaces> ibasis_;
+};
+
+// Connected components (labels 0..k-1, by first occurrence) of the pixels
+// touching one lattice point; pairs are all 8-neighbours of each other.
+struct Corner {
+  std::vector<PixelRef> pixels;
+  std::array<int, 4> label{};
+  std::array<bool, 6> pair_connected{};  // pairs in order (0,1) (0,2) (0,3) (1,2) (1,3) (2,3)
+  int components = 0;
+};
+
+int pair_index(int a, int b) {
+  static constexpr int table[4][4] = {{-1, 0, 1, 2}, {0, -1, 3, 4}, {1, 3, -1, 5}, {2, 4, 5, -1}};
+  return table[a][b];
+}
+
+void analyse_corner(const CubeLattice& lat, Corner& c) {
+  const int n = int(c.pixels.size());
+  std::array<int, 4> parent{0, 1, 2, 3};
+  auto find = [&](int x) {
+    while (parent[x] != x) x = parent[x];
+    return x;
+  };
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b) {
+      const bool connected = !lat.skin(c.pixels[a], c.pixels[b]);
+      c.pair_connected[pair_index(a, b)] = connected;
+      if (connected) {
+        const int ra = find(a), rb = find(b);
+        parent[std::max(ra, rb)] = std::min(ra, rb);
+      }
+    }
+  std::array<int, 4> root_label{-1, -1, -1, -1};
+  c.components = 0;
+  for (int a = 0; a < n; ++a) {
+    const int r = find(a);
+    if (root_label[r] < 0) root_label[r] = c.components++;
+    c.label[a] = root_label[r];
+  }
+}
+
+// True when a cube-edge lattice point is fully connected (see depth_mesh.h).
+bool edge_point_fully_connected(const Corner& c) {
+  // Sorted by face: pixels 0, 1 lie on one face and 2, 3 on the other.
+  return c.pixels.size() == 4 && c.components == 1 && c.pair_connected[pair_index(0, 1)] &&
+         c.pair_connected[pair_index(2, 3)];
+}
+
+bool cube_corner_fully_connected(const CubeLattice& lat, const Lattice& d) {
+  Corner c;
+  lat.gather(d, c.pixels);
+  if (c.pixels.size() != 3) return false;
+  for (const PixelRef& p : c.pixels)
+    if (lat.background(p)) return false;
+  analyse_corner(lat, c);
+  return c.pair_connected[0] && c.pair_connected[1] && c.pair_connected[3];
+}
+
+void validate(const CubeSample& sample) {
+  const int n = sample.faces[0].size;
+  if (n <= 0) throw std::invalid_argument("build_depth_meshes: face 0 has size " + std::to_string(n));
+  for (int f = 0; f < kCubeFaces; ++f) {
+    const CubeFace& face = sample.faces[f];
+    if (face.size != n)
+      throw std::invalid_argument("build_depth_meshes: face " + std::to_string(f) + " has size " +
+                                  std::to_string(face.size) + ", face 0 has " + std::to_string(n));
+    if (face.depth.size() != std::size_t(n) * n)
+      throw std::invalid_argument("build_depth_meshes: face " + std::to_string(f) + " holds " +
+                                  std::to_string(face.depth.size()) + " depths, expected " + std::to_string(n * n));
+    for (std::size_t k = 0; k < face.depth.size(); ++k) {
+      const float z = face.depth[k];
+      if (std::isnan(z) || !(z > 0))
+        throw std::invalid_argument("build_depth_meshes: face " + std::to_string(f) + " pixel (" +
+                                    std::to_string(k % n) + ", " + std::to_string(k / n) + ") has depth " +
+                                    std::to_string(z) + " (must be positive or +inf)");
+    }
+  }
+}
+
+constexpr std::uint32_t kNone = 0xffffffffu;
+
+FaceMesh build_face(const CubeLattice& lat, int f) {
+  const int n = lat.size();
+  FaceMesh mesh;
+  // Vertex ids per pixel corner: NW, NE, SW, SE.
+  std::vector<std::array<std::uint32_t, 4>> corner_vertex(std::size_t(n) * n, {kNone, kNone, kNone, kNone});
+  Corner c;
+  const float inv_n = 1.0f / float(n);
+  for (int cj = 0; cj <= n; ++cj) {
+    for (int ci = 0; ci <= n; ++ci) {
+      const Lattice d = lat.corner(f, ci, cj);
+      const bool border = ci == 0 || cj == 0 || ci == n || cj == n;
+      if (border) {
+        lat.gather(d, c.pixels);
+      } else {
+        c.pixels = {{f, ci - 1, cj - 1}, {f, ci, cj - 1}, {f, ci - 1, cj}, {f, ci, cj}};
+      }
+      analyse_corner(lat, c);
+      const int count = int(c.pixels.size());
+      // Per-pixel records at cube-edge points that are not fully connected.
+      bool split_per_pixel = false;
+      if (border && count == 4 && lat.on_cube_edge(d)) {
+        split_per_pixel = !edge_point_fully_connected(c);
+        if (!split_per_pixel) {
+          // Next to a cube corner along this edge?
+          int free_axis = 0;
+          for (int k = 0; k < 3; ++k)
+            if (std::abs(d[k]) != n) free_axis = k;
+          if (std::abs(d[free_axis]) == n - 2) {
+            Lattice cube_corner = d;
+            cube_corner[free_axis] = d[free_axis] > 0 ? n : -n;
+            split_per_pixel = !cube_corner_fully_connected(lat, cube_corner);
+          }
+        }
+      }
+      // Average depth per component, summed in sorted pixel order.
+      std::array<double, 4> sum{}, cnt{};
+      for (int a = 0; a < count; ++a) {
+        if (lat.background(c.pixels[a])) continue;
+        sum[c.label[a]] += lat.depth(c.pixels[a]);
+        cnt[c.label[a]] += 1;
+      }
+      std::array<std::uint32_t, 4> component_vertex{kNone, kNone, kNone, kNone};
+      for (int a = 0; a < count; ++a) {
+        const PixelRef& p = c.pixels[a];
+        if (p.face != f || lat.background(p)) continue;
+        const int l = c.label[a];
+        std::uint32_t id = split_per_pixel ? kNone : component_vertex[l];
+        if (id == kNone) {
+          const double scale = (sum[l] / cnt[l]) / double(n);
+          mesh.positions.push_back({float(double(d[0]) * scale), float(double(d[1]) * scale), float(double(d[2]) * scale)});
+          mesh.uvs.push_back({float(ci) * inv_n, float(cj) * inv_n});
+          id = std::uint32_t(mesh.positions.size() - 1);
+          if (!split_per_pixel) component_vertex[l] = id;
+        }
+        const int slot = (cj - p.j) * 2 + (ci - p.i);
+        corner_vertex[std::size_t(p.j) * n + p.i][slot] = id;
+      }
+    }
+  }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const auto& v = corner_vertex[std::size_t(j) * n + i];
+      if (v[0] == kNone) continue;  // background pixel
+      mesh.indices.insert(mesh.indices.end(), {v[0], v[2], v[3], v[0], v[3], v[1]});
+    }
+  return mesh;
+}
+
+// Unique skin edges over the whole cube: pairs inside a face from a scan of
+// each face, pairs across faces from the lattice points on cube edges.
+std::size_t count_skin_edges(const CubeLattice& lat) {
+  const int n = lat.size();
+  std::size_t skins = 0;
+  for (int f = 0; f < kCubeFaces; ++f)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const PixelRef p{f, i, j};
+        if (i + 1 < n) skins += lat.skin(p, {f, i + 1, j});
+        if (j + 1 < n) skins += lat.skin(p, {f, i, j + 1});
+        if (i + 1 < n && j + 1 < n) skins += lat.skin(p, {f, i + 1, j + 1});
+        if (i > 0 && j + 1 < n) skins += lat.skin(p, {f, i - 1, j + 1});
+      }
+  std::vector<std::pair<PixelRef, PixelRef>> cross_pairs;
+  std::vector<PixelRef> pixels;
+  for (int f = 0; f < kCubeFaces; ++f)
+    for (int k = 0; k <= n; ++k)
+      for (auto [ci, cj] : {std::pair{k, 0}, std::pair{k, n}, std::pair{0, k}, std::pair{n, k}}) {
+        lat.gather(lat.corner(f, ci, cj), pixels);
+        for (std::size_t a = 0; a < pixels.size(); ++a)
+          for (std::size_t b = a + 1; b < pixels.size(); ++b)
+            if (pixels[a].face != pixels[b].face) cross_pairs.emplace_back(pixels[a], pixels[b]);
+      }
+  std::sort(cross_pairs.begin(), cross_pairs.end(), [](const auto& x, const auto& y) {
+    if (!(x.first == y.first)) return x.first < y.first;
+    return x.second < y.second;
+  });
+  cross_pairs.erase(std::unique(cross_pairs.begin(), cross_pairs.end()), cross_pairs.end());
+  for (const auto& [a, b] : cross_pairs) skins += lat.skin(a, b);
+  return skins;
+}
+
+}  // namespace
+
+std::array<FaceMesh, kCubeFaces> build_depth_meshes(const CubeSample& sample, const DepthMeshParams& params,
+                                                    DepthMeshStats* stats) {
+  validate(sample);
+  const CubeLattice lat(sample, params);
+  std::array<FaceMesh, kCubeFaces> meshes;
+  for (int f = 0; f < kCubeFaces; ++f) meshes[f] = build_face(lat, f);
+  if (stats) {
+    *stats = {};
+    for (int f = 0; f < kCubeFaces; ++f) {
+      stats->triangles += meshes[f].triangle_count();
+      for (float z : sample.faces[f].depth) stats->background_pixels += !std::isfinite(z);
+    }
+    stats->skin_edges = count_skin_edges(lat);
+  }
+  return meshes;
+}
+
+}  // namespace cellbake

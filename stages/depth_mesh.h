@@ -1,0 +1,53 @@
+// Dense depth meshes without skins: one triangle mesh per cube face, two
+// triangles per covered pixel with corners on pixel corners.
+//
+// Wilson 2002, "Spatially Encoded Image-Space Simplifications for Interactive
+// Walkthrough", ch. 5 §5.2.2 (dense mesh creation, corner depth = average of the
+// connected neighbours) and §3.4.2.1.1 (skin heuristics).
+#pragma once
+
+#include <array>
+#include <cstddef>
+
+#include "stages/cube_map.h"
+
+namespace cellbake {
+
+struct DepthMeshParams {
+  // An edge between two neighbouring pixels' surface points is a skin when the
+  // angle between the edge and the eye ray through its midpoint is below this
+  // (the edge is nearly parallel to the ray, i.e. it spans a depth discontinuity).
+  double skin_angle_degrees = 3.0;
+  // ... or when the relative jump of the eye distances, |d1 - d2| / min(d1, d2),
+  // exceeds this. At 512^2 a plane must be within ~1.7 degrees of the ray before
+  // its neighbouring pixels jump by 10 %.
+  double max_relative_depth_jump = 0.1;
+};
+
+struct DepthMeshStats {
+  std::size_t triangles = 0;          // over all six faces
+  std::size_t skin_edges = 0;         // unique neighbouring pixel pairs (8-neighbourhood, across faces too) that are skins
+  std::size_t background_pixels = 0;  // over all six faces
+};
+
+// Builds one dense mesh per cube face (order of `cube_map.h`). Every pixel that
+// is not background gets two triangles (NW, SW, SE) and (NW, SE, NE), counter-
+// clockwise as seen from the eye. A corner vertex lies on the eye ray through the
+// pixel corner; its planar depth is the average depth of the pixels around that
+// corner that are connected to the pixel (connected components of the
+// 8-neighbour, non-skin adjacency among the pixels touching the corner). Corners
+// on cube-face borders are computed from the pixels of every face touching them,
+// so neighbouring faces get bit-identical positions there. Where a border
+// corner is not fully connected (its pixels are not one component, or two pixels
+// of the same face there are not directly connected, or it is next to a cube
+// corner whose three pixels are not all connected), each pixel gets its own
+// vertex record there (positions still shared where the surface is): this marks
+// the break for `simplify_face_mesh`, which must decide border simplification
+// identically on both faces.
+// Positions are relative to the sample's eye (float); uv = pixel corner / size
+// (u right, v down). Deterministic. Throws std::invalid_argument when the faces
+// differ in size, are empty, or hold a depth that is NaN or not positive.
+std::array<FaceMesh, kCubeFaces> build_depth_meshes(const CubeSample& sample, const DepthMeshParams& params,
+                                                    DepthMeshStats* stats = nullptr);
+
+}  // namespace cellbake

@@ -1,0 +1,123 @@
+// Stage `encode`, colour images: JPEG / WebP / PNG through OpenImageIO with
+// in-memory I/O proxies (no files). Face meshes are in encode_face_mesh.cpp.
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
+
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+#include "stages/encode.h"
+
+namespace cellbake {
+namespace {
+
+constexpr int kMaxImageSide = 16384;
+constexpr std::int64_t kMaxImagePixels = std::int64_t{1} << 26;
+
+// OpenImageIO's format name for our format name.
+std::string oiio_format(const std::string& format) {
+  if (format == "jpeg") return "jpg";
+  if (format == "webp") return "webp";
+  if (format == "png") return "png";
+  throw std::invalid_argument("encode_image: unknown image format '" + format + "' (expected jpeg, webp or png)");
+}
+
+// Reads and clears OpenImageIO's pending global error text.
+std::string take_global_error() { return OIIO::geterror(); }
+
+// The format of an encoded image, from its first bytes, or "" if unknown.
+std::string sniff_format(const std::uint8_t* data, std::size_t size) {
+  static constexpr std::uint8_t png[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (size >= 8 && std::memcmp(data, png, 8) == 0) return "png";
+  if (size >= 3 && data[0] == 0xff && data[1] == 0xd8 && data[2] == 0xff) return "jpg";
+  if (size >= 12 && std::memcmp(data, "RIFF", 4) == 0 && std::memcmp(data + 8, "WEBP", 4) == 0) return "webp";
+  return "";
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> encode_image(const std::vector<Rgba8>& pixels, int width, int height,
+                                       const ImageEncodeParams& params) {
+  const std::string format = oiio_format(params.format);
+  if (width <= 0 || height <= 0 || width > kMaxImageSide || height > kMaxImageSide)
+    throw std::invalid_argument("encode_image: bad image size " + std::to_string(width) + "x" + std::to_string(height));
+  if (pixels.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
+    throw std::invalid_argument("encode_image: " + std::to_string(pixels.size()) + " pixels for a " +
+                                std::to_string(width) + "x" + std::to_string(height) + " image");
+  if (params.quality < 1 || params.quality > 100)
+    throw std::invalid_argument("encode_image: quality " + std::to_string(params.quality) + " is outside 1..100");
+
+  const int channels = format == "jpg" ? 3 : 4;
+  std::vector<std::uint8_t> raw(pixels.size() * static_cast<std::size_t>(channels));
+  for (std::size_t i = 0; i < pixels.size(); ++i) {
+    std::uint8_t* out = raw.data() + i * static_cast<std::size_t>(channels);
+    out[0] = pixels[i].r;
+    out[1] = pixels[i].g;
+    out[2] = pixels[i].b;
+    if (channels == 4) out[3] = pixels[i].a;
+  }
+
+  std::vector<unsigned char> bytes;
+  OIIO::Filesystem::IOVecOutput proxy(bytes);
+  OIIO::Filesystem::IOProxy* proxy_ptr = &proxy;
+  OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
+  // The proxy goes in through the spec, not ImageOutput::create: OIIO 2.4's
+  // JPEG writer crashes when destroyed unopened with a proxy already attached.
+  spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy_ptr);
+  spec.attribute("Compression", params.format + ":" + std::to_string(params.quality));
+  // Our pixels are straight (unassociated) alpha: stop OIIO from converting.
+  spec.attribute("oiio:UnassociatedAlpha", 1);
+  auto output = OIIO::ImageOutput::create(format);
+  if (!output) throw std::runtime_error("encode_image: no OpenImageIO writer for " + params.format + ": " + take_global_error());
+  const bool ok = output->open("memory." + format, spec) &&
+                  output->write_image(OIIO::TypeDesc::UINT8, raw.data()) && output->close();
+  if (!ok) throw std::runtime_error("encode_image: writing " + params.format + " failed: " + output->geterror());
+  return {bytes.begin(), bytes.end()};
+}
+
+DecodedImage decode_image(const std::uint8_t* data, std::size_t size) {
+  if (data == nullptr || size == 0) throw std::runtime_error("image blob: empty");
+  const std::string format = sniff_format(data, size);
+  if (format.empty()) throw std::runtime_error("image blob: not a PNG, JPEG or WebP image");
+
+  OIIO::Filesystem::IOMemReader proxy(data, size);
+  OIIO::Filesystem::IOProxy* proxy_ptr = &proxy;
+  OIIO::ImageSpec config;
+  config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy_ptr);
+  config.attribute("oiio:UnassociatedAlpha", 1);  // give back straight alpha, as stored
+  auto input = OIIO::ImageInput::open("memory." + format, &config);
+  if (!input) throw std::runtime_error("image blob: cannot open " + format + ": " + take_global_error());
+  const OIIO::ImageSpec& spec = input->spec();
+  if (spec.width <= 0 || spec.height <= 0 || spec.depth != 1 || spec.width > kMaxImageSide ||
+      spec.height > kMaxImageSide || std::int64_t{spec.width} * spec.height > kMaxImagePixels)
+    throw std::runtime_error("image blob: unsupported size " + std::to_string(spec.width) + "x" +
+                             std::to_string(spec.height) + "x" + std::to_string(spec.depth));
+  const int channels = spec.nchannels;
+  if (channels < 1 || channels > 4)
+    throw std::runtime_error("image blob: unsupported channel count " + std::to_string(channels));
+
+  DecodedImage image;
+  image.width = spec.width;
+  image.height = spec.height;
+  const std::size_t count = static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height);
+  std::vector<std::uint8_t> raw(count * static_cast<std::size_t>(channels));
+  if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, raw.data())) {
+    const std::string message = input->geterror();
+    throw std::runtime_error("image blob: decoding " + format + " failed: " + message);
+  }
+  input->close();
+  image.pixels.resize(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::uint8_t* in = raw.data() + i * static_cast<std::size_t>(channels);
+    Rgba8& p = image.pixels[i];
+    if (channels <= 2) {
+      p = {in[0], in[0], in[0], channels == 2 ? in[1] : std::uint8_t{255}};
+    } else {
+      p = {in[0], in[1], in[2], channels == 4 ? in[3] : std::uint8_t{255}};
+    }
+  }
+  return image;
+}
+
+}  // namespace cellbake

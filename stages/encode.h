@@ -1,0 +1,86 @@
+// Stage `encode`: compact, deterministic byte encodings of a cell's far field —
+// each cube face's colour image (JPEG / WebP / PNG through OpenImageIO, in
+// memory) and each face's textured depth mesh (quantised positions and
+// texture coordinates, meshoptimizer vertex and index codecs; Kapoulkine,
+// meshoptimizer, https://github.com/zeux/meshoptimizer). Decoders take
+// untrusted bytes: they validate everything and throw std::runtime_error,
+// never crash.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "stages/cube_map.h"
+#include "stages/geometry.h"
+
+namespace cellbake {
+
+// ------------------------------------------------------------------ images
+
+struct ImageEncodeParams {
+  std::string format = "jpeg";  // "jpeg" | "webp" | "png"
+  int quality = 85;             // 1..100 for jpeg and webp (lossy); ignored by png (lossless)
+};
+
+struct DecodedImage {
+  int width = 0, height = 0;
+  std::vector<Rgba8> pixels;  // row-major, row 0 at the top, width * height
+};
+
+// Encodes a row-major RGBA8 image (row 0 at the top) as format `params.format`.
+// JPEG has no alpha: alpha is dropped (decode gives 255). PNG is lossless;
+// WebP at quality 100 is still lossy. Same input and params -> same bytes.
+// Throws std::invalid_argument for an empty or mis-sized image, an unknown
+// format or a quality outside 1..100, and std::runtime_error("encode_image: ...")
+// when OpenImageIO fails.
+std::vector<std::uint8_t> encode_image(const std::vector<Rgba8>& pixels, int width, int height,
+                                       const ImageEncodeParams& params);
+
+// Decodes bytes from encode_image (format sniffed from the magic bytes: PNG,
+// JPEG, WebP). Grey and grey+alpha images are expanded to RGBA; images without
+// alpha get 255. Throws std::runtime_error("image blob: ...") on anything it
+// cannot decode, including images above 16384 pixels on a side or 2^26 pixels
+// in all. Never crashes on garbage.
+DecodedImage decode_image(const std::uint8_t* data, std::size_t size);
+inline DecodedImage decode_image(const std::vector<std::uint8_t>& bytes) { return decode_image(bytes.data(), bytes.size()); }
+
+// ------------------------------------------------------------- face meshes
+
+struct MeshEncodeParams {
+  // Bits per position axis (1..16), quantised over the mesh's own bounds; see
+  // face_mesh_position_error_bound for the resulting error.
+  int position_bits = 16;
+  // Reorder triangles for the vertex cache and vertices for fetch before
+  // encoding (meshoptimizer), which shrinks the index stream ~2x. The decoded
+  // mesh then has the same triangles (same winding, corners possibly rotated)
+  // in a different order. When false, the order of triangles is kept.
+  bool optimize_order = true;
+};
+
+// Encodes a face mesh: a 64-byte little-endian header (magic "CBFM", version,
+// bits, counts, position and uv bounds, stream sizes), then the
+// meshoptimizer-encoded vertex stream (quantised x, y, z at position_bits and
+// u, v at 16 bits, as uint16) and index stream. Same input and params -> same
+// bytes. Throws std::invalid_argument("encode_face_mesh: ...") for a
+// non-finite position or uv, an index out of range, an index count not a
+// multiple of 3, uvs not matching positions, or bits outside 1..16.
+std::vector<std::uint8_t> encode_face_mesh(const FaceMesh& mesh, const MeshEncodeParams& params);
+
+// Decodes bytes from encode_face_mesh. Validates every length, count, bound,
+// quantised value and index; throws std::runtime_error("face mesh blob: ...")
+// on anything wrong. Memory use is bounded by a small multiple of `size`.
+FaceMesh decode_face_mesh(const std::uint8_t* data, std::size_t size);
+inline FaceMesh decode_face_mesh(const std::vector<std::uint8_t>& bytes) {
+  return decode_face_mesh(bytes.data(), bytes.size());
+}
+
+// Largest per-axis position error (same units as the positions) that encoding
+// `mesh` at `position_bits` can introduce: half a quantisation step of the
+// widest axis, (max - min) / (2^bits - 1) / 2, plus float32 rounding of the
+// decoded value. Texture coordinates: (max - min) / 65535 / 2 plus rounding.
+double face_mesh_position_error_bound(const FaceMesh& mesh, int position_bits);
+double face_mesh_uv_error_bound(const FaceMesh& mesh);
+
+}  // namespace cellbake

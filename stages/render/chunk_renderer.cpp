@@ -1,0 +1,443 @@
+#include "stages/render/chunk_renderer.h"
+
+#include "stages/render/gl_functions.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace cellbake {
+namespace {
+
+// Vertex shader: positions arrive relative to the chunk origin; u_offset moves
+// them to eye-relative world axes; u_view_projection = projection * rotation
+// into the camera frame.
+constexpr const char* kVertexShader = R"(#version 330 core
+layout(location = 0) in vec3 a_position;
+layout(location = 1) in vec4 a_color;
+uniform vec3 u_offset;      // chunk origin - eye, world axes
+uniform mat4 u_view_projection;
+uniform vec3 u_forward;     // camera forward axis, unit length
+out vec3 v_relative;        // world position - eye
+out float v_view_depth;     // planar distance along the camera's forward axis
+out vec4 v_color;
+void main() {
+  v_relative = a_position + u_offset;
+  v_view_depth = dot(v_relative, u_forward);
+  v_color = a_color;
+  gl_Position = u_view_projection * vec4(v_relative, 1.0);
+}
+)";
+
+constexpr const char* kFragmentShader = R"(#version 330 core
+in vec3 v_relative;
+in float v_view_depth;
+in vec4 v_color;
+uniform vec3 u_discard_lo;  // discard box relative to the eye
+uniform vec3 u_discard_hi;
+layout(location = 0) out vec4 o_color;
+layout(location = 1) out float o_view_depth;
+void main() {
+  if (all(greaterThan(v_relative, u_discard_lo)) && all(lessThan(v_relative, u_discard_hi))) discard;
+  o_color = v_color;
+  o_view_depth = v_view_depth;
+}
+)";
+
+struct Vertex {
+  float x, y, z;
+  Rgba8 color;
+};
+static_assert(sizeof(Vertex) == 16);
+
+GLuint compile_shader(const GlFunctions& gl, GLenum type, const char* source) {
+  const GLuint shader = gl.CreateShader(type);
+  gl.ShaderSource(shader, 1, &source, nullptr);
+  gl.CompileShader(shader);
+  GLint ok = GL_FALSE;
+  gl.GetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    std::array<char, 4096> log{};
+    gl.GetShaderInfoLog(shader, static_cast<GLsizei>(log.size()), nullptr, log.data());
+    gl.DeleteShader(shader);
+    throw std::runtime_error(std::string("chunk_renderer: ") +
+                             (type == GL_VERTEX_SHADER ? "vertex" : "fragment") +
+                             " shader failed to compile: " + log.data());
+  }
+  return shader;
+}
+
+// Column-major 4x4 matrices as GL expects them; built in double.
+using Mat4 = std::array<double, 16>;
+
+Mat4 multiply(const Mat4& a, const Mat4& b) {
+  Mat4 m{};
+  for (int col = 0; col < 4; ++col)
+    for (int row = 0; row < 4; ++row)
+      for (int k = 0; k < 4; ++k) m[col * 4 + row] += a[k * 4 + row] * b[col * 4 + k];
+  return m;
+}
+
+// Rotation from world axes to the camera frame (rows right, up, -forward).
+Mat4 view_rotation(const RenderCamera& c) {
+  Mat4 m{};
+  const Vec3d rows[3] = {c.right, c.up, c.forward * -1.0};
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 3; ++k) m[k * 4 + r] = rows[r][k];
+  m[15] = 1;
+  return m;
+}
+
+// Off-axis perspective with an infinite far plane. Reversed-Z (clip control
+// ZERO_TO_ONE): depth = near / d, 1 at the near plane, -> 0 at infinity.
+// Standard: NDC z = 1 - 2 near / d.
+Mat4 projection(const RenderCamera& c, bool reversed_z) {
+  const double l = c.tan_left, r = c.tan_right, b = c.tan_bottom, t = c.tan_top, n = c.near_plane;
+  Mat4 m{};
+  m[0] = 2 / (r - l);
+  m[8] = (r + l) / (r - l);
+  m[5] = 2 / (t - b);
+  m[9] = (t + b) / (t - b);
+  m[11] = -1;
+  if (reversed_z) {
+    m[14] = n;
+  } else {
+    m[10] = -1;
+    m[14] = -2 * n;
+  }
+  return m;
+}
+
+void validate_camera(const RenderCamera& c) {
+  if (!is_finite(c.eye)) throw std::invalid_argument("chunk_renderer: camera eye is not finite");
+  if (!(c.near_plane > 0) || !std::isfinite(c.near_plane))
+    throw std::invalid_argument("chunk_renderer: near plane must be positive, got " + std::to_string(c.near_plane));
+  if (!(c.tan_right > c.tan_left) || !(c.tan_top > c.tan_bottom))
+    throw std::invalid_argument("chunk_renderer: empty camera frustum");
+}
+
+// Makes `context` current and loads its entry points.
+GlFunctions load_current_functions(GlContext* context) {
+  if (!context) throw std::invalid_argument("chunk_renderer: null GL context");
+  context->make_current();
+  return load_gl_functions(*context);
+}
+
+}  // namespace
+
+ChunkRenderer::ChunkRenderer(std::unique_ptr<GlContext> context, ChunkRendererParams params)
+    : context_(std::move(context)),
+      params_(params),
+      gl_functions_(std::make_unique<GlFunctions>(load_current_functions(context_.get()))),
+      gl_(*gl_functions_) {
+  build_program();
+}
+
+ChunkRenderer::~ChunkRenderer() {
+  try {
+    make_current();
+    clear_cache();
+    release_framebuffer();
+    if (program_) gl_.DeleteProgram(program_);
+  } catch (...) {
+    // The context goes away with us; its objects go with it.
+  }
+}
+
+// Unconditional: another context may have been made current on this thread,
+// or this one on another thread, since the last call (a pointer comparison
+// with OSMesaGetCurrentContext cannot tell a reused address apart).
+void ChunkRenderer::make_current() { context_->make_current(); }
+
+void ChunkRenderer::build_program() {
+  const GLuint vs = compile_shader(gl_, GL_VERTEX_SHADER, kVertexShader);
+  GLuint fs = 0;
+  try {
+    fs = compile_shader(gl_, GL_FRAGMENT_SHADER, kFragmentShader);
+  } catch (...) {
+    gl_.DeleteShader(vs);
+    throw;
+  }
+  program_ = gl_.CreateProgram();
+  gl_.AttachShader(program_, vs);
+  gl_.AttachShader(program_, fs);
+  gl_.LinkProgram(program_);
+  gl_.DeleteShader(vs);
+  gl_.DeleteShader(fs);
+  GLint ok = GL_FALSE;
+  gl_.GetProgramiv(program_, GL_LINK_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    std::array<char, 4096> log{};
+    gl_.GetProgramInfoLog(program_, static_cast<GLsizei>(log.size()), nullptr, log.data());
+    throw std::runtime_error(std::string("chunk_renderer: shader program failed to link: ") + log.data());
+  }
+  u_offset_ = gl_.GetUniformLocation(program_, "u_offset");
+  u_view_projection_ = gl_.GetUniformLocation(program_, "u_view_projection");
+  u_forward_ = gl_.GetUniformLocation(program_, "u_forward");
+  u_discard_lo_ = gl_.GetUniformLocation(program_, "u_discard_lo");
+  u_discard_hi_ = gl_.GetUniformLocation(program_, "u_discard_hi");
+  check_gl_error(gl_, "chunk_renderer: build_program");
+}
+
+void ChunkRenderer::release_framebuffer() {
+  if (framebuffer_) gl_.DeleteFramebuffers(1, &framebuffer_);
+  const GLuint buffers[] = {color_buffer_, view_depth_buffer_, depth_buffer_};
+  for (GLuint b : buffers)
+    if (b) gl_.DeleteRenderbuffers(1, &b);
+  framebuffer_ = color_buffer_ = view_depth_buffer_ = depth_buffer_ = 0;
+  frame_width_ = frame_height_ = 0;
+}
+
+void ChunkRenderer::resize_framebuffer(int width, int height) {
+  release_framebuffer();
+  gl_.GenFramebuffers(1, &framebuffer_);
+  gl_.BindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
+  const auto make_buffer = [&](GLenum format, GLenum attachment) {
+    GLuint rb = 0;
+    gl_.GenRenderbuffers(1, &rb);
+    gl_.BindRenderbuffer(GL_RENDERBUFFER, rb);
+    gl_.RenderbufferStorage(GL_RENDERBUFFER, format, width, height);
+    gl_.FramebufferRenderbuffer(GL_FRAMEBUFFER, attachment, GL_RENDERBUFFER, rb);
+    return rb;
+  };
+  color_buffer_ = make_buffer(GL_RGBA8, GL_COLOR_ATTACHMENT0);
+  view_depth_buffer_ = make_buffer(GL_R32F, GL_COLOR_ATTACHMENT1);
+  depth_buffer_ = make_buffer(GL_DEPTH_COMPONENT32F, GL_DEPTH_ATTACHMENT);
+  const GLenum status = gl_.CheckFramebufferStatus(GL_FRAMEBUFFER);
+  if (status != GL_FRAMEBUFFER_COMPLETE)
+    throw std::runtime_error("chunk_renderer: framebuffer " + std::to_string(width) + "x" + std::to_string(height) +
+                             " incomplete (status " + std::to_string(status) + ")");
+  const GLenum draw_buffers[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+  gl_.DrawBuffers(2, draw_buffers);
+  frame_width_ = width;
+  frame_height_ = height;
+  check_gl_error(gl_, "chunk_renderer: resize_framebuffer");
+}
+
+void ChunkRenderer::begin_frame(int width, int height) {
+  if (width < 1 || height < 1)
+    throw std::invalid_argument("chunk_renderer: frame size must be at least 1x1, got " + std::to_string(width) +
+                                "x" + std::to_string(height));
+  make_current();
+  if (width != frame_width_ || height != frame_height_ || !framebuffer_) resize_framebuffer(width, height);
+  gl_.BindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
+  gl_.Viewport(0, 0, width, height);
+  gl_.Enable(GL_DEPTH_TEST);
+  gl_.DepthMask(GL_TRUE);
+  gl_.Disable(GL_CULL_FACE);  // CAD models have inconsistent winding
+  gl_.Disable(GL_BLEND);
+  if (reversed_z()) {
+    gl_.ClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+    gl_.DepthFunc(GL_GREATER);
+  } else {
+    gl_.DepthFunc(GL_LESS);
+  }
+  const float clear_color[4] = {0, 0, 0, 0};
+  const float clear_view_depth[4] = {std::numeric_limits<float>::infinity(), 0, 0, 0};
+  const float clear_depth = reversed_z() ? 0.0f : 1.0f;
+  gl_.ClearBufferfv(GL_COLOR, 0, clear_color);
+  gl_.ClearBufferfv(GL_COLOR, 1, clear_view_depth);
+  gl_.ClearBufferfv(GL_DEPTH, 0, &clear_depth);
+  check_gl_error(gl_, "chunk_renderer: begin_frame");
+  in_frame_ = true;
+}
+
+void ChunkRenderer::require_frame(const char* what) const {
+  if (!in_frame_) throw std::logic_error(std::string("chunk_renderer: ") + what + " called without begin_frame");
+}
+
+bool ChunkRenderer::is_cached(std::int64_t id) const { return cache_.contains(id); }
+
+void ChunkRenderer::release(CachedChunk& entry) {
+  gl_.DeleteVertexArrays(1, &entry.vertex_array);
+  gl_.DeleteBuffers(1, &entry.vertex_buffer);
+  gl_.DeleteBuffers(1, &entry.index_buffer);
+  cached_bytes_ -= entry.bytes;
+}
+
+void ChunkRenderer::clear_cache() {
+  make_current();
+  for (auto& [id, entry] : cache_) release(entry);
+  cache_.clear();
+  lru_.clear();
+}
+
+void ChunkRenderer::evict_beyond_cap() {
+  // Never evict the most recent entry: it is about to be drawn.
+  while (cached_bytes_ > params_.cache_bytes && lru_.size() > 1) {
+    const std::int64_t victim = lru_.back();
+    lru_.pop_back();
+    auto it = cache_.find(victim);
+    release(it->second);
+    cache_.erase(it);
+    ++stats_.evictions;
+  }
+}
+
+const ChunkRenderer::CachedChunk& ChunkRenderer::upload(const Chunk& chunk) {
+  const std::string where = "chunk_renderer: chunk " + std::to_string(chunk.id);
+  const std::size_t n = chunk.positions.size();
+  if (!chunk.colors.empty() && chunk.colors.size() != n)
+    throw std::runtime_error(where + " has " + std::to_string(chunk.colors.size()) + " colours for " +
+                             std::to_string(n) + " positions");
+  if (chunk.indices.size() % 3 != 0) throw std::runtime_error(where + " index count is not a multiple of 3");
+  if (chunk.indices.size() > static_cast<std::size_t>(std::numeric_limits<GLsizei>::max()))
+    throw std::runtime_error(where + " has too many indices");
+  for (std::uint32_t i : chunk.indices)
+    if (i >= n) throw std::runtime_error(where + " index " + std::to_string(i) + " out of range");
+
+  std::vector<Vertex> vertices(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3f& p = chunk.positions[i];
+    vertices[i] = {p.x, p.y, p.z, chunk.colors.empty() ? Rgba8{} : chunk.colors[i]};
+  }
+  const bool short_indices = n <= 65536;
+  std::vector<std::uint16_t> indices16;
+  if (short_indices) indices16.assign(chunk.indices.begin(), chunk.indices.end());
+  const std::size_t index_bytes = chunk.indices.size() * (short_indices ? 2 : 4);
+
+  if (auto old = cache_.find(chunk.id); old != cache_.end()) {
+    lru_.erase(old->second.recency);
+    release(old->second);
+    cache_.erase(old);
+  }
+  CachedChunk entry;
+  entry.origin = chunk.origin;
+  entry.index_count = static_cast<int>(chunk.indices.size());
+  entry.index_type = short_indices ? GL_UNSIGNED_SHORT : GL_UNSIGNED_INT;
+  entry.bytes = vertices.size() * sizeof(Vertex) + index_bytes;
+  gl_.GenVertexArrays(1, &entry.vertex_array);
+  gl_.BindVertexArray(entry.vertex_array);
+  gl_.GenBuffers(1, &entry.vertex_buffer);
+  gl_.BindBuffer(GL_ARRAY_BUFFER, entry.vertex_buffer);
+  gl_.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(Vertex)), vertices.data(),
+                 GL_STATIC_DRAW);
+  gl_.EnableVertexAttribArray(0);
+  gl_.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex), reinterpret_cast<const void*>(0));
+  gl_.EnableVertexAttribArray(1);
+  gl_.VertexAttribPointer(1, 4, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(Vertex),
+                          reinterpret_cast<const void*>(offsetof(Vertex, color)));
+  gl_.GenBuffers(1, &entry.index_buffer);
+  gl_.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, entry.index_buffer);
+  gl_.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(index_bytes),
+                 short_indices ? static_cast<const void*>(indices16.data())
+                               : static_cast<const void*>(chunk.indices.data()),
+                 GL_STATIC_DRAW);
+  gl_.BindVertexArray(0);
+  check_gl_error(gl_, where.c_str());
+
+  lru_.push_front(chunk.id);
+  entry.recency = lru_.begin();
+  cached_bytes_ += entry.bytes;
+  ++stats_.uploads;
+  auto& stored = cache_[chunk.id] = entry;
+  evict_beyond_cap();
+  return stored;
+}
+
+void ChunkRenderer::set_camera_uniforms(const RenderCamera& camera, const Box3d& discard_box) {
+  validate_camera(camera);
+  gl_.UseProgram(program_);
+  const Mat4 view_projection = multiply(projection(camera, reversed_z()), view_rotation(camera));
+  std::array<float, 16> matrix;
+  std::transform(view_projection.begin(), view_projection.end(), matrix.begin(),
+                 [](double v) { return static_cast<float>(v); });
+  gl_.UniformMatrix4fv(u_view_projection_, 1, GL_FALSE, matrix.data());
+  gl_.Uniform3f(u_forward_, static_cast<float>(camera.forward.x), static_cast<float>(camera.forward.y),
+                static_cast<float>(camera.forward.z));
+  if (discard_box.empty()) {
+    // lo > hi on every axis: no position is strictly inside.
+    gl_.Uniform3f(u_discard_lo_, 1, 1, 1);
+    gl_.Uniform3f(u_discard_hi_, -1, -1, -1);
+  } else {
+    const Vec3d lo = discard_box.lo - camera.eye, hi = discard_box.hi - camera.eye;
+    gl_.Uniform3f(u_discard_lo_, static_cast<float>(lo.x), static_cast<float>(lo.y), static_cast<float>(lo.z));
+    gl_.Uniform3f(u_discard_hi_, static_cast<float>(hi.x), static_cast<float>(hi.y), static_cast<float>(hi.z));
+  }
+}
+
+void ChunkRenderer::draw_cached(const CachedChunk& entry, const Vec3d& eye) {
+  const Vec3d offset = entry.origin - eye;  // double, then float: eye-relative
+  gl_.Uniform3f(u_offset_, static_cast<float>(offset.x), static_cast<float>(offset.y), static_cast<float>(offset.z));
+  if (entry.index_count > 0) {
+    gl_.BindVertexArray(entry.vertex_array);
+    gl_.DrawElements(GL_TRIANGLES, entry.index_count, entry.index_type, nullptr);
+  }
+  ++stats_.chunks_drawn;
+  stats_.triangles_drawn += static_cast<std::uint64_t>(entry.index_count / 3);
+}
+
+void ChunkRenderer::draw(const RenderCamera& camera, const Box3d& discard_box, std::span<const std::int64_t> ids,
+                         const ChunkLoader& load) {
+  require_frame("draw");
+  make_current();
+  set_camera_uniforms(camera, discard_box);
+  for (std::int64_t id : ids) {
+    auto it = cache_.find(id);
+    if (it != cache_.end()) {
+      lru_.splice(lru_.begin(), lru_, it->second.recency);
+      draw_cached(it->second, camera.eye);
+      continue;
+    }
+    const std::shared_ptr<const Chunk> chunk = load(id);
+    if (!chunk) throw std::runtime_error("chunk_renderer: loader returned no chunk for id " + std::to_string(id));
+    if (chunk->id != id)
+      throw std::runtime_error("chunk_renderer: loader returned chunk " + std::to_string(chunk->id) + " for id " +
+                               std::to_string(id));
+    draw_cached(upload(*chunk), camera.eye);
+  }
+  gl_.BindVertexArray(0);
+  check_gl_error(gl_, "chunk_renderer: draw");
+}
+
+void ChunkRenderer::draw(const RenderCamera& camera, const Box3d& discard_box,
+                         std::span<const std::shared_ptr<const Chunk>> chunks) {
+  std::vector<std::int64_t> ids;
+  std::unordered_map<std::int64_t, const std::shared_ptr<const Chunk>*> by_id;
+  ids.reserve(chunks.size());
+  for (const auto& c : chunks) {
+    if (!c) throw std::invalid_argument("chunk_renderer: null chunk in draw list");
+    ids.push_back(c->id);
+    by_id[c->id] = &c;
+  }
+  draw(camera, discard_box, ids, [&](std::int64_t id) { return *by_id.at(id); });
+}
+
+void ChunkRenderer::read_frame(std::vector<Rgba8>& color, std::vector<float>& depth) {
+  require_frame("read_frame");
+  make_current();
+  const std::size_t w = static_cast<std::size_t>(frame_width_), h = static_cast<std::size_t>(frame_height_);
+  readback_color_.resize(w * h);
+  readback_depth_.resize(w * h);
+  gl_.BindFramebuffer(GL_READ_FRAMEBUFFER, framebuffer_);
+  gl_.PixelStorei(GL_PACK_ALIGNMENT, 1);
+  gl_.ReadBuffer(GL_COLOR_ATTACHMENT0);
+  gl_.ReadPixels(0, 0, frame_width_, frame_height_, GL_RGBA, GL_UNSIGNED_BYTE, readback_color_.data());
+  gl_.ReadBuffer(GL_COLOR_ATTACHMENT1);
+  gl_.ReadPixels(0, 0, frame_width_, frame_height_, GL_RED, GL_FLOAT, readback_depth_.data());
+  check_gl_error(gl_, "chunk_renderer: read_frame");
+  // GL's row 0 is the bottom; ours is the top.
+  color.resize(w * h);
+  depth.resize(w * h);
+  for (std::size_t row = 0; row < h; ++row) {
+    const std::size_t src = (h - 1 - row) * w;
+    std::memcpy(color.data() + row * w, readback_color_.data() + src, w * sizeof(Rgba8));
+    std::memcpy(depth.data() + row * w, readback_depth_.data() + src, w * sizeof(float));
+  }
+}
+
+bool ChunkRenderer::reversed_z() const { return gl_.ClipControl != nullptr; }
+
+ChunkRendererStats ChunkRenderer::stats() const {
+  ChunkRendererStats s = stats_;
+  s.cached_chunks = cache_.size();
+  s.cached_bytes = cached_bytes_;
+  return s;
+}
+
+}  // namespace cellbake

@@ -1,0 +1,144 @@
+// Draws chunked geometry offscreen and reads back colour plus linear planar
+// view depth: the drawing core shared by the panoramic sampler (stages/sample.h)
+// and the headless viewer.
+//
+// Precision: chunks keep float32 positions relative to a double origin; every
+// draw translates by (chunk.origin - eye) computed in double and cast to float,
+// so the GPU only ever sees eye-relative coordinates and models 1e6 m from the
+// world origin lose nothing. Depth: the z-test uses reversed-Z with a float
+// depth buffer (glClipControl, GL 4.5 / ARB_clip_control) and an infinite far
+// plane, or standard [-1, 1] depth with an infinite far plane where clip
+// control is missing; what is read back is the exact planar view depth written
+// by the fragment shader into an R32F attachment, independent of that choice.
+// A discard box removes every fragment whose world position lies strictly
+// inside it (the far field of a view cell is everything outside its cull box).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <list>
+#include <memory>
+#include <span>
+#include <unordered_map>
+#include <vector>
+
+#include "stages/geometry.h"
+#include "stages/render/gl_context.h"
+
+namespace cellbake {
+
+struct GlFunctions;  // stages/render/gl_functions.h; kept out of this header so users need no GL headers
+
+// A pinhole camera. The basis must be orthonormal and right-handed like an
+// OpenGL camera (right x up = -forward); the image's x axis runs along
+// `right`, its y axis along `up`. The frustum is given by the tangents of its
+// edges at unit forward distance (a 90-degree cube face: -1, 1, -1, 1).
+struct RenderCamera {
+  Vec3d eye;  // world coordinates
+  Vec3d forward{0, 0, -1};
+  Vec3d right{1, 0, 0};
+  Vec3d up{0, 1, 0};
+  double tan_left = -1, tan_right = 1, tan_bottom = -1, tan_top = 1;
+  double near_plane = 0.01;  // metres along forward; nearer geometry is clipped
+};
+
+struct ChunkRendererParams {
+  // Cap on the bytes of cached chunk buffers (vertex + index data); the least
+  // recently drawn chunks are evicted beyond it. A single chunk larger than the
+  // cap is still drawn (it is then the only one cached).
+  std::size_t cache_bytes = std::size_t{1} << 30;
+};
+
+struct ChunkRendererStats {
+  std::uint64_t uploads = 0;    // chunks uploaded into buffers
+  std::uint64_t evictions = 0;  // chunks evicted by the cache cap
+  std::uint64_t chunks_drawn = 0;
+  std::uint64_t triangles_drawn = 0;  // submitted, before clipping and discard
+  std::size_t cached_chunks = 0;
+  std::size_t cached_bytes = 0;
+};
+
+// Loads a chunk by id; the renderer calls it only for chunks it has not cached.
+using ChunkLoader = std::function<std::shared_ptr<const Chunk>(std::int64_t id)>;
+
+// Owns one GL context and the buffers of the chunks drawn with it. Chunks are
+// cached by id: use one renderer per model (ids of different models collide)
+// and one renderer per thread at a time. Every method makes the context
+// current on the calling thread first. Results are deterministic for the same
+// inputs, Mesa version and draw order.
+class ChunkRenderer {
+ public:
+  // Takes ownership of `context`; throws std::runtime_error when the context
+  // lacks OpenGL 3.3 or an entry point, or the shaders fail to build.
+  explicit ChunkRenderer(std::unique_ptr<GlContext> context, ChunkRendererParams params = {});
+  ~ChunkRenderer();
+  ChunkRenderer(const ChunkRenderer&) = delete;
+  ChunkRenderer& operator=(const ChunkRenderer&) = delete;
+
+  // True when chunk `id` has cached buffers.
+  bool is_cached(std::int64_t id) const;
+  // Drops every cached chunk (call when the ids' geometry changed).
+  void clear_cache();
+
+  // Starts a frame of `width` x `height` pixels (>= 1): colour cleared to
+  // (0, 0, 0, 0), depth to +infinity.
+  void begin_frame(int width, int height);
+  // Draws the chunks `ids` in the given order, uploading through `load` those
+  // not cached, with fragments strictly inside `discard_box` (world
+  // coordinates; an empty box discards nothing) dropped. Throws
+  // std::logic_error without a frame, std::runtime_error on a malformed chunk
+  // (indices out of range, colours not one per position) naming its id.
+  void draw(const RenderCamera& camera, const Box3d& discard_box, std::span<const std::int64_t> ids,
+            const ChunkLoader& load);
+  // Same, for chunks the caller already holds (uploaded unless cached).
+  void draw(const RenderCamera& camera, const Box3d& discard_box,
+            std::span<const std::shared_ptr<const Chunk>> chunks);
+  // Reads the frame back, row-major with row 0 at the top: RGBA8 colour and
+  // planar view depth in metres (+infinity where nothing was drawn). Resizes
+  // both vectors to width * height.
+  void read_frame(std::vector<Rgba8>& color, std::vector<float>& depth);
+
+  // True when the z-test uses reversed-Z (glClipControl was available).
+  bool reversed_z() const;
+  ChunkRendererStats stats() const;
+
+ private:
+  struct CachedChunk {
+    unsigned vertex_array = 0, vertex_buffer = 0, index_buffer = 0;
+    int index_count = 0;
+    unsigned index_type = 0;  // GL_UNSIGNED_SHORT or GL_UNSIGNED_INT
+    Vec3d origin;
+    std::size_t bytes = 0;
+    std::list<std::int64_t>::iterator recency;  // position in lru_ (front = most recent)
+  };
+
+  void make_current();
+  void build_program();
+  void resize_framebuffer(int width, int height);
+  void release_framebuffer();
+  const CachedChunk& upload(const Chunk& chunk);
+  void evict_beyond_cap();
+  void release(CachedChunk& entry);
+  void set_camera_uniforms(const RenderCamera& camera, const Box3d& discard_box);
+  void draw_cached(const CachedChunk& entry, const Vec3d& eye);
+  void require_frame(const char* what) const;
+
+  std::unique_ptr<GlContext> context_;  // first member: destroyed last
+  ChunkRendererParams params_;
+  std::unique_ptr<GlFunctions> gl_functions_;
+  const GlFunctions& gl_;  // *gl_functions_
+  unsigned program_ = 0;
+  int u_offset_ = -1, u_view_projection_ = -1, u_forward_ = -1, u_discard_lo_ = -1, u_discard_hi_ = -1;
+  unsigned framebuffer_ = 0, color_buffer_ = 0, view_depth_buffer_ = 0, depth_buffer_ = 0;
+  int frame_width_ = 0, frame_height_ = 0;
+  bool in_frame_ = false;
+  std::unordered_map<std::int64_t, CachedChunk> cache_;
+  std::list<std::int64_t> lru_;
+  std::size_t cached_bytes_ = 0;
+  ChunkRendererStats stats_;
+  std::vector<float> readback_depth_;
+  std::vector<Rgba8> readback_color_;
+};
+
+}  // namespace cellbake

@@ -1,0 +1,55 @@
+// Simplification of dense per-face depth meshes into small textured-depth-mesh
+// geometry, with a guaranteed depth error and unchanged screen coverage.
+//
+// Wilson 2002, ch. 5 §5.2.3 (view-dependent error: boundaries and silhouettes
+// may not move in screen space, interior points have latitude along the view
+// direction; the faces of a cube must meet without cracks). Instead of the
+// thesis' GAPS / Garland-Heckbert edge collapses we exploit the grid: a
+// world-space plane is an exact plane in (x, y, 1/z) screen space, so a region
+// quadtree over the pixel grid (as in terrain simplification, e.g. Pajarola
+// 1998 "Large scale terrain visualization using the restricted quadtree
+// triangulation") merges blocks whose vertices fit one such plane.
+#pragma once
+
+#include <cstddef>
+
+#include "stages/cube_map.h"
+#include "stages/simplify_error.h"
+
+namespace cellbake {
+
+struct SimplifyParams {
+  // Max relative depth error |z_out - z_in| / z_in at the dense mesh's vertices,
+  // measured along the eye ray (vertices never move across the view direction,
+  // so the screen-space error from the sample point is zero by construction).
+  double depth_error_relative = 0.01;
+  // Per-face triangle cap (VWALK used 10,000). When the result is larger, the
+  // interior depth bound is doubled, up to `max_relaxations` times; face borders
+  // always use `depth_error_relative` so neighbouring faces still agree.
+  std::size_t max_triangles = 10000;
+  int max_relaxations = 8;
+};
+
+struct SimplifyResult {
+  FaceMesh mesh;  // vertices are a subset of the input's (bit-identical positions and uvs)
+  std::size_t triangles_in = 0;
+  std::size_t triangles_out = 0;
+  double depth_error_bound_used = 0;    // interior bound of the final mesh (> params' when the cap forced it)
+  bool cap_forced_larger_error = false;  // the cap made us exceed depth_error_relative
+  SimplifyError achieved;                // measured against the input
+};
+
+// Simplifies one dense face mesh from build_depth_meshes (a pixel grid with
+// face_size^2 pixels). Guarantees, by construction and checked by the measured
+// `achieved`: every covered pixel stays covered and nothing else is covered
+// (silhouettes, skins and borders do not move), no triangle flips in screen
+// space, depth error <= depth_error_bound_used at the input vertices. Face
+// borders are simplified by a rule that reads only border data that
+// neighbouring faces share bit for bit, so the six faces of a sample keep
+// identical border vertices (no cracks) when all are simplified with the same
+// params. Deterministic. The cap may be unreachable for faces dominated by
+// silhouettes (then triangles_out > max_triangles). Throws std::invalid_argument
+// when `in` is not a pixel-grid mesh of that size.
+SimplifyResult simplify_face_mesh(const FaceMesh& in, int face_size, const SimplifyParams& params);
+
+}  // namespace cellbake

@@ -1,0 +1,273 @@
+#include "storage/cell_db.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstring>
+#include <stdexcept>
+
+#include "stages/hashing.h"
+#include "storage/sqlite_db.h"
+
+namespace cellbake {
+namespace {
+
+constexpr int kCellDbSchemaVersion = 1;
+
+// Migrations: entry i upgrades schema version i to i + 1.
+const char* kMigrations[] = {
+    R"sql(
+CREATE TABLE IF NOT EXISTS meta(key TEXT PRIMARY KEY, value TEXT NOT NULL);
+CREATE TABLE cells(
+  id INTEGER PRIMARY KEY, region INTEGER NOT NULL, gx INTEGER NOT NULL, gy INTEGER NOT NULL, gz INTEGER NOT NULL,
+  min_x REAL, min_y REAL, min_z REAL, max_x REAL, max_y REAL, max_z REAL,
+  status TEXT NOT NULL, error TEXT NOT NULL DEFAULT '',
+  input_hash TEXT NOT NULL, cull_hash TEXT NOT NULL, content_hash TEXT NOT NULL,
+  cull_half_size REAL, near_triangles INTEGER, near_chunks BLOB,
+  far_triangles INTEGER, bytes INTEGER, max_coverage_error REAL, max_depth_error REAL,
+  stage_seconds TEXT NOT NULL DEFAULT '{}');
+CREATE TABLE samples(
+  cell_id INTEGER NOT NULL REFERENCES cells(id) ON DELETE CASCADE, sample_index INTEGER NOT NULL,
+  eye_x REAL NOT NULL, eye_y REAL NOT NULL, eye_z REAL NOT NULL, parent INTEGER NOT NULL,
+  PRIMARY KEY(cell_id, sample_index));
+CREATE TABLE faces(
+  cell_id INTEGER NOT NULL, sample_index INTEGER NOT NULL, face INTEGER NOT NULL,
+  image_format TEXT NOT NULL, image BLOB NOT NULL, mesh BLOB NOT NULL,
+  triangles INTEGER NOT NULL, coverage_error REAL, depth_error REAL,
+  PRIMARY KEY(cell_id, sample_index, face),
+  FOREIGN KEY(cell_id, sample_index) REFERENCES samples(cell_id, sample_index) ON DELETE CASCADE);
+)sql",
+};
+
+int user_version(SqliteDb& db) {
+  SqliteStatement s(db, "PRAGMA user_version");
+  s.step();
+  return static_cast<int>(s.column_int(0));
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> pack_near_chunks(const std::vector<NearChunkRow>& rows) {
+  std::vector<std::uint8_t> out(rows.size() * 13);
+  std::uint8_t* p = out.data();
+  for (const auto& r : rows) {
+    std::memcpy(p, &r.chunk_id, 8);
+    std::memcpy(p + 8, &r.triangles, 4);
+    p[12] = r.whole ? 1 : 0;
+    p += 13;
+  }
+  return out;
+}
+
+std::vector<NearChunkRow> unpack_near_chunks(const std::uint8_t* data, std::size_t size) {
+  if (size % 13 != 0) throw std::runtime_error("near-chunk list: length " + std::to_string(size) + " is not 13*n");
+  std::vector<NearChunkRow> rows(size / 13);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const std::uint8_t* p = data + 13 * i;
+    std::memcpy(&rows[i].chunk_id, p, 8);
+    std::memcpy(&rows[i].triangles, p + 8, 4);
+    if (p[12] > 1) throw std::runtime_error("near-chunk list: bad flag");
+    rows[i].whole = p[12] == 1;
+  }
+  return rows;
+}
+
+CellDb::CellDb(const std::filesystem::path& path, Mode mode) {
+  if (mode == Mode::read_only && !std::filesystem::exists(path))
+    throw std::runtime_error(path.string() + ": cell database does not exist");
+  db_ = std::make_unique<SqliteDb>(
+      path, mode == Mode::read_only ? SqliteDb::Mode::read_only : SqliteDb::Mode::read_write_create);
+  db_->exec("PRAGMA foreign_keys=ON");
+  if (mode == Mode::read_only) {
+    if (user_version(*db_) != kCellDbSchemaVersion)
+      throw std::runtime_error(path.string() + ": not a cellbake cell database of schema version " +
+                               std::to_string(kCellDbSchemaVersion));
+    return;
+  }
+  db_->exec("PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;");
+  int version = user_version(*db_);
+  if (version > kCellDbSchemaVersion)
+    throw std::runtime_error(path.string() + ": cell database schema version " + std::to_string(version) +
+                             " is newer than this cellbake (" + std::to_string(kCellDbSchemaVersion) + ")");
+  while (version < kCellDbSchemaVersion) {
+    SqliteTransaction tx(*db_);
+    db_->exec(kMigrations[version]);
+    ++version;
+    db_->exec("PRAGMA user_version=" + std::to_string(version));
+    tx.commit();
+  }
+  set_meta("kind", "cellbake-cell-database");
+}
+
+CellDb::~CellDb() = default;
+
+const std::filesystem::path& CellDb::path() const { return db_->file(); }
+
+void CellDb::set_meta(const std::string& key, const std::string& value) {
+  SqliteStatement s(*db_, "INSERT INTO meta VALUES(?,?) ON CONFLICT(key) DO UPDATE SET value=excluded.value");
+  s.bind(1, key).bind(2, value).run();
+}
+
+std::optional<std::string> CellDb::meta(const std::string& key) const {
+  SqliteStatement s(*db_, "SELECT value FROM meta WHERE key=?");
+  s.bind(1, key);
+  if (!s.step()) return std::nullopt;
+  return s.column_text(0);
+}
+
+void CellDb::put_cell(const CellRow& c) {
+  SqliteTransaction tx(*db_);
+  {
+    SqliteStatement del(*db_, "DELETE FROM cells WHERE id=?");
+    del.bind(1, c.id).run();
+  }
+  {
+    SqliteStatement s(*db_,
+                      "INSERT INTO cells(id, region, gx, gy, gz, min_x, min_y, min_z, max_x, max_y, max_z, status, "
+                      "error, input_hash, cull_hash, content_hash, cull_half_size, near_triangles, near_chunks, "
+                      "far_triangles, bytes, max_coverage_error, max_depth_error, stage_seconds) "
+                      "VALUES(?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
+    const auto near = pack_near_chunks(c.near_chunks);
+    nlohmann::json secs(c.stage_seconds);
+    s.bind(1, c.id).bind(2, std::int64_t(c.region)).bind(3, std::int64_t(c.gx)).bind(4, std::int64_t(c.gy));
+    s.bind(5, std::int64_t(c.gz)).bind(6, c.bounds.lo.x).bind(7, c.bounds.lo.y).bind(8, c.bounds.lo.z);
+    s.bind(9, c.bounds.hi.x).bind(10, c.bounds.hi.y).bind(11, c.bounds.hi.z).bind(12, c.status).bind(13, c.error);
+    s.bind(14, c.input_hash).bind(15, c.cull_hash).bind(16, c.content_hash).bind(17, c.cull_half_size);
+    s.bind(18, std::int64_t(c.near_triangles)).bind_blob(19, near.data(), near.size());
+    s.bind(20, std::int64_t(c.far_triangles)).bind(21, std::int64_t(c.bytes)).bind(22, c.max_coverage_error);
+    s.bind(23, c.max_depth_error).bind(24, secs.dump());
+    s.run();
+  }
+  SqliteStatement ins_sample(*db_, "INSERT INTO samples VALUES(?,?,?,?,?,?)");
+  SqliteStatement ins_face(*db_, "INSERT INTO faces VALUES(?,?,?,?,?,?,?,?,?)");
+  for (const auto& sm : c.samples) {
+    ins_sample.bind(1, c.id).bind(2, std::int64_t(sm.index)).bind(3, sm.eye.x).bind(4, sm.eye.y).bind(5, sm.eye.z);
+    ins_sample.bind(6, std::int64_t(sm.parent)).run();
+    for (const auto& f : sm.faces) {
+      ins_face.bind(1, c.id).bind(2, std::int64_t(sm.index)).bind(3, std::int64_t(f.face)).bind(4, f.image_format);
+      ins_face.bind_blob(5, f.image.data(), f.image.size()).bind_blob(6, f.mesh.data(), f.mesh.size());
+      ins_face.bind(7, std::int64_t(f.triangles)).bind(8, f.coverage_error).bind(9, f.depth_error).run();
+    }
+  }
+  tx.commit();
+}
+
+std::map<std::int64_t, CellStamp> CellDb::stamps() const {
+  std::map<std::int64_t, CellStamp> out;
+  SqliteStatement s(*db_,
+                    "SELECT id, status, input_hash, cull_hash, content_hash, cull_half_size, near_chunks, "
+                    "near_triangles FROM cells");
+  while (s.step()) {
+    CellStamp st;
+    st.id = s.column_int(0);
+    st.status = s.column_text(1);
+    st.input_hash = s.column_text(2);
+    st.cull_hash = s.column_text(3);
+    st.content_hash = s.column_text(4);
+    st.cull_half_size = s.column_double(5);
+    std::size_t n = 0;
+    const std::uint8_t* p = s.column_blob_data(6, n);
+    if (p) st.near_chunks = unpack_near_chunks(p, n);
+    st.near_triangles = static_cast<std::uint64_t>(s.column_int(7));
+    out[st.id] = std::move(st);
+  }
+  return out;
+}
+
+std::vector<std::int64_t> CellDb::cell_ids() const {
+  std::vector<std::int64_t> ids;
+  SqliteStatement s(*db_, "SELECT id FROM cells ORDER BY id");
+  while (s.step()) ids.push_back(s.column_int(0));
+  return ids;
+}
+
+std::optional<CellRow> CellDb::get_cell(std::int64_t id, bool with_blobs) const {
+  SqliteStatement s(*db_,
+                    "SELECT region, gx, gy, gz, min_x, min_y, min_z, max_x, max_y, max_z, status, error, input_hash, "
+                    "cull_hash, content_hash, cull_half_size, near_triangles, near_chunks, far_triangles, bytes, "
+                    "max_coverage_error, max_depth_error, stage_seconds FROM cells WHERE id=?");
+  s.bind(1, id);
+  if (!s.step()) return std::nullopt;
+  CellRow c;
+  c.id = id;
+  c.region = int(s.column_int(0));
+  c.gx = int(s.column_int(1));
+  c.gy = int(s.column_int(2));
+  c.gz = int(s.column_int(3));
+  c.bounds = {{s.column_double(4), s.column_double(5), s.column_double(6)},
+              {s.column_double(7), s.column_double(8), s.column_double(9)}};
+  c.status = s.column_text(10);
+  c.error = s.column_text(11);
+  c.input_hash = s.column_text(12);
+  c.cull_hash = s.column_text(13);
+  c.content_hash = s.column_text(14);
+  c.cull_half_size = s.column_double(15);
+  c.near_triangles = std::uint64_t(s.column_int(16));
+  std::size_t n = 0;
+  const std::uint8_t* p = s.column_blob_data(17, n);
+  if (p) c.near_chunks = unpack_near_chunks(p, n);
+  c.far_triangles = std::uint64_t(s.column_int(18));
+  c.bytes = std::uint64_t(s.column_int(19));
+  c.max_coverage_error = s.column_double(20);
+  c.max_depth_error = s.column_double(21);
+  auto secs = nlohmann::json::parse(s.column_text(22), nullptr, false);
+  if (secs.is_object())
+    for (auto& [k, v] : secs.items())
+      if (v.is_number()) c.stage_seconds[k] = v.get<double>();
+
+  SqliteStatement ss(*db_, "SELECT sample_index, eye_x, eye_y, eye_z, parent FROM samples WHERE cell_id=? ORDER BY sample_index");
+  ss.bind(1, id);
+  while (ss.step())
+    c.samples.push_back({int(ss.column_int(0)), {ss.column_double(1), ss.column_double(2), ss.column_double(3)},
+                         int(ss.column_int(4)), {}});
+  SqliteStatement fs(*db_,
+                     std::string("SELECT sample_index, face, image_format, ") +
+                         (with_blobs ? "image, mesh" : "x'', x''") +
+                         ", triangles, coverage_error, depth_error FROM faces WHERE cell_id=? ORDER BY sample_index, face");
+  fs.bind(1, id);
+  while (fs.step()) {
+    const int si = int(fs.column_int(0));
+    FaceRow f;
+    f.face = int(fs.column_int(1));
+    f.image_format = fs.column_text(2);
+    f.image = fs.column_blob(3);
+    f.mesh = fs.column_blob(4);
+    f.triangles = std::uint32_t(fs.column_int(5));
+    f.coverage_error = fs.column_double(6);
+    f.depth_error = fs.column_double(7);
+    for (auto& sm : c.samples)
+      if (sm.index == si) sm.faces.push_back(std::move(f));
+  }
+  return c;
+}
+
+CellDbTotals CellDb::totals() const {
+  CellDbTotals t;
+  Hasher h;
+  SqliteStatement s(*db_,
+                    "SELECT id, status, content_hash, bytes, far_triangles, near_triangles, stage_seconds FROM cells "
+                    "ORDER BY id");
+  while (s.step()) {
+    if (s.column_text(1) == "done") {
+      ++t.cells_done;
+      h.u64(std::uint64_t(s.column_int(0))).text(s.column_text(2));
+      t.bytes += std::uint64_t(s.column_int(3));
+      t.far_triangles += std::uint64_t(s.column_int(4));
+      t.near_triangles += std::uint64_t(s.column_int(5));
+    } else {
+      ++t.cells_failed;
+    }
+    auto secs = nlohmann::json::parse(s.column_text(6), nullptr, false);
+    if (secs.is_object())
+      for (auto& [k, v] : secs.items())
+        if (v.is_number()) t.stage_seconds[k] += v.get<double>();
+  }
+  t.content_hash = h.hex();
+  return t;
+}
+
+bool CellDb::integrity_ok() const {
+  SqliteStatement s(*db_, "PRAGMA integrity_check");
+  return s.step() && s.column_text(0) == "ok";
+}
+
+}  // namespace cellbake

@@ -1,0 +1,110 @@
+// The cell database: one row per baked view cell with its near-field list,
+// panoramic samples and encoded far-field faces. Every cell is written in one
+// transaction (wholly present or absent), WAL mode, versioned schema with
+// migrations. Schema and example queries: docs/database.md.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "stages/geometry.h"
+
+namespace cellbake {
+
+class SqliteDb;
+
+struct NearChunkRow {
+  std::int64_t chunk_id = 0;
+  std::uint32_t triangles = 0;
+  bool whole = false;
+};
+
+struct FaceRow {
+  int face = 0;                      // 0..5, cube_map.h order
+  std::string image_format;          // "jpeg" | "webp" | "png"
+  std::vector<std::uint8_t> image;   // encoded colour image
+  std::vector<std::uint8_t> mesh;    // encoded FaceMesh (stages/encode.h)
+  std::uint32_t triangles = 0;
+  double coverage_error = 0;         // fraction of sub-pixel samples whose coverage the simplifier changed
+  double depth_error = 0;            // achieved max relative depth error
+};
+
+struct SampleRow {
+  int index = 0;
+  Vec3d eye;
+  int parent = -1;  // dependency-tree parent sample (-1 = root)
+  std::vector<FaceRow> faces;
+};
+
+struct CellRow {
+  std::int64_t id = 0;
+  int region = 0;
+  int gx = 0, gy = 0, gz = 0;
+  Box3d bounds;
+  std::string status;  // "done" | "failed"
+  std::string error;   // failure message naming cell and stage
+  std::string input_hash;    // stage versions + parameters + store content for this cell
+  std::string cull_hash;     // the part of input_hash the cull-box stage depends on
+  std::string content_hash;  // over the cell's content (not timings)
+  double cull_half_size = 0;
+  std::uint64_t near_triangles = 0;
+  std::vector<NearChunkRow> near_chunks;
+  std::uint64_t far_triangles = 0;
+  std::uint64_t bytes = 0;
+  double max_coverage_error = 0;
+  double max_depth_error = 0;
+  std::map<std::string, double> stage_seconds;
+  std::vector<SampleRow> samples;
+};
+
+// A cell's identity and stored hashes, for resume decisions without loading blobs.
+struct CellStamp {
+  std::int64_t id = 0;
+  std::string status, input_hash, cull_hash, content_hash;
+  double cull_half_size = 0;
+  std::vector<NearChunkRow> near_chunks;
+  std::uint64_t near_triangles = 0;
+};
+
+struct CellDbTotals {
+  std::uint64_t cells_done = 0, cells_failed = 0;
+  std::map<std::string, double> stage_seconds;
+  std::uint64_t bytes = 0, far_triangles = 0, near_triangles = 0;
+  std::string content_hash;  // over every done cell's content_hash in id order
+};
+
+class CellDb {
+ public:
+  enum class Mode { read_only, read_write };
+  // Opens or creates (read_write) the database, applying migrations.
+  CellDb(const std::filesystem::path& path, Mode mode);
+  ~CellDb();
+
+  // Key/value metadata (e.g. "config", "store_hash").
+  void set_meta(const std::string& key, const std::string& value);
+  std::optional<std::string> meta(const std::string& key) const;
+
+  // Replaces the cell (and its samples and faces) in one transaction.
+  void put_cell(const CellRow& cell);
+  std::map<std::int64_t, CellStamp> stamps() const;
+  std::optional<CellRow> get_cell(std::int64_t id, bool with_blobs = true) const;
+  std::vector<std::int64_t> cell_ids() const;
+  CellDbTotals totals() const;
+  // PRAGMA integrity_check == "ok".
+  bool integrity_ok() const;
+  const std::filesystem::path& path() const;
+
+ private:
+  std::unique_ptr<SqliteDb> db_;
+};
+
+// Packs / unpacks a near-field list (validated; throws std::runtime_error on bad bytes).
+std::vector<std::uint8_t> pack_near_chunks(const std::vector<NearChunkRow>& rows);
+std::vector<NearChunkRow> unpack_near_chunks(const std::uint8_t* data, std::size_t size);
+
+}  // namespace cellbake

@@ -1,0 +1,571 @@
+// Model readers: per-format round trips on tiny hand-written files with exact
+// expected triangles and colours, and bad input that must throw InputError
+// naming the file and the place.
+#include <gtest/gtest.h>
+#include <zlib.h>
+
+#include <bit>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "pipeline/input_error.h"
+#include "pipeline/readers/model_reader.h"
+#include "tests/test_support.h"
+
+namespace cellbake {
+namespace {
+
+namespace fs = std::filesystem;
+using test::TempDir;
+using test::write_text;
+
+struct ReadResult {
+  ModelInfo info;
+  std::vector<Triangle> triangles;
+};
+
+ReadResult read_all(const fs::path& file) {
+  ReadResult result;
+  result.info = read_model(file, [&](const Triangle& t) { result.triangles.push_back(t); });
+  return result;
+}
+
+// Expects read_model(file) to throw InputError whose message names the file,
+// contains `location` ("line 3", "byte 120", ...) and `what`.
+void expect_input_error(const fs::path& file, const std::string& location, const std::string& what) {
+  try {
+    read_model(file, [](const Triangle&) {});
+    ADD_FAILURE() << "no InputError for " << file;
+  } catch (const InputError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find(file.filename().string()), std::string::npos) << message;
+    EXPECT_NE(message.find(location), std::string::npos) << message;
+    EXPECT_NE(message.find(what), std::string::npos) << message;
+  }
+}
+
+void write_bytes(const fs::path& file, const std::string& bytes) { write_text(file, bytes); }
+
+void write_gzip(const fs::path& file, const std::string& bytes) {
+  gzFile gz = gzopen(file.string().c_str(), "wb");
+  ASSERT_NE(gz, nullptr);
+  ASSERT_EQ(gzwrite(gz, bytes.data(), static_cast<unsigned>(bytes.size())), static_cast<int>(bytes.size()));
+  gzclose(gz);
+}
+
+// Appends `value` in little- or big-endian byte order.
+template <class T>
+void put(std::string& out, T value, bool big_endian) {
+  char bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T));
+  if (big_endian != (std::endian::native == std::endian::big)) std::reverse(bytes, bytes + sizeof(T));
+  out.append(bytes, sizeof(T));
+}
+
+constexpr Rgba8 kGrey{200, 200, 200, 255};
+
+// ---------------------------------------------------------------- OBJ
+
+TEST(ObjReader, MaterialQuadAndNegativeIndices) {
+  TempDir dir;
+  write_text(dir / "colours.mtl",
+             "# two materials\n"
+             "newmtl red\nKd 1 0 0\nmap_Kd tex/red.png\n"
+             "newmtl glass\nKd 0 0 1\nd 0.5\n");
+  write_text(dir / "scene.obj",
+             "mtllib colours.mtl\n"
+             "o quad\n"
+             "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+             "usemtl red\n"
+             "f 1 2 3 4\n"
+             "g second\ns off\n"
+             "v 5 5 5\nv 6 5 5\nv 5 6 5\n"
+             "usemtl glass\n"
+             "f -3 -2 -1\n"
+             "usemtl unknown\n"
+             "f 1 2 5\n");
+  const ReadResult r = read_all(dir / "scene.obj");
+  EXPECT_EQ(r.info.format, "obj");
+  ASSERT_EQ(r.info.materials.size(), 3u);
+  EXPECT_EQ(r.info.materials[0].color, kGrey);
+  EXPECT_EQ(r.info.materials[1].name, "red");
+  EXPECT_EQ(r.info.materials[1].texture, (dir.path() / "tex/red.png").lexically_normal().string());
+  EXPECT_EQ(r.info.materials[2].color, (Rgba8{0, 0, 255, 128}));
+  EXPECT_EQ(r.info.triangles_emitted, 4u);
+  EXPECT_EQ(r.info.polygons_triangulated, 1u);
+  ASSERT_EQ(r.triangles.size(), 4u);
+
+  // The quad becomes the fan (1 2 3), (1 3 4).
+  EXPECT_EQ(r.triangles[0].p[0], (Vec3d{0, 0, 0}));
+  EXPECT_EQ(r.triangles[0].p[1], (Vec3d{1, 0, 0}));
+  EXPECT_EQ(r.triangles[0].p[2], (Vec3d{1, 1, 0}));
+  EXPECT_EQ(r.triangles[1].p[0], (Vec3d{0, 0, 0}));
+  EXPECT_EQ(r.triangles[1].p[1], (Vec3d{1, 1, 0}));
+  EXPECT_EQ(r.triangles[1].p[2], (Vec3d{0, 1, 0}));
+  EXPECT_EQ(r.triangles[0].material, 1u);
+  EXPECT_EQ(r.triangles[0].color[2], (Rgba8{255, 0, 0, 255}));
+  // Negative indices count back from the last vertex defined.
+  EXPECT_EQ(r.triangles[2].p[0], (Vec3d{5, 5, 5}));
+  EXPECT_EQ(r.triangles[2].p[2], (Vec3d{5, 6, 5}));
+  EXPECT_EQ(r.triangles[2].material, 2u);
+  EXPECT_EQ(r.triangles[2].color[0], (Rgba8{0, 0, 255, 128}));
+  // An unknown material name falls back to the default.
+  EXPECT_EQ(r.triangles[3].material, 0u);
+  EXPECT_EQ(r.triangles[3].color[1], kGrey);
+}
+
+TEST(ObjReader, VertexColoursTexcoordsAndCornerForms) {
+  TempDir dir;
+  write_text(dir / "m.mtl", "newmtl half\nKd 0.5 1 1\n");
+  write_text(dir / "c.obj",
+             "mtllib m.mtl\r\n"
+             "v 0 0 0 1 0 0\r\nv 1 0 0 0 1 0\r\nv 0 1 0 0 0 1\r\nv 0 0 1\r\n"
+             "vt 0.25 0.75\r\nvt 1 0\r\nvt 0 1\r\n"
+             "vn 0 0 1\r\n"
+             "f 1/1 2/2 3/3\r\n"
+             "f 1//1 2//1 4//1\r\n"
+             "usemtl half\r\n"
+             "f 1/1/1 2/2/1 4/3/1\r\n");
+  const ReadResult r = read_all(dir / "c.obj");
+  ASSERT_EQ(r.triangles.size(), 3u);
+  EXPECT_EQ(r.triangles[0].color[0], (Rgba8{255, 0, 0, 255}));
+  EXPECT_EQ(r.triangles[0].color[1], (Rgba8{0, 255, 0, 255}));
+  EXPECT_EQ(r.triangles[0].color[2], (Rgba8{0, 0, 255, 255}));
+  EXPECT_EQ(r.triangles[0].uv[0], (Uv{0.25f, 0.75f}));
+  EXPECT_EQ(r.triangles[0].uv[2], (Uv{0, 1}));
+  // A vertex without colour takes the material colour (default grey).
+  EXPECT_EQ(r.triangles[1].color[2], kGrey);
+  EXPECT_EQ(r.triangles[1].p[2], (Vec3d{0, 0, 1}));
+  // Material x vertex colour: 128 = round(0.5 * 255) for Kd 0.5, times red 255.
+  EXPECT_EQ(r.triangles[2].color[0], (Rgba8{128, 0, 0, 255}));
+  EXPECT_EQ(r.triangles[2].color[1], (Rgba8{0, 255, 0, 255}));
+  EXPECT_EQ(r.triangles[2].color[2], (Rgba8{128, 255, 255, 255}));  // no vertex colour: the material colour
+  EXPECT_EQ(r.triangles[2].uv[2], (Uv{0, 1}));
+}
+
+TEST(ObjReader, MissingMaterialLibraryFallsBackToDefaultColour) {
+  TempDir dir;
+  write_text(dir / "a.obj", "mtllib nowhere.mtl\nusemtl steel\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  const ReadResult r = read_all(dir / "a.obj");
+  ASSERT_EQ(r.triangles.size(), 1u);
+  EXPECT_EQ(r.info.materials.size(), 1u);
+  EXPECT_EQ(r.triangles[0].color[0], kGrey);
+}
+
+TEST(ObjReader, EmptyFileHasNoTriangles) {
+  TempDir dir;
+  write_text(dir / "empty.obj", "");
+  write_text(dir / "comments.obj", "# nothing here\n\n   \n");
+  EXPECT_EQ(read_all(dir / "empty.obj").info.triangles_emitted, 0u);
+  EXPECT_EQ(read_all(dir / "comments.obj").triangles.size(), 0u);
+}
+
+TEST(ObjReader, BadInputNamesFileAndLine) {
+  TempDir dir;
+  write_text(dir / "nan.obj", "v 0 0 0\nv nan 0 0\n");
+  expect_input_error(dir / "nan.obj", "line 2", "non-finite coordinate");
+  write_text(dir / "inf.obj", "v 0 0 0\nv 1 -inf 0\n");
+  expect_input_error(dir / "inf.obj", "line 2", "non-finite coordinate");
+  write_text(dir / "zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
+  expect_input_error(dir / "zero.obj", "line 4", "index 0");
+  write_text(dir / "range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 4\n");
+  expect_input_error(dir / "range.obj", "line 5", "out of range");
+  // A face may not refer to a vertex defined after it.
+  write_text(dir / "later.obj", "v 0 0 0\nv 1 0 0\nf 1 2 3\nv 0 1 0\n");
+  expect_input_error(dir / "later.obj", "line 3", "out of range");
+  write_text(dir / "negative.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n");
+  expect_input_error(dir / "negative.obj", "line 4", "out of range");
+  write_text(dir / "garbage.obj", "v 0 0 0\nv 1 0x 0\n");
+  expect_input_error(dir / "garbage.obj", "line 2", "malformed");
+  write_text(dir / "corner.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3a\n");
+  expect_input_error(dir / "corner.obj", "line 4", "malformed face corner");
+  write_text(dir / "texcoord.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n");
+  expect_input_error(dir / "texcoord.obj", "line 5", "texture coordinate index 2 out of range");
+}
+
+// ---------------------------------------------------------------- PLY
+
+// A PLY with a skipped "material" element (list property) first, 4 coloured
+// vertices (uchar colours, an extra ignored property), and faces with an
+// extra per-face list before the index list: a quad and a triangle.
+std::string tricky_ply(const std::string& format, const std::string& index_type) {
+  const bool ascii = format == "ascii";
+  const bool big = format == "binary_big_endian";
+  std::string out = "ply\nformat " + format + " 1.0\ncomment made by hand\n";
+  out += "element material 1\nproperty list uchar float weights\nproperty uchar id\n";
+  out += "element vertex 4\nproperty double x\nproperty float y\nproperty int z\nproperty float confidence\n";
+  out += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+  out += "element face 2\nproperty list int short tags\nproperty list uchar " + index_type + " vertex_indices\n";
+  out += "property uchar flags\nend_header\n";
+  const double xs[4] = {0, 10, 10, 0}, ys[4] = {0, 0, 10, 10};
+  const int zs[4] = {-1, -1, -1, 5};
+  const std::uint8_t colours[4][3] = {{255, 0, 0}, {0, 255, 0}, {0, 0, 255}, {10, 20, 30}};
+  if (ascii) {
+    out += "2 0.5 1.5 7\n";
+    for (int v = 0; v < 4; ++v)
+      out += std::to_string(xs[v]) + " " + std::to_string(ys[v]) + " " + std::to_string(zs[v]) + " 0.9 " +
+             std::to_string(colours[v][0]) + " " + std::to_string(colours[v][1]) + " " +
+             std::to_string(colours[v][2]) + "\n";
+    out += "1 9 4 0 1 2 3 0\n0 3 3 1 0 1\n";
+    return out;
+  }
+  put<std::uint8_t>(out, 2, big);
+  put<float>(out, 0.5f, big);
+  put<float>(out, 1.5f, big);
+  put<std::uint8_t>(out, 7, big);
+  for (int v = 0; v < 4; ++v) {
+    put<double>(out, xs[v], big);
+    put<float>(out, static_cast<float>(ys[v]), big);
+    put<std::int32_t>(out, zs[v], big);
+    put<float>(out, 0.9f, big);
+    for (int c = 0; c < 3; ++c) put<std::uint8_t>(out, colours[v][c], big);
+  }
+  const auto put_index = [&](int i) {
+    if (index_type == "int") put<std::int32_t>(out, i, big);
+    if (index_type == "uint") put<std::uint32_t>(out, static_cast<std::uint32_t>(i), big);
+    if (index_type == "ushort") put<std::uint16_t>(out, static_cast<std::uint16_t>(i), big);
+  };
+  put<std::int32_t>(out, 1, big);
+  put<std::int16_t>(out, 9, big);
+  put<std::uint8_t>(out, 4, big);
+  for (int i : {0, 1, 2, 3}) put_index(i);
+  put<std::uint8_t>(out, 0, big);
+  put<std::int32_t>(out, 0, big);
+  put<std::uint8_t>(out, 3, big);
+  for (int i : {3, 1, 0}) put_index(i);
+  put<std::uint8_t>(out, 1, big);
+  return out;
+}
+
+void expect_tricky_ply_triangles(const ReadResult& r) {
+  EXPECT_EQ(r.info.format, "ply");
+  EXPECT_EQ(r.info.triangles_emitted, 3u);
+  EXPECT_EQ(r.info.polygons_triangulated, 1u);
+  ASSERT_EQ(r.triangles.size(), 3u);
+  EXPECT_EQ(r.triangles[0].p[0], (Vec3d{0, 0, -1}));
+  EXPECT_EQ(r.triangles[0].p[1], (Vec3d{10, 0, -1}));
+  EXPECT_EQ(r.triangles[0].p[2], (Vec3d{10, 10, -1}));
+  EXPECT_EQ(r.triangles[1].p[2], (Vec3d{0, 10, 5}));
+  EXPECT_EQ(r.triangles[0].color[0], (Rgba8{255, 0, 0, 255}));
+  EXPECT_EQ(r.triangles[0].color[1], (Rgba8{0, 255, 0, 255}));
+  EXPECT_EQ(r.triangles[1].color[1], (Rgba8{0, 0, 255, 255}));
+  EXPECT_EQ(r.triangles[2].color[0], (Rgba8{10, 20, 30, 255}));
+  EXPECT_EQ(r.triangles[2].p[1], (Vec3d{10, 0, -1}));
+  EXPECT_EQ(r.triangles[2].material, 0u);
+}
+
+TEST(PlyReader, AsciiWithSkippedElementsAndProperties) {
+  TempDir dir;
+  write_bytes(dir / "a.ply", tricky_ply("ascii", "int"));
+  expect_tricky_ply_triangles(read_all(dir / "a.ply"));
+}
+
+TEST(PlyReader, BinaryLittleEndianUintIndices) {
+  TempDir dir;
+  write_bytes(dir / "le.ply", tricky_ply("binary_little_endian", "uint"));
+  expect_tricky_ply_triangles(read_all(dir / "le.ply"));
+}
+
+TEST(PlyReader, BinaryBigEndianIntIndices) {
+  TempDir dir;
+  write_bytes(dir / "be.ply", tricky_ply("binary_big_endian", "int"));
+  expect_tricky_ply_triangles(read_all(dir / "be.ply"));
+  write_bytes(dir / "be16.ply", tricky_ply("binary_big_endian", "ushort"));
+  expect_tricky_ply_triangles(read_all(dir / "be16.ply"));
+}
+
+TEST(PlyReader, FacesBeforeVerticesFloatColoursAndTexcoords) {
+  TempDir dir;
+  write_text(dir / "f.ply",
+             "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar uint vertex_index\n"
+             "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+             "property float red\nproperty float green\nproperty float blue\nproperty float alpha\n"
+             "property float s\nproperty float t\nend_header\n"
+             "3 2 1 0\n"
+             "0 0 0 1 0.5 0 1 0 0\n1 0 0 0 0 0 0.2 1 0\n0 1 0 1 1 1 1 0 1\n");
+  const ReadResult r = read_all(dir / "f.ply");
+  ASSERT_EQ(r.triangles.size(), 1u);
+  EXPECT_EQ(r.triangles[0].p[0], (Vec3d{0, 1, 0}));
+  EXPECT_EQ(r.triangles[0].p[2], (Vec3d{0, 0, 0}));
+  EXPECT_EQ(r.triangles[0].color[2], (Rgba8{255, 128, 0, 255}));
+  EXPECT_EQ(r.triangles[0].color[1], (Rgba8{0, 0, 0, 51}));
+  EXPECT_EQ(r.triangles[0].uv[1], (Uv{1, 0}));
+  EXPECT_EQ(r.triangles[0].uv[0], (Uv{0, 1}));
+}
+
+TEST(PlyReader, NoColoursMeansDefaultGrey) {
+  TempDir dir;
+  write_text(dir / "g.ply",
+             "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+             "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  const ReadResult r = read_all(dir / "g.ply");
+  ASSERT_EQ(r.triangles.size(), 1u);
+  EXPECT_EQ(r.triangles[0].color[0], kGrey);
+}
+
+TEST(PlyReader, BadInputNamesFileAndPlace) {
+  TempDir dir;
+  const std::string binary = tricky_ply("binary_little_endian", "int");
+  const std::size_t header_end = binary.find("end_header\n") + 11;
+  // Cut inside the second vertex record (material record = 1+8+1 bytes, vertex record = 8+4+4+4+3 bytes).
+  const std::size_t second_vertex = header_end + 10 + 23;
+  write_bytes(dir / "cut.ply", binary.substr(0, second_vertex + 5));
+  expect_input_error(dir / "cut.ply", "byte " + std::to_string(second_vertex), "unexpected end of file");
+  // Cut inside the last face's index list.
+  write_bytes(dir / "cutface.ply", binary.substr(0, binary.size() - 3));
+  expect_input_error(dir / "cutface.ply", "byte", "unexpected end of file");
+
+  std::string out_of_range = binary;
+  out_of_range[out_of_range.size() - 1 - 12] = 9;  // first index of the last face: 3 -> 9
+  write_bytes(dir / "range.ply", out_of_range);
+  expect_input_error(dir / "range.ply", "byte " + std::to_string(binary.size() - 13), "out of range");
+
+  std::string nan_vertex = binary;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::memcpy(&nan_vertex[second_vertex], &nan, sizeof nan);
+  write_bytes(dir / "nan.ply", nan_vertex);
+  expect_input_error(dir / "nan.ply", "byte " + std::to_string(second_vertex), "non-finite coordinate");
+
+  write_text(dir / "header.ply", "ply\nformat ascii 1.0\nelement vertex three\nend_header\n");
+  expect_input_error(dir / "header.ply", "line 3", "malformed PLY header");
+  write_text(dir / "type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\nend_header\n");
+  expect_input_error(dir / "type.ply", "line 4", "unknown property type");
+  write_text(dir / "magic.ply", "plx\nformat ascii 1.0\nend_header\n");
+  expect_input_error(dir / "magic.ply", "line 1", "malformed PLY header");
+
+  const std::string ascii_head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list int int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+  write_text(dir / "ascii_range.ply", ascii_head + "3 0 1 3\n");
+  expect_input_error(dir / "ascii_range.ply", "line 13", "out of range");
+  write_text(dir / "ascii_count.ply", ascii_head + "-5 0 1 2\n");
+  expect_input_error(dir / "ascii_count.ply", "line 13", "negative list count");
+  write_text(dir / "ascii_cut.ply", ascii_head + "4 0 1 2\n");
+  expect_input_error(dir / "ascii_cut.ply", "line 13", "unexpected end of file");
+
+  // A huge list count in a skipped element ends in a clean truncation error, not an allocation.
+  write_bytes(dir / "huge.ply",
+              "ply\nformat binary_little_endian 1.0\nelement junk 1\nproperty list uint double v\n"
+              "element vertex 0\nproperty float x\nproperty float y\nproperty float z\n"
+              "element face 1\nproperty list uchar int vertex_indices\nend_header\n\xff\xff\xff\xff");
+  expect_input_error(dir / "huge.ply", "byte", "unexpected end of file");
+  // So does a vertex count far beyond what the file holds.
+  write_bytes(dir / "many.ply",
+              "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\n"
+              "property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+              "end_header\n" + std::string(30, '\0'));
+  expect_input_error(dir / "many.ply", "byte", "unexpected end of file");
+}
+
+// ---------------------------------------------------------------- OFF
+
+TEST(OffReader, PlainOffWithCommentsAndPolygon) {
+  TempDir dir;
+  write_text(dir / "a.off",
+             "OFF # a square pyramid base\n# comment line\n\n5 2 0\n"
+             "0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 1  # apex\n"
+             "4 0 1 2 3\n3 0 1 4 255 0 0\n");
+  const ReadResult r = read_all(dir / "a.off");
+  EXPECT_EQ(r.info.format, "off");
+  EXPECT_EQ(r.info.polygons_triangulated, 1u);
+  ASSERT_EQ(r.triangles.size(), 3u);
+  EXPECT_EQ(r.triangles[1].p[2], (Vec3d{0, 1, 0}));
+  EXPECT_EQ(r.triangles[2].p[2], (Vec3d{0.5, 0.5, 1}));
+  EXPECT_EQ(r.triangles[2].color[2], kGrey);
+}
+
+TEST(OffReader, CoffIntegerAndFloatColours) {
+  TempDir dir;
+  write_text(dir / "c.off", "COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 128\n0 1 0 0 0 255 255\n3 0 1 2\n");
+  const ReadResult r = read_all(dir / "c.off");
+  ASSERT_EQ(r.triangles.size(), 1u);
+  EXPECT_EQ(r.triangles[0].color[0], (Rgba8{255, 0, 0, 255}));
+  EXPECT_EQ(r.triangles[0].color[1], (Rgba8{0, 255, 0, 128}));
+  write_text(dir / "f.off", "COFF 3 1 0\n0 0 0 1.0 0.5 0\n1 0 0 0 0 1.0\n0 1 0 0.2 0.2 0.2\n3 0 1 2\n");
+  const ReadResult f = read_all(dir / "f.off");
+  ASSERT_EQ(f.triangles.size(), 1u);
+  EXPECT_EQ(f.triangles[0].color[0], (Rgba8{255, 128, 0, 255}));
+  EXPECT_EQ(f.triangles[0].color[2], (Rgba8{51, 51, 51, 255}));
+}
+
+TEST(OffReader, BadInputNamesFileAndLine) {
+  TempDir dir;
+  write_text(dir / "range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n");
+  expect_input_error(dir / "range.off", "line 6", "out of range");
+  write_text(dir / "nan.off", "OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n");
+  expect_input_error(dir / "nan.off", "line 4", "non-finite coordinate");
+  write_text(dir / "cut.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  expect_input_error(dir / "cut.off", "line 6", "unexpected end of file");
+}
+
+// ---------------------------------------------------------------- STL
+
+TEST(StlReader, AsciiFacets) {
+  TempDir dir;
+  write_text(dir / "a.stl",
+             "solid thing\n  facet normal 0 0 1\n    outer loop\n      vertex 0 0 0\n      vertex 1 0 0\n"
+             "      vertex 0 1 0\n    endloop\n  endfacet\n  facet normal 0 0 1\n    outer loop\n"
+             "      vertex 0 0 1e1\n      vertex 1 0 10\n      vertex 0 1 10\n    endloop\n  endfacet\n"
+             "endsolid thing\n");
+  const ReadResult r = read_all(dir / "a.stl");
+  EXPECT_EQ(r.info.format, "stl");
+  ASSERT_EQ(r.triangles.size(), 2u);
+  EXPECT_EQ(r.triangles[1].p[0], (Vec3d{0, 0, 10}));
+  EXPECT_EQ(r.triangles[0].p[2], (Vec3d{0, 1, 0}));
+  EXPECT_EQ(r.triangles[0].color[0], kGrey);
+}
+
+std::string binary_stl(const std::string& header_text, const std::vector<std::array<float, 9>>& triangles) {
+  std::string out = header_text;
+  out.resize(80, ' ');
+  put<std::uint32_t>(out, static_cast<std::uint32_t>(triangles.size()), false);
+  for (const auto& t : triangles) {
+    for (int k = 0; k < 3; ++k) put<float>(out, 0.0f, false);
+    for (float v : t) put<float>(out, v, false);
+    put<std::uint16_t>(out, 0, false);
+  }
+  return out;
+}
+
+TEST(StlReader, BinaryEvenWhenHeaderSaysSolid) {
+  TempDir dir;
+  const std::vector<std::array<float, 9>> triangles = {{0, 0, 0, 1, 0, 0, 0, 1, 0}, {2, 2, 2, 3, 2, 2, 2, 3, 2.5f}};
+  write_bytes(dir / "b.stl", binary_stl("binary export", triangles));
+  write_bytes(dir / "s.stl", binary_stl("solid but binary facet", triangles));
+  for (const char* name : {"b.stl", "s.stl"}) {
+    const ReadResult r = read_all(dir / name);
+    ASSERT_EQ(r.triangles.size(), 2u) << name;
+    EXPECT_EQ(r.triangles[0].p[1], (Vec3d{1, 0, 0}));
+    EXPECT_EQ(r.triangles[1].p[2], (Vec3d{2, 3, 2.5}));
+  }
+  const std::string full = binary_stl("x", triangles);
+  write_bytes(dir / "cut.stl", full.substr(0, full.size() - 1));
+  expect_input_error(dir / "cut.stl", "byte 80", "announces 2 triangles");
+  write_gzip(dir / "cut.stl.gz", full.substr(0, full.size() - 1));
+  expect_input_error(dir / "cut.stl.gz", "byte 134", "unexpected end of file");
+}
+
+// ---------------------------------------------------------------- gzip
+
+TEST(GzipInput, ObjAndPlyDecompressOnTheFly) {
+  TempDir dir;
+  write_gzip(dir / "m.obj.gz", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 4 3\n");
+  const ReadResult obj = read_all(dir / "m.obj.gz");
+  EXPECT_EQ(obj.info.format, "obj");
+  ASSERT_EQ(obj.triangles.size(), 2u);
+  EXPECT_EQ(obj.triangles[1].p[2], (Vec3d{0, 1, 0}));
+
+  write_gzip(dir / "m.PLY.GZ", tricky_ply("binary_big_endian", "uint"));
+  expect_tricky_ply_triangles(read_all(dir / "m.PLY.GZ"));
+
+  // STL's binary/ASCII test cannot use the file size under gzip.
+  const std::vector<std::array<float, 9>> triangles = {{0, 0, 0, 1, 0, 0, 0, 1, 0}};
+  write_gzip(dir / "b.stl.gz", binary_stl("solid exported by a CAD tool", triangles));
+  const ReadResult binary = read_all(dir / "b.stl.gz");
+  ASSERT_EQ(binary.triangles.size(), 1u);
+  EXPECT_EQ(binary.triangles[0].p[2], (Vec3d{0, 1, 0}));
+  write_gzip(dir / "a.stl.gz", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+                                "vertex 0 1 0\nvertex 0 0 1\nendloop\nendfacet\nendsolid a\n");
+  const ReadResult ascii = read_all(dir / "a.stl.gz");
+  EXPECT_EQ(ascii.info.polygons_triangulated, 1u);
+  ASSERT_EQ(ascii.triangles.size(), 2u);
+  EXPECT_EQ(ascii.triangles[1].p[2], (Vec3d{0, 0, 1}));
+
+  // A damaged compressed stream is an error at the decompressed offset reached.
+  std::string text;
+  for (int i = 0; i < 2000; ++i) text += "v " + std::to_string(i) + " 0 0\n";
+  write_gzip(dir / "damaged.obj.gz", text);
+  std::ifstream in(dir / "damaged.obj.gz", std::ios::binary);
+  std::string compressed((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (std::size_t i = 20; i < compressed.size() - 8; i += 7) compressed[i] = static_cast<char>(compressed[i] ^ 0x5a);
+  write_bytes(dir / "damaged.obj.gz", compressed);
+  expect_input_error(dir / "damaged.obj.gz", "byte", "gzip error");
+  // So is a compressed stream cut short (zlib alone would report a clean end).
+  write_gzip(dir / "cut.obj.gz", text);
+  std::ifstream cut_in(dir / "cut.obj.gz", std::ios::binary);
+  std::string cut((std::istreambuf_iterator<char>(cut_in)), std::istreambuf_iterator<char>());
+  write_bytes(dir / "cut.obj.gz", cut.substr(0, cut.size() / 2));
+  expect_input_error(dir / "cut.obj.gz", "byte", "truncated");
+}
+
+// ---------------------------------------------------------------- assimp
+
+std::string base64(const std::string& bytes) {
+  static const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    std::uint32_t chunk = static_cast<std::uint8_t>(bytes[i]) << 16;
+    if (i + 1 < bytes.size()) chunk |= static_cast<std::uint8_t>(bytes[i + 1]) << 8;
+    if (i + 2 < bytes.size()) chunk |= static_cast<std::uint8_t>(bytes[i + 2]);
+    out += table[(chunk >> 18) & 63];
+    out += table[(chunk >> 12) & 63];
+    out += i + 1 < bytes.size() ? table[(chunk >> 6) & 63] : '=';
+    out += i + 2 < bytes.size() ? table[chunk & 63] : '=';
+  }
+  return out;
+}
+
+std::string one_triangle_gltf() {
+  std::string buffer;
+  for (float v : {0.0f, 0.0f, 0.0f, 2.0f, 0.0f, 0.0f, 0.0f, 3.0f, 0.0f}) put<float>(buffer, v, false);
+  for (std::uint16_t i : {0, 1, 2, 0}) put<std::uint16_t>(buffer, i, false);  // 3 indices + padding
+  return R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],
+  "nodes":[{"mesh":0,"translation":[10,0,0]}],
+  "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"material":0}]}],
+  "materials":[{"name":"red","pbrMetallicRoughness":{"baseColorFactor":[1,0,0,1]}}],
+  "buffers":[{"byteLength":44,"uri":"data:application/octet-stream;base64,)" +
+         base64(buffer) + R"("}],
+  "bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":6}],
+  "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[2,3,0]},
+               {"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}]})";
+}
+
+TEST(AssimpReader, GltfWithEmbeddedBuffer) {
+  TempDir dir;
+  write_text(dir / "t.gltf", one_triangle_gltf());
+  const ReadResult r = read_all(dir / "t.gltf");
+  EXPECT_EQ(r.info.format, "assimp:gltf");
+  ASSERT_EQ(r.triangles.size(), 1u);
+  // The node translation is baked in.
+  EXPECT_EQ(r.triangles[0].p[0], (Vec3d{10, 0, 0}));
+  EXPECT_EQ(r.triangles[0].p[1], (Vec3d{12, 0, 0}));
+  EXPECT_EQ(r.triangles[0].p[2], (Vec3d{10, 3, 0}));
+  ASSERT_LT(r.triangles[0].material, r.info.materials.size());
+  EXPECT_EQ(r.info.materials[r.triangles[0].material].name, "red");
+  EXPECT_EQ(r.triangles[0].color[0], (Rgba8{255, 0, 0, 255}));
+
+  write_gzip(dir / "t.gltf.gz", one_triangle_gltf());
+  const ReadResult gz = read_all(dir / "t.gltf.gz");
+  ASSERT_EQ(gz.triangles.size(), 1u);
+  EXPECT_EQ(gz.triangles[0].p[1], (Vec3d{12, 0, 0}));
+
+  write_text(dir / "broken.gltf", "{\"asset\": ");
+  expect_input_error(dir / "broken.gltf", "", "assimp");
+}
+
+// ---------------------------------------------------------------- dispatch
+
+TEST(ReadModel, UnknownExtensionAndMissingFile) {
+  TempDir dir;
+  write_text(dir / "model.xyz", "1 2 3\n");
+  expect_input_error(dir / "model.xyz", "", "unknown model format '.xyz'");
+  write_text(dir / "noext", "1 2 3\n");
+  expect_input_error(dir / "noext", "", "unknown model format");
+  expect_input_error(dir / "absent.obj", "", "cannot open");
+  expect_input_error(dir / "absent.ply.gz", "", "cannot open");
+  expect_input_error(dir / "absent.glb", "", "cannot open");
+}
+
+TEST(ReadModel, ExtensionIsCaseInsensitive) {
+  TempDir dir;
+  write_text(dir / "UPPER.OBJ", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  EXPECT_EQ(read_all(dir / "UPPER.OBJ").triangles.size(), 1u);
+}
+
+}  // namespace
+}  // namespace cellbake

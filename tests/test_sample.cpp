@@ -1,0 +1,374 @@
+// Tests of the panoramic sampler and the offscreen chunk renderer with
+// analytic answers: an eye at the centre of a closed box of side 2 sees planar
+// depth 1 on every face, whatever the box's distance from the world origin.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <thread>
+
+#include "stages/render/chunk_renderer.h"
+#include "stages/render/gl_context.h"
+#include "stages/sample.h"
+#include "tests/fixture_chunk_source.h"
+
+namespace cellbake {
+namespace {
+
+using test::chunk_from_triangles;
+using test::flat_triangle;
+using test::InMemoryChunkSource;
+
+const std::array<Rgba8, 6> kWallColors = {Rgba8{255, 0, 0, 255},   Rgba8{0, 255, 0, 255},
+                                          Rgba8{0, 0, 255, 255},   Rgba8{255, 255, 0, 255},
+                                          Rgba8{0, 255, 255, 255}, Rgba8{255, 0, 255, 255}};
+
+// The wall of `box` facing cube face `face` from inside (face 0 = the x = hi.x wall, ...), two triangles.
+std::vector<Triangle> box_wall(const Box3d& box, int face, Rgba8 color) {
+  const int axis = face / 2, u = (axis + 1) % 3, v = (axis + 2) % 3;
+  const double w = face % 2 == 0 ? box.hi[axis] : box.lo[axis];
+  std::array<Vec3d, 4> q;
+  const double us[4] = {box.lo[u], box.hi[u], box.hi[u], box.lo[u]};
+  const double vs[4] = {box.lo[v], box.lo[v], box.hi[v], box.hi[v]};
+  for (int i = 0; i < 4; ++i) {
+    q[i][axis] = w;
+    q[i][u] = us[i];
+    q[i][v] = vs[i];
+  }
+  return {flat_triangle(q[0], q[1], q[2], color), flat_triangle(q[0], q[2], q[3], color)};
+}
+
+// A closed box of side 2 around `centre`: chunk id face + 1 holds wall `face`.
+// Chunk origins sit off the float32 grid of large coordinates, as ingest's would.
+void add_closed_box(InMemoryChunkSource& source, const Vec3d& centre) {
+  const Box3d box = Box3d::cube(centre, 1.0);
+  for (int face = 0; face < kCubeFaces; ++face)
+    source.add(chunk_from_triangles(face + 1, box_wall(box, face, kWallColors[face]),
+                                    centre + Vec3d{0.37 * face, -0.21, 0.13}));
+}
+
+std::unique_ptr<ChunkRenderer> make_renderer(ChunkRendererParams params = {}) {
+  return std::make_unique<ChunkRenderer>(create_gl_context(GlBackend::osmesa, 1, 1), params);
+}
+
+SampleParams small_params(int face_size = 32, int supersample = 1) {
+  SampleParams p;
+  p.face_size = face_size;
+  p.supersample = supersample;
+  return p;
+}
+
+std::size_t pixel(int size, int col, int row) { return static_cast<std::size_t>(row) * size + col; }
+
+void expect_closed_box_seen(const CubeSample& sample, double tolerance) {
+  for (int face = 0; face < kCubeFaces; ++face) {
+    const CubeFace& f = sample.faces[face];
+    ASSERT_EQ(f.depth.size(), static_cast<std::size_t>(f.size) * f.size);
+    ASSERT_EQ(f.color.size(), f.depth.size());
+    // Every pixel sees the wall square-on, so the planar depth is 1 everywhere.
+    for (std::size_t i = 0; i < f.depth.size(); ++i) {
+      ASSERT_NEAR(f.depth[i], 1.0, tolerance) << "face " << face << " pixel " << i;
+      ASSERT_EQ(f.color[i], kWallColors[face]) << "face " << face << " pixel " << i;
+    }
+  }
+}
+
+TEST(Sample, ClosedBoxHasDepthOneOnEveryFaceAndTheWallColours) {
+  InMemoryChunkSource source;
+  add_closed_box(source, {0, 0, 0});
+  auto renderer = make_renderer();
+  const CubeSample sample = sample_cube({0, 0, 0}, Box3d::cube({0, 0, 0}, 0.1), small_params(), source, *renderer);
+  EXPECT_EQ(sample.eye, (Vec3d{0, 0, 0}));
+  for (const CubeFace& f : sample.faces) EXPECT_EQ(f.size, 32);
+  expect_closed_box_seen(sample, 1e-4);
+  // The four pixels around each face centre, named explicitly.
+  for (int face = 0; face < kCubeFaces; ++face)
+    for (int c : {15, 16})
+      for (int r : {15, 16}) EXPECT_NEAR(sample.faces[face].depth[pixel(32, c, r)], 1.0, 1e-4);
+}
+
+TEST(Sample, FarFromTheWorldOriginDepthsKeepTheirPrecision) {
+  // The second offset is not representable in float32 (ulp 0.25 m at 2e6 m):
+  // only eye-relative coordinates computed in double keep depth 1 to 1e-4.
+  for (const Vec3d offset : {Vec3d{1e6, -2e6, 5e5}, Vec3d{1e6 + 0.3137, -2e6 - 0.7071, 5e5 + 0.1234}}) {
+    InMemoryChunkSource source;
+    add_closed_box(source, offset);
+    auto renderer = make_renderer();
+    const CubeSample sample = sample_cube(offset, Box3d::cube(offset, 0.1), small_params(), source, *renderer);
+    expect_closed_box_seen(sample, 1e-4);
+  }
+}
+
+TEST(Sample, OrientationFollowsCubeMapConvention) {
+  // A small marker just off the +X face centre, on the +up (+z) and +right (-y) side:
+  // it must land in the upper-right quadrant of face 0 (row 0 at the top).
+  InMemoryChunkSource source;
+  add_closed_box(source, {0, 0, 0});
+  const Rgba8 marker{10, 20, 30, 255};
+  source.add(chunk_from_triangles(
+      10, {flat_triangle({0.9, -0.3, 0.3}, {0.9, -0.6, 0.3}, {0.9, -0.45, 0.6}, marker)}));
+  auto renderer = make_renderer();
+  const CubeSample sample = sample_cube({0, 0, 0}, Box3d::cube({0, 0, 0}, 0.1), small_params(), source, *renderer);
+  const CubeFace& f = sample.faces[0];
+  int upper_right = 0, elsewhere = 0;
+  for (int row = 0; row < f.size; ++row)
+    for (int col = 0; col < f.size; ++col)
+      if (f.color[pixel(f.size, col, row)] == marker) (row < f.size / 2 && col >= f.size / 2 ? upper_right : elsewhere)++;
+  EXPECT_GT(upper_right, 4);
+  EXPECT_EQ(elsewhere, 0);
+  // Pixel centre direction (s, t) times the depth lands on the marker plane x = 0.9.
+  for (int row = 0; row < f.size; ++row)
+    for (int col = 0; col < f.size; ++col)
+      if (f.color[pixel(f.size, col, row)] == marker) {
+        const double s = 2.0 * (col + 0.5) / f.size - 1, t = 1 - 2.0 * (row + 0.5) / f.size;
+        const Vec3d p = cube_face_direction(cube_face_basis(0), s, t) * f.depth[pixel(f.size, col, row)];
+        EXPECT_NEAR(p.x, 0.9, 1e-4);
+        EXPECT_LT(p.y, 0);
+        EXPECT_GT(p.z, 0);
+      }
+}
+
+// A small triangle at x = 0.5 covering the +X face centre.
+Chunk blocker_chunk(std::int64_t id, Rgba8 color) {
+  return chunk_from_triangles(id, {flat_triangle({0.5, -0.2, -0.2}, {0.5, 0.2, -0.2}, {0.5, 0.0, 0.3}, color)});
+}
+
+TEST(Sample, GeometryInsideTheCullBoxIsNotDrawn) {
+  const Rgba8 blocker_color{1, 2, 3, 255};
+  InMemoryChunkSource source;
+  add_closed_box(source, {0, 0, 0});
+  source.add(blocker_chunk(20, blocker_color));
+  const std::size_t centre = pixel(32, 16, 16);
+
+  auto renderer = make_renderer();
+  const CubeSample hidden = sample_cube({0, 0, 0}, Box3d::cube({0, 0, 0}, 0.75), small_params(), source, *renderer);
+  EXPECT_NEAR(hidden.faces[0].depth[centre], 1.0, 1e-4);
+  EXPECT_EQ(hidden.faces[0].color[centre], kWallColors[0]);
+  const auto loads = source.loads();
+  EXPECT_EQ(std::count(loads.begin(), loads.end(), 20), 0) << "a chunk inside the cull box was loaded";
+
+  const CubeSample seen = sample_cube({0, 0, 0}, Box3d::cube({0, 0, 0}, 0.25), small_params(), source, *renderer);
+  EXPECT_NEAR(seen.faces[0].depth[centre], 0.5, 1e-4);
+  EXPECT_EQ(seen.faces[0].color[centre], blocker_color);
+}
+
+TEST(Sample, OffCentreEyeDiscardsPerFragment) {
+  // A quad at x = 0.5 reaching out of the cull box: the eye sits off the box
+  // centre, the quad's middle is inside the box and in front of the eye, so
+  // only a per-fragment test (not a clip plane or a chunk test) hides it.
+  const Rgba8 blocker_color{1, 2, 3, 255};
+  InMemoryChunkSource source;
+  add_closed_box(source, {0, 0, 0});
+  const double e = 0.95;
+  source.add(chunk_from_triangles(20, {flat_triangle({0.5, -e, -e}, {0.5, e, -e}, {0.5, e, e}, blocker_color),
+                                       flat_triangle({0.5, -e, -e}, {0.5, e, e}, {0.5, -e, e}, blocker_color)}));
+  auto renderer = make_renderer();
+  const Vec3d eye{0.3, 0, 0};
+  const CubeSample s = sample_cube(eye, Box3d::cube({0, 0, 0}, 0.6), small_params(), source, *renderer);
+  const std::size_t centre = pixel(32, 16, 16);
+  EXPECT_NEAR(s.faces[0].depth[centre], 0.7, 1e-4);
+  EXPECT_EQ(s.faces[0].color[centre], kWallColors[0]);
+  EXPECT_EQ(std::count(s.faces[0].color.begin(), s.faces[0].color.end(), blocker_color), 0);
+  // Looking back (-X) the wall at x = -1 is 1.3 away.
+  EXPECT_NEAR(s.faces[1].depth[centre], 1.3, 1e-4);
+  // The quad's rim outside the box (|y| > 0.6) is seen from the +Y face, at planar depth y.
+  const CubeFace& plus_y = s.faces[2];
+  int rim = 0;
+  for (int row = 0; row < plus_y.size; ++row)
+    for (int col = 0; col < plus_y.size; ++col)
+      if (plus_y.color[pixel(32, col, row)] == blocker_color) {
+        ++rim;
+        const double sc = 2.0 * (col + 0.5) / 32 - 1;  // right = +x: x - 0.3 = sc * depth = 0.2
+        EXPECT_NEAR(sc * plus_y.depth[pixel(32, col, row)], 0.2, 1e-4);
+        EXPECT_GT(plus_y.depth[pixel(32, col, row)], 0.6 - 1e-4);
+      }
+  EXPECT_GT(rim, 4);
+}
+
+TEST(Sample, BackgroundIsInfinityWhereNothingIsDrawn) {
+  InMemoryChunkSource source;
+  source.add(chunk_from_triangles(1, box_wall(Box3d::cube({0, 0, 0}, 1.0), 0, kWallColors[0])));
+  auto renderer = make_renderer();
+  const CubeSample s = sample_cube({0, 0, 0}, Box3d::cube({0, 0, 0}, 0.1), small_params(), source, *renderer);
+  for (float d : s.faces[0].depth) ASSERT_NEAR(d, 1.0, 1e-4);
+  for (int face = 1; face < kCubeFaces; ++face) {
+    for (float d : s.faces[face].depth) ASSERT_EQ(d, kBackgroundDepth) << "face " << face;
+    for (Rgba8 c : s.faces[face].color) ASSERT_EQ(c, (Rgba8{0, 0, 0, 0})) << "face " << face;
+  }
+}
+
+TEST(Sample, PerFaceFrustumCullingLoadsOnlyNeededChunks) {
+  const Rgba8 grey{128, 128, 128, 255};
+  const auto tiny_at = [&](std::int64_t id, Vec3d c) {
+    return chunk_from_triangles(id, {flat_triangle(c + Vec3d{0, -0.1, -0.1}, c + Vec3d{0, 0.1, -0.1},
+                                                   c + Vec3d{0, 0, 0.1}, grey)});
+  };
+  InMemoryChunkSource source;
+  source.add(tiny_at(1, {5, 0, 0}));     // +X only
+  source.add(tiny_at(2, {20, 0, 0}));    // +X only; stretches face 0's query box over chunk 3
+  source.add(tiny_at(3, {5, 8, 0}));     // +Y only: in face 0's query box, outside its frustum
+  source.add(tiny_at(4, {0.3, 0, 0}));   // strictly inside the cull box
+  source.add(tiny_at(5, {0, 0.5, -5}));  // -Z only
+  const Box3d cull_box = Box3d::cube({0, 0, 0}, 1.0);
+  const auto ids_of = [&](int face) {
+    std::vector<std::int64_t> ids;
+    for (const ChunkRef& r : chunks_in_face(face, {0, 0, 0}, cull_box, 0.01, source)) ids.push_back(r.id);
+    return ids;
+  };
+  EXPECT_EQ(ids_of(0), (std::vector<std::int64_t>{1, 2}));
+  EXPECT_EQ(ids_of(1), (std::vector<std::int64_t>{}));
+  EXPECT_EQ(ids_of(2), (std::vector<std::int64_t>{3}));
+  EXPECT_EQ(ids_of(3), (std::vector<std::int64_t>{}));
+  EXPECT_EQ(ids_of(4), (std::vector<std::int64_t>{}));
+  EXPECT_EQ(ids_of(5), (std::vector<std::int64_t>{5}));
+
+  auto renderer = make_renderer();
+  sample_cube({0, 0, 0}, cull_box, small_params(), source, *renderer);
+  std::vector<std::int64_t> loads = source.loads();
+  std::sort(loads.begin(), loads.end());
+  EXPECT_EQ(loads, (std::vector<std::int64_t>{1, 2, 3, 5}));  // each needed chunk once, chunk 4 never
+
+  // The renderer keeps them: a second sample from the same place loads nothing.
+  source.clear_loads();
+  sample_cube({0, 0, 0}, cull_box, small_params(), source, *renderer);
+  EXPECT_TRUE(source.loads().empty());
+}
+
+TEST(Sample, ChunkSharedByFacesIsLoadedOnce) {
+  InMemoryChunkSource source;
+  // One chunk holding all six walls: every face needs it.
+  std::vector<Triangle> all;
+  for (int face = 0; face < kCubeFaces; ++face)
+    for (const Triangle& t : box_wall(Box3d::cube({0, 0, 0}, 1.0), face, kWallColors[face])) all.push_back(t);
+  source.add(chunk_from_triangles(7, all));
+  auto renderer = make_renderer();
+  const CubeSample s = sample_cube({0, 0, 0}, Box3d::cube({0, 0, 0}, 0.1), small_params(), source, *renderer);
+  expect_closed_box_seen(s, 1e-4);
+  EXPECT_EQ(source.loads(), (std::vector<std::int64_t>{7}));
+}
+
+TEST(Sample, SupersampleGivesTheSameDepthsOnAFlatWall) {
+  InMemoryChunkSource source;
+  add_closed_box(source, {0, 0, 0});
+  auto renderer = make_renderer();
+  const CubeSample s = sample_cube({0, 0, 0}, Box3d::cube({0, 0, 0}, 0.1), small_params(32, 2), source, *renderer);
+  for (const CubeFace& f : s.faces) EXPECT_EQ(f.size, 32);
+  expect_closed_box_seen(s, 1e-4);
+}
+
+TEST(Sample, SupersampledDepthOfASlantedPlaneIsThePixelCentreDepth) {
+  // Plane x - 0.3 y = 1 seen by face 0 (right = -y, up = +z): the point at
+  // face coordinates (s, t) is d (1, -s, t), so d = 1 / (1 + 0.3 s).
+  const Rgba8 grey{90, 90, 90, 255};
+  const auto on_plane = [](double y, double z) { return Vec3d{1 + 0.3 * y, y, z}; };
+  InMemoryChunkSource source;
+  source.add(chunk_from_triangles(1, {flat_triangle(on_plane(-5, -5), on_plane(5, -5), on_plane(5, 5), grey),
+                                      flat_triangle(on_plane(-5, -5), on_plane(5, 5), on_plane(-5, 5), grey)}));
+  auto renderer = make_renderer();
+  for (int supersample : {1, 2, 3}) {
+    const CubeSample s =
+        sample_cube({0, 0, 0}, Box3d::cube({0, 0, 0}, 0.1), small_params(32, supersample), source, *renderer);
+    const CubeFace& f = s.faces[0];
+    for (int row = 0; row < f.size; ++row)
+      for (int col = 0; col < f.size; ++col) {
+        const double sc = 2.0 * (col + 0.5) / f.size - 1;
+        ASSERT_NEAR(f.depth[pixel(f.size, col, row)], 1 / (1 + 0.3 * sc), 1e-4)
+            << "supersample " << supersample << " col " << col << " row " << row;
+        ASSERT_EQ(f.color[pixel(f.size, col, row)], grey);
+      }
+  }
+}
+
+TEST(Sample, DownsampleAveragesCoveredColourAndKeepsTheNearestDepthAcrossEdges) {
+  const float inf = kBackgroundDepth;
+  // All four subpixels covered by two surfaces (depths 1 and 10): the nearest.
+  const CubeFace edge = downsample_face({{100, 0, 0, 255}, {200, 0, 0, 255}, {100, 0, 0, 255}, {200, 0, 0, 255}},
+                                        {1, 10, 1, 10}, 1, 2, 0.05);
+  EXPECT_EQ(edge.color[0], (Rgba8{150, 0, 0, 255}));
+  EXPECT_EQ(edge.depth[0], 1.0f);
+  // One covered subpixel: its colour and depth.
+  const CubeFace rim = downsample_face({{0, 0, 0, 0}, {0, 50, 0, 255}, {0, 0, 0, 0}, {0, 0, 0, 0}},
+                                       {inf, 4, inf, inf}, 1, 2, 0.05);
+  EXPECT_EQ(rim.color[0], (Rgba8{0, 50, 0, 255}));
+  EXPECT_EQ(rim.depth[0], 4.0f);
+  // All four on one surface: harmonic mean, 1 / mean(1/2, 1/2, 1/2.02, 1/2.02).
+  const CubeFace plane = downsample_face(std::vector<Rgba8>(4, Rgba8{}), {2.0f, 2.0f, 2.02f, 2.02f}, 1, 2, 0.05);
+  EXPECT_NEAR(plane.depth[0], 4.0 / (2 / 2.0 + 2 / 2.02), 1e-6);
+  // Nothing covered: background.
+  const CubeFace empty = downsample_face(std::vector<Rgba8>(4, Rgba8{0, 0, 0, 0}), std::vector<float>(4, inf), 1, 2, 0.05);
+  EXPECT_EQ(empty.depth[0], kBackgroundDepth);
+  EXPECT_EQ(empty.color[0], (Rgba8{0, 0, 0, 0}));
+}
+
+TEST(ChunkRenderer, CacheCapEvictsAndResultsStayCorrect) {
+  InMemoryChunkSource source;
+  add_closed_box(source, {0, 0, 0});
+  // Each wall chunk is 6 vertices * 16 bytes + 6 16-bit indices = 108 bytes.
+  ChunkRendererParams params;
+  params.cache_bytes = 250;
+  auto renderer = make_renderer(params);
+  const CubeSample s = sample_cube({0, 0, 0}, Box3d::cube({0, 0, 0}, 0.1), small_params(), source, *renderer);
+  expect_closed_box_seen(s, 1e-4);
+  // Walls touching a face's frustum edge are drawn there too, so chunks are
+  // re-uploaded as they are evicted; the cap holds throughout.
+  const ChunkRendererStats stats = renderer->stats();
+  EXPECT_GE(stats.uploads, 6u);
+  EXPECT_GT(stats.evictions, 0u);
+  EXPECT_EQ(stats.cached_chunks, 2u);
+  EXPECT_LE(stats.cached_bytes, params.cache_bytes);
+}
+
+TEST(ChunkRenderer, MalformedChunkIsRejectedWithItsId) {
+  InMemoryChunkSource source;
+  Chunk bad = chunk_from_triangles(42, {flat_triangle({2, 0, 0}, {2, 1, 0}, {2, 0, 1}, Rgba8{})});
+  bad.indices[1] = 99;
+  source.add(bad);
+  auto renderer = make_renderer();
+  try {
+    sample_cube({0, 0, 0}, Box3d{}, small_params(), source, *renderer);
+    FAIL() << "expected an exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("chunk 42"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ChunkRenderer, OneContextPerThreadGivesIdenticalResults) {
+  InMemoryChunkSource source;
+  add_closed_box(source, {0, 0, 0});
+  source.add(blocker_chunk(20, Rgba8{1, 2, 3, 255}));
+  const Box3d cull_box = Box3d::cube({0, 0, 0}, 0.25);
+  auto reference_renderer = make_renderer();
+  const CubeSample reference = sample_cube({0.1, 0.05, 0}, cull_box, small_params(), source, *reference_renderer);
+  std::array<CubeSample, 2> results;
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 2; ++t)
+    threads.emplace_back([&, t] {
+      auto renderer = make_renderer();
+      for (int repeat = 0; repeat < 3; ++repeat)
+        results[t] = sample_cube({0.1, 0.05, 0}, cull_box, small_params(), source, *renderer);
+    });
+  for (auto& th : threads) th.join();
+  for (const CubeSample& r : results)
+    for (int face = 0; face < kCubeFaces; ++face) {
+      EXPECT_EQ(r.faces[face].depth, reference.faces[face].depth) << "face " << face;
+      EXPECT_EQ(r.faces[face].color, reference.faces[face].color) << "face " << face;
+    }
+}
+
+TEST(Sample, RejectsBadParameters) {
+  InMemoryChunkSource source;
+  auto renderer = make_renderer();
+  SampleParams p = small_params();
+  p.face_size = 0;
+  EXPECT_THROW(sample_cube({0, 0, 0}, Box3d{}, p, source, *renderer), std::invalid_argument);
+  p = small_params();
+  p.supersample = 0;
+  EXPECT_THROW(sample_cube({0, 0, 0}, Box3d{}, p, source, *renderer), std::invalid_argument);
+  p = small_params();
+  p.near_plane = 0;
+  EXPECT_THROW(sample_cube({0, 0, 0}, Box3d{}, p, source, *renderer), std::invalid_argument);
+  EXPECT_THROW(sample_cube({NAN, 0, 0}, Box3d{}, small_params(), source, *renderer), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace cellbake

@@ -1,0 +1,176 @@
+// Simplification of dense depth meshes built from analytic scenes: flat faces
+// collapse to a couple of triangles, the error bound holds, coverage is kept,
+// nothing flips, neighbouring faces keep identical border vertices, output is
+// deterministic, the triangle cap relaxes the bound and says so.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <set>
+#include <stdexcept>
+#include <tuple>
+
+#include "stages/depth_mesh.h"
+#include "stages/depth_mesh_analytic_scene.h"
+#include "stages/simplify.h"
+
+namespace cellbake {
+namespace {
+
+using PositionKey = std::tuple<float, float, float>;
+
+std::set<PositionKey> border_positions(const FaceMesh& m) {
+  std::set<PositionKey> out;
+  for (std::size_t v = 0; v < m.positions.size(); ++v) {
+    const Uv uv = m.uvs[v];
+    if (uv.u == 0.0f || uv.v == 0.0f || uv.u == 1.0f || uv.v == 1.0f)
+      out.insert({m.positions[v].x, m.positions[v].y, m.positions[v].z});
+  }
+  return out;
+}
+
+void expect_exact_coverage_and_bound(const SimplifyResult& r, double bound, int face) {
+  EXPECT_LE(r.achieved.max_depth_error_relative, bound * (1 + 1e-6) + 1e-7) << "face " << face;
+  EXPECT_EQ(r.achieved.uncovered_samples, 0u) << "face " << face;
+  EXPECT_EQ(r.achieved.spurious_samples, 0u) << "face " << face;
+  EXPECT_EQ(r.achieved.flipped_triangles, 0u) << "face " << face;
+  EXPECT_EQ(r.achieved.overlapping_samples, 0u) << "face " << face;
+  EXPECT_EQ(r.triangles_out, r.mesh.triangle_count());
+}
+
+AnalyticScene cluttered_room() {
+  AnalyticScene scene;
+  scene.boxes.push_back(Box3d::cube({0, 0, 0}, 10.0));  // the room, seen from inside
+  scene.boxes.push_back({{2, -1, -3}, {3, 1, 0}});
+  scene.boxes.push_back({{-6, 3, -10}, {-4, 5, 2}});
+  scene.boxes.push_back({{-2, -7, 1}, {1, -5, 3}});
+  scene.cylinders.push_back({4, 4, 0.4, -10, 10});
+  scene.cylinders.push_back({-3, -2, 1.0, -10, -1});
+  scene.cylinders.push_back({1.5, 6, 0.15, -10, 10});  // a thin pipe
+  return scene;
+}
+
+TEST(Simplify, BoxFacesSeenFromTheCentreBecomeTwoTriangles) {
+  AnalyticScene scene;
+  scene.boxes.push_back(Box3d::cube({0, 0, 0}, 1.0));
+  const int n = 64;
+  const auto dense = build_depth_meshes(raycast_analytic_scene(scene, {0, 0, 0}, n), DepthMeshParams{});
+  std::array<SimplifyResult, kCubeFaces> out;
+  for (int f = 0; f < kCubeFaces; ++f) {
+    out[f] = simplify_face_mesh(dense[f], n, SimplifyParams{});
+    EXPECT_EQ(out[f].triangles_in, std::size_t(2 * n * n));
+    EXPECT_LE(out[f].triangles_out, 8u) << "face " << f;
+    EXPECT_LT(out[f].achieved.max_depth_error_relative, 1e-6);
+    expect_exact_coverage_and_bound(out[f], 1e-6, f);
+    EXPECT_FALSE(out[f].cap_forced_larger_error);
+  }
+  // Adjacent faces share their two cube-corner vertices exactly.
+  for (int a = 0; a < kCubeFaces; ++a)
+    for (int b = a + 1; b < kCubeFaces; ++b) {
+      if (a / 2 == b / 2) continue;
+      const auto pa = border_positions(out[a].mesh), pb = border_positions(out[b].mesh);
+      std::vector<PositionKey> common;
+      std::set_intersection(pa.begin(), pa.end(), pb.begin(), pb.end(), std::back_inserter(common));
+      EXPECT_EQ(common.size(), 2u) << "faces " << a << ", " << b;
+    }
+}
+
+TEST(Simplify, PlaneSeenFromAboveBecomesAHandfulOfTriangles) {
+  AnalyticScene scene;
+  scene.boxes.push_back({{-1000, -1000, -5}, {1000, 1000, 0}});  // ground, top at z = 0
+  const int n = 64;
+  const auto dense = build_depth_meshes(raycast_analytic_scene(scene, {0.3, -0.2, 2}, n), DepthMeshParams{});
+  const SimplifyResult down = simplify_face_mesh(dense[5], n, SimplifyParams{});  // -Z
+  EXPECT_LE(down.triangles_out, 8u);
+  expect_exact_coverage_and_bound(down, SimplifyParams{}.depth_error_relative, 5);
+  // A side face sees the same plane obliquely (exactly planar in (x, y, 1/z)),
+  // plus a grazing horizon: still a small fraction of the input.
+  const SimplifyResult side = simplify_face_mesh(dense[0], n, SimplifyParams{});
+  EXPECT_LT(side.triangles_out * 10, side.triangles_in);
+  expect_exact_coverage_and_bound(side, SimplifyParams{}.depth_error_relative, 0);
+}
+
+TEST(Simplify, ClutteredRoomKeepsTheBoundCoverageAndCrackFreeBorders) {
+  const int n = 96;
+  const auto dense = build_depth_meshes(raycast_analytic_scene(cluttered_room(), {0.35, 0.2, -0.15}, n),
+                                        DepthMeshParams{});
+  SimplifyParams params;
+  params.depth_error_relative = 0.005;
+  std::array<SimplifyResult, kCubeFaces> out;
+  std::size_t in_total = 0, out_total = 0;
+  for (int f = 0; f < kCubeFaces; ++f) {
+    out[f] = simplify_face_mesh(dense[f], n, params);
+    expect_exact_coverage_and_bound(out[f], params.depth_error_relative, f);
+    in_total += out[f].triangles_in;
+    out_total += out[f].triangles_out;
+  }
+  EXPECT_LT(out_total * 4, in_total);
+  // A border vertex both dense faces share is kept by both simplified faces or by neither.
+  for (int a = 0; a < kCubeFaces; ++a)
+    for (int b = a + 1; b < kCubeFaces; ++b) {
+      if (a / 2 == b / 2) continue;
+      const auto da = border_positions(dense[a]), db = border_positions(dense[b]);
+      const auto sa = border_positions(out[a].mesh), sb = border_positions(out[b].mesh);
+      std::vector<PositionKey> shared;
+      std::set_intersection(da.begin(), da.end(), db.begin(), db.end(), std::back_inserter(shared));
+      ASSERT_GT(shared.size(), 0u);
+      for (const PositionKey& p : shared) EXPECT_EQ(sa.count(p), sb.count(p)) << "faces " << a << ", " << b;
+    }
+}
+
+TEST(Simplify, IsDeterministic) {
+  const int n = 64;
+  const auto dense = build_depth_meshes(raycast_analytic_scene(cluttered_room(), {0, 0, 0}, n), DepthMeshParams{});
+  for (int f : {0, 3}) {
+    const SimplifyResult a = simplify_face_mesh(dense[f], n, SimplifyParams{});
+    const SimplifyResult b = simplify_face_mesh(dense[f], n, SimplifyParams{});
+    EXPECT_EQ(a.mesh.positions, b.mesh.positions);
+    EXPECT_EQ(a.mesh.uvs, b.mesh.uvs);
+    EXPECT_EQ(a.mesh.indices, b.mesh.indices);
+  }
+}
+
+TEST(Simplify, TighterBoundKeepsMoreTriangles) {
+  const int n = 64;
+  const auto dense = build_depth_meshes(raycast_analytic_scene(cluttered_room(), {0, 0, 0}, n), DepthMeshParams{});
+  SimplifyParams loose, tight;
+  loose.depth_error_relative = 0.02;
+  tight.depth_error_relative = 0.0005;
+  std::size_t loose_total = 0, tight_total = 0;
+  for (int f = 0; f < kCubeFaces; ++f) {
+    const SimplifyResult a = simplify_face_mesh(dense[f], n, loose);
+    const SimplifyResult b = simplify_face_mesh(dense[f], n, tight);
+    expect_exact_coverage_and_bound(a, loose.depth_error_relative, f);
+    expect_exact_coverage_and_bound(b, tight.depth_error_relative, f);
+    loose_total += a.triangles_out;
+    tight_total += b.triangles_out;
+  }
+  EXPECT_LT(loose_total, tight_total);
+}
+
+TEST(Simplify, TriangleCapRelaxesTheInteriorBoundAndReportsIt) {
+  const int n = 64;
+  const auto dense = build_depth_meshes(raycast_analytic_scene(cluttered_room(), {0, 0, 0}, n), DepthMeshParams{});
+  SimplifyParams params;
+  params.depth_error_relative = 0.0005;
+  const SimplifyResult free_run = simplify_face_mesh(dense[2], n, params);
+  ASSERT_FALSE(free_run.cap_forced_larger_error);
+  params.max_triangles = free_run.triangles_out * 3 / 4;
+  const SimplifyResult capped = simplify_face_mesh(dense[2], n, params);
+  EXPECT_TRUE(capped.cap_forced_larger_error);
+  EXPECT_GT(capped.depth_error_bound_used, params.depth_error_relative);
+  EXPECT_LT(capped.triangles_out, free_run.triangles_out);
+  expect_exact_coverage_and_bound(capped, capped.depth_error_bound_used, 2);
+}
+
+TEST(Simplify, RejectsMeshesThatAreNotPixelGrids) {
+  FaceMesh m;
+  m.positions = {{1, 0, 0}, {1, 1, 0}, {1, 0, 1}};
+  m.uvs = {{0.1f, 0.1f}, {0.5f, 0.1f}, {0.1f, 0.5f}};
+  m.indices = {0, 1, 2};
+  EXPECT_THROW(simplify_face_mesh(m, 8, SimplifyParams{}), std::invalid_argument);
+  m.uvs = {{0, 0}, {0.5f, 0}, {0, 0.5f}};  // on corners, but spanning four pixels
+  EXPECT_THROW(simplify_face_mesh(m, 8, SimplifyParams{}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace cellbake
