@@ -137,7 +137,8 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
       keys.push_back(make_triangle_key(t, static_cast<std::uint32_t>(spill.count())));
       spill.add(t);
       ++file_triangles;
-      if (progress && (report.triangles_read & 0xFFFFF) == 0) progress("read " + model.filename().string(), -1);
+      if (progress && (report.triangles_read & 0xFFFF) == 0)
+        progress("read " + model.filename().string(), report.triangles_read, 0);
     });
     for (const auto& m : info.materials) materials.push_back(m);
     report.polygons_triangulated += info.polygons_triangulated;
@@ -151,7 +152,7 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   report.read_seconds = seconds_since(t_read);
 
   const auto t_chunk = Clock::now();
-  if (progress) progress("chunk", 0);
+  if (progress) progress("chunk", 0, 0);
   const std::vector<ChunkRange> ranges = split_into_chunks(keys, params.max_chunk_triangles);
   report.chunk_seconds = seconds_since(t_chunk);
 
@@ -197,7 +198,7 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
       writer.add_chunk(c);
       ++report.chunks;
     }
-    if (progress) progress("write", double(first + n) / double(ranges.size()));
+    if (progress) progress("write", first + n, ranges.size());
   }
   report.skipped_duplicate = spill.count() - report.triangles_stored;
   content.u64(report.triangles_stored);
@@ -214,6 +215,7 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   summary.content_hash = report.content_hash;
   writer.finish(summary);
   report.write_seconds = seconds_since(t_write);
+  if (progress) progress("done", 0, 0);
   return report;
 }
 

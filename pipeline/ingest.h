@@ -18,8 +18,8 @@ namespace cellbake {
 // implementation, tests may pass a serial one. Results must not depend on it.
 using ParallelFor = std::function<void(std::size_t n, const std::function<void(std::size_t)>& fn)>;
 
-// Reports progress: phase name and fraction done in [0, 1].
-using ProgressCallback = std::function<void(const std::string& phase, double fraction)>;
+// Reports progress: phase name, amount done and total (0 = unknown); the last call is phase "done".
+using ProgressCallback = std::function<void(const std::string& phase, std::uint64_t done, std::uint64_t total)>;
 
 struct IngestParams {
   std::size_t max_chunk_triangles = 4096;  // chunks hold (max/2, max] triangles, except runs of duplicates

@@ -10,13 +10,15 @@ namespace cellbake {
 ProgressCallback ingest_progress() {
   auto last_phase = std::make_shared<std::string>();
   auto bar = std::make_shared<std::unique_ptr<ProgressBar>>();
-  return [last_phase, bar](const std::string& phase, double fraction) {
+  return [last_phase, bar](const std::string& phase, std::uint64_t done, std::uint64_t total) {
     if (phase != *last_phase) {
       if (*bar) (*bar)->finish();
       *last_phase = phase;
-      *bar = std::make_unique<ProgressBar>("ingest " + phase, fraction >= 0 ? 1000 : 0, fraction >= 0 ? "‰" : "M tris");
+      bar->reset();
+      if (phase == "done") return;
+      *bar = std::make_unique<ProgressBar>("ingest " + phase, total, phase == "write" ? "chunks" : "triangles");
     }
-    if (fraction >= 0) (*bar)->update(static_cast<std::uint64_t>(fraction * 1000));
+    (*bar)->update(done);
   };
 }
 

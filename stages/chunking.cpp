@@ -31,7 +31,11 @@ void split(std::vector<TriangleKey>& keys, std::size_t begin, std::size_t end, s
   Box3d cb;
   for (std::size_t i = begin; i < end; ++i) cb.expand(keys[i].centroid);
   const Vec3d ext = cb.extent();
-  const int axis = (ext.x >= ext.y && ext.x >= ext.z) ? 0 : (ext.y >= ext.z ? 1 : 2);
+  // Longest axis; near-ties (relative 1e-6) go to the lower axis so that a
+  // translated copy of a model, whose extents differ by rounding, splits alike.
+  int axis = 0;
+  for (int a = 1; a < 3; ++a)
+    if (ext[a] > ext[axis] * (1 + 1e-6)) axis = a;
   auto less = [axis](const TriangleKey& a, const TriangleKey& b) {
     if (a.centroid[axis] != b.centroid[axis]) return a.centroid[axis] < b.centroid[axis];
     if (a.centroid != b.centroid) return lex_less(a.centroid, b.centroid);

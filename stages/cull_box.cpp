@@ -20,15 +20,15 @@ namespace cellbake {
 namespace {
 
 // A chunk within reach of the search: the Chebyshev distances of all its
-// triangles lie in [lo, hi] (conservative, from the indexed bounds).
+// triangles lie in [lo, hi] (conservative, from the indexed bounds). Once
+// loaded, each triangle t has its own interval [lower[t], upper[t]] (bounding
+// box distance, nearest corner), collapsed to the exact distance on demand.
 struct Candidate {
   ChunkRef ref;
   double lo = 0, hi = 0;
-  bool loaded = false;
-  // One per triangle, once loaded: the exact Chebyshev distance, or a lower
-  // bound of it when that bound already exceeded every half size the search
-  // can still return (so "distance <= h" is decided the same either way).
-  std::vector<double> distances;
+  std::shared_ptr<const Chunk> chunk;  // null until loaded
+  Vec3d offset;                        // chunk origin - centre
+  std::vector<double> lower, upper;
 };
 
 double linf_norm(const Vec3d& v) { return std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)}); }
@@ -76,46 +76,50 @@ double weighted_select(std::vector<Weighted>& v, std::uint64_t k) {
   return std::numeric_limits<double>::infinity();
 }
 
-// Loads the candidate's chunk and computes the Chebyshev distance of each of
-// its triangles to `center`. Every half size the search can still return lies
-// in [surely_in, surely_out]: a triangle whose bounding-box distance (a lower
-// bound) exceeds surely_out keeps that bound, and one whose nearest corner (an
-// upper bound) is within surely_in keeps that; both decide "distance <= h"
-// exactly as the exact value would, for a fraction of the cost.
-void load_distances(Candidate& cand, const Vec3d& center, double surely_in, double surely_out,
-                    const ChunkSource& source, std::uint64_t& loads) {
-  const std::shared_ptr<const Chunk> chunk = source.load(cand.ref.id);
+Vec3d relative_corner(const Candidate& c, std::uint32_t vertex) {
+  const Vec3f& p = c.chunk->positions[vertex];
+  return {c.offset.x + p.x, c.offset.y + p.y, c.offset.z + p.z};
+}
+
+// Loads the candidate's chunk, checks it against its index entry and computes
+// each triangle's distance interval.
+void load_chunk(Candidate& cand, const Vec3d& center, const ChunkSource& source, std::uint64_t& loads) {
+  cand.chunk = source.load(cand.ref.id);
   ++loads;
   const std::string where = "cull_box: chunk " + std::to_string(cand.ref.id);
-  if (!chunk) throw std::runtime_error(where + " loaded as null");
-  if (chunk->triangle_count() != cand.ref.triangle_count || chunk->indices.size() % 3 != 0)
-    throw std::runtime_error(where + " has " + std::to_string(chunk->triangle_count()) +
+  if (!cand.chunk) throw std::runtime_error(where + " loaded as null");
+  const Chunk& chunk = *cand.chunk;
+  if (chunk.triangle_count() != cand.ref.triangle_count || chunk.indices.size() % 3 != 0)
+    throw std::runtime_error(where + " has " + std::to_string(chunk.triangle_count()) +
                              " triangles but the index says " + std::to_string(cand.ref.triangle_count));
-  const Vec3d offset = chunk->origin - center;
-  std::vector<Vec3d> rel(chunk->positions.size());
-  for (std::size_t i = 0; i < rel.size(); ++i) {
-    const Vec3f& p = chunk->positions[i];
-    rel[i] = {offset.x + p.x, offset.y + p.y, offset.z + p.z};
+  cand.offset = chunk.origin - center;
+  std::vector<Vec3d> rel(chunk.positions.size());
+  std::vector<double> norm(rel.size());
+  for (std::uint32_t i = 0; i < rel.size(); ++i) {
+    rel[i] = relative_corner(cand, i);
+    norm[i] = linf_norm(rel[i]);
   }
-  cand.distances.resize(chunk->triangle_count());
-  const std::uint32_t* idx = chunk->indices.data();
-  for (std::size_t t = 0; t < cand.distances.size(); ++t) {
+  const std::size_t n = chunk.triangle_count();
+  cand.lower.resize(n);
+  cand.upper.resize(n);
+  const std::uint32_t* idx = chunk.indices.data();
+  for (std::size_t t = 0; t < n; ++t) {
     const std::uint32_t i0 = idx[3 * t], i1 = idx[3 * t + 1], i2 = idx[3 * t + 2];
     if (i0 >= rel.size() || i1 >= rel.size() || i2 >= rel.size())
       throw std::runtime_error(where + ": triangle " + std::to_string(t) + " indexes past its " +
                                std::to_string(rel.size()) + " vertices");
-    const Vec3d& a = rel[i0];
-    const Vec3d& b = rel[i1];
-    const Vec3d& c = rel[i2];
-    const double lower = triangle_box_axes_gap(a, b, c);
-    if (lower > surely_out) {
-      cand.distances[t] = lower;
-      continue;
-    }
-    const double upper = std::min({linf_norm(a), linf_norm(b), linf_norm(c)});
-    cand.distances[t] = upper <= surely_in ? upper : triangle_linf_distance_relative(a, b, c);
+    cand.lower[t] = triangle_box_axes_gap(rel[i0], rel[i1], rel[i2]);
+    cand.upper[t] = std::min({norm[i0], norm[i1], norm[i2]});
   }
-  cand.loaded = true;
+}
+
+// Collapses triangle t's interval to its exact distance.
+void refine_triangle(Candidate& cand, std::size_t t) {
+  if (cand.lower[t] == cand.upper[t]) return;
+  const std::uint32_t* idx = cand.chunk->indices.data() + 3 * t;
+  const double d = triangle_linf_distance_relative(relative_corner(cand, idx[0]), relative_corner(cand, idx[1]),
+                                                   relative_corner(cand, idx[2]));
+  cand.lower[t] = cand.upper[t] = d;
 }
 
 void validate(const Vec3d& center, const CullBoxParams& params) {
@@ -158,85 +162,108 @@ std::vector<Candidate> gather_candidates(const Vec3d& center, double min_half, d
   }
 }
 
+// One unit of the selection: a whole unloaded chunk (triangle == kWholeChunk)
+// or one triangle of a loaded chunk, with its distance interval.
+constexpr std::uint32_t kWholeChunk = ~0u;
+struct Item {
+  double lo, hi;
+  std::uint32_t cand, triangle;
+};
+
 // The (budget+1)-th smallest triangle distance d*, or +infinity when fewer
-// triangles are in reach. Stops early (returning a value that is just as good
-// for the clamped answer) once d* is known to exceed `max_half` or to be at
-// most `min_half`.
+// triangles are in reach. Works like a bisection that only ever narrows:
+// bracket d* between the k-th smallest lower bound and the k-th smallest upper
+// bound of the active items, retire items wholly below (they rank before d*)
+// or above the bracket, and refine the items that straddle it — load chunks
+// holding the bracket's midpoint, then collapse triangles to exact distances —
+// until every active item is exact. Stops early (with a value just as good for
+// the clamped answer) once d* is known to exceed `max_half` or to be at most
+// `min_half`.
 double select_threshold(std::vector<Candidate>& cands, const Vec3d& center, std::uint64_t budget, double min_half,
                         double max_half, const ChunkSource& source, std::uint64_t& loads) {
   std::uint64_t total = 0;
   for (const Candidate& c : cands) total += c.ref.triangle_count;
   if (total <= budget) return std::numeric_limits<double>::infinity();
 
-  std::uint64_t k = budget + 1;              // rank of d* among the still-active distances
-  std::vector<std::size_t> pending;          // unloaded candidates still straddling the bracket
-  for (std::size_t i = 0; i < cands.size(); ++i) pending.push_back(i);
-  std::vector<double> points;                // loaded distances inside the bracket
+  std::uint64_t k = budget + 1;  // rank of d* among the active items' distances
+  std::vector<Item> active;
+  for (std::uint32_t i = 0; i < cands.size(); ++i) active.push_back({cands[i].lo, cands[i].hi, i, kWholeChunk});
+  auto weight = [&](const Item& it) -> std::uint64_t {
+    return it.triangle == kWholeChunk ? cands[it.cand].ref.triangle_count : 1;
+  };
   std::vector<Weighted> entries;
   for (;;) {
-    // Bracket [lo_k, hi_k] with lo_k <= d* <= hi_k: the k-th smallest lower
-    // bound and the k-th smallest upper bound.
     entries.clear();
-    entries.reserve(pending.size() + points.size());
-    for (std::size_t i : pending) entries.push_back({cands[i].lo, cands[i].ref.triangle_count});
-    for (double d : points) entries.push_back({d, 1});
+    entries.reserve(active.size());
+    for (const Item& it : active) entries.push_back({it.lo, weight(it)});
     const double bracket_lo = weighted_select(entries, k);
     entries.clear();
-    for (std::size_t i : pending) entries.push_back({cands[i].hi, cands[i].ref.triangle_count});
-    for (double d : points) entries.push_back({d, 1});
+    for (const Item& it : active) entries.push_back({it.hi, weight(it)});
     const double bracket_hi = weighted_select(entries, k);
     if (bracket_lo > max_half) return bracket_lo;  // d* > max: the answer is max
     if (bracket_hi <= min_half) return bracket_hi;  // d* <= min: the budget is exceeded at min
 
-    // Everything wholly below the bracket ranks before d*; everything above after.
-    std::vector<std::size_t> straddling;
-    for (std::size_t i : pending) {
-      if (cands[i].hi < bracket_lo) {
-        k -= cands[i].ref.triangle_count;
-      } else if (cands[i].lo <= bracket_hi) {
-        straddling.push_back(i);
-      }
-    }
-    pending.swap(straddling);
+    // Retire items wholly below or above the bracket.
     std::size_t kept = 0;
-    for (double d : points) {
-      if (d < bracket_lo) {
-        --k;
-      } else if (d <= bracket_hi) {
-        points[kept++] = d;
+    bool all_exact = true, any_chunk = false;
+    for (const Item& it : active) {
+      if (it.hi < bracket_lo) {
+        k -= weight(it);
+      } else if (it.lo <= bracket_hi) {
+        active[kept++] = it;
+        all_exact = all_exact && it.lo == it.hi;
+        any_chunk = any_chunk || it.triangle == kWholeChunk;
       }
     }
-    points.resize(kept);
-    if (pending.empty()) {
+    active.resize(kept);
+    if (all_exact) {
       entries.clear();
-      for (double d : points) entries.push_back({d, 1});
+      for (const Item& it : active) entries.push_back({it.lo, weight(it)});
       return weighted_select(entries, k);
     }
 
-    // Load the pending chunks whose interval holds the bracket's midpoint, or
-    // failing that the one nearest to it.
     const double probe = bracket_lo + 0.5 * (bracket_hi - bracket_lo);
-    std::vector<std::size_t> to_load, rest;
-    for (std::size_t i : pending) (cands[i].lo <= probe && probe <= cands[i].hi ? to_load : rest).push_back(i);
-    if (to_load.empty()) {
-      auto gap = [&](std::size_t i) { return std::max(cands[i].lo - probe, probe - cands[i].hi); };
-      auto nearest = std::min_element(rest.begin(), rest.end(), [&](std::size_t a, std::size_t b) { return gap(a) < gap(b); });
-      to_load.push_back(*nearest);
-      rest.erase(nearest);
-    }
-    for (std::size_t i : to_load) {
-      // Later half sizes are >= bracket_lo - safety gap, except max_half when d* > max_half.
-      const double surely_in = std::min(bracket_lo - 2 * safety_gap(center, bracket_hi), max_half);
-      load_distances(cands[i], center, surely_in, bracket_hi, source, loads);
-      for (double d : cands[i].distances) {
-        if (d < bracket_lo) {
-          --k;
-        } else if (d <= bracket_hi) {
-          points.push_back(d);
+    std::vector<Item> next;
+    next.reserve(active.size());
+    if (any_chunk) {
+      // Load the chunks holding the midpoint, or failing that the nearest one.
+      std::vector<std::uint32_t> to_load;
+      for (const Item& it : active)
+        if (it.triangle == kWholeChunk && it.lo <= probe && probe <= it.hi) to_load.push_back(it.cand);
+      if (to_load.empty()) {
+        double best = std::numeric_limits<double>::infinity();
+        std::uint32_t nearest = 0;
+        for (const Item& it : active) {
+          const double gap = std::max(it.lo - probe, probe - it.hi);
+          if (it.triangle == kWholeChunk && gap < best) best = gap, nearest = it.cand;
+        }
+        to_load.push_back(nearest);
+      }
+      for (const Item& it : active)
+        if (it.triangle != kWholeChunk || std::find(to_load.begin(), to_load.end(), it.cand) == to_load.end())
+          next.push_back(it);
+      for (std::uint32_t ci : to_load) {
+        Candidate& c = cands[ci];
+        load_chunk(c, center, source, loads);
+        for (std::uint32_t t = 0; t < c.lower.size(); ++t) {
+          if (c.upper[t] < bracket_lo) {
+            --k;  // ranks before d*
+          } else if (c.lower[t] <= bracket_hi) {
+            next.push_back({c.lower[t], c.upper[t], ci, t});
+          }
         }
       }
+    } else {
+      // Only triangles straddle the bracket: make them exact.
+      for (Item it : active) {
+        if (it.lo != it.hi) {
+          refine_triangle(cands[it.cand], it.triangle);
+          it.lo = it.hi = cands[it.cand].lower[it.triangle];
+        }
+        next.push_back(it);
+      }
     }
-    pending.swap(rest);
+    active.swap(next);
   }
 }
 
@@ -254,23 +281,27 @@ CullBoxResult find_cull_box(const Vec3d& cell_center, const CullBoxParams& param
   result.chunks_queried = cands.size();
   const double threshold =
       select_threshold(cands, cell_center, params.triangle_budget, min_half, max_half, source, result.chunks_loaded);
-
-  double half = max_half;
-  if (threshold <= max_half) {
-    half = std::clamp(threshold - safety_gap(cell_center, threshold), min_half, max_half);
-  }
+  const double half =
+      threshold <= max_half ? std::clamp(threshold - safety_gap(cell_center, threshold), min_half, max_half) : max_half;
   result.half_size = half;
 
   // Exact evaluation at the chosen half size.
   for (Candidate& c : cands) {
     std::uint64_t n = 0;
-    if (!c.loaded && c.hi <= half) {
+    if (!c.chunk && c.hi <= half) {
       n = c.ref.triangle_count;
-    } else if (!c.loaded && c.lo > half) {
+    } else if (!c.chunk && c.lo > half) {
       n = 0;
     } else {
-      if (!c.loaded) load_distances(c, cell_center, half, half, source, result.chunks_loaded);
-      n = static_cast<std::uint64_t>(std::count_if(c.distances.begin(), c.distances.end(), [&](double d) { return d <= half; }));
+      if (!c.chunk) load_chunk(c, cell_center, source, result.chunks_loaded);
+      for (std::size_t t = 0; t < c.lower.size(); ++t) {
+        if (c.upper[t] <= half) {
+          ++n;
+        } else if (c.lower[t] <= half) {
+          refine_triangle(c, t);
+          n += c.lower[t] <= half;
+        }
+      }
     }
     if (n == 0) continue;
     result.triangle_count += n;

@@ -6,7 +6,10 @@
 // (N - 2 cj) up. The pixels touching a lattice point are gathered from every
 // face containing it (4 inside a face or on a cube edge, 3 at a cube corner),
 // sorted, split into connected components by the skin test, and each component's
-// depth is the average of its pixels' planar depths summed in that sorted order.
+// depth is the average of its pixels' depths summed in that sorted order. We
+// average inverse depths (a harmonic mean) rather than depths as the thesis
+// does: 1/z is affine over a world plane in screen space, so a plane seen at
+// any angle gives exactly coplanar corners, which the simplifier exploits.
 // The vertex is then D * (depth / N): the same arithmetic on the same numbers
 // for every face that shares the point, hence bit-identical positions.
 #include "stages/depth_mesh.h"
@@ -228,11 +231,13 @@ FaceMesh build_face(const CubeLattice& lat, int f) {
           }
         }
       }
-      // Average depth per component, summed in sorted pixel order.
+      // Harmonic mean of the planar depths per component (inverse depth is affine
+      // in screen space over a plane, so planes stay exactly planar), summed in
+      // sorted pixel order.
       std::array<double, 4> sum{}, cnt{};
       for (int a = 0; a < count; ++a) {
         if (lat.background(c.pixels[a])) continue;
-        sum[c.label[a]] += lat.depth(c.pixels[a]);
+        sum[c.label[a]] += 1.0 / double(lat.depth(c.pixels[a]));
         cnt[c.label[a]] += 1;
       }
       std::array<std::uint32_t, 4> component_vertex{kNone, kNone, kNone, kNone};
@@ -242,7 +247,7 @@ FaceMesh build_face(const CubeLattice& lat, int f) {
         const int l = c.label[a];
         std::uint32_t id = split_per_pixel ? kNone : component_vertex[l];
         if (id == kNone) {
-          const double scale = (sum[l] / cnt[l]) / double(n);
+          const double scale = (cnt[l] / sum[l]) / double(n);
           mesh.positions.push_back({float(double(d[0]) * scale), float(double(d[1]) * scale), float(double(d[2]) * scale)});
           mesh.uvs.push_back({float(ci) * inv_n, float(cj) * inv_n});
           id = std::uint32_t(mesh.positions.size() - 1);

@@ -12,7 +12,9 @@
 namespace cellbake {
 namespace {
 
-constexpr double kOffsetX = 0.03, kOffsetY = 0.07;
+// Offsets chosen so that no segment between lattice points shorter than ~700 px
+// passes exactly through a sample.
+constexpr double kOffsetX = 0.0313, kOffsetY = 0.0711;
 
 struct ScreenVertex {
   double x, y, w;

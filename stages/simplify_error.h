@@ -16,7 +16,7 @@ struct SimplifyError {
   // the planar depth of the simplified surface on the same eye ray (taken from
   // the simplified triangle covering the pixel next to the vertex).
   double max_depth_error_relative = 0;
-  // Screen coverage, sampled at 4 points per pixel (0.03 / 0.07 px inside each
+  // Screen coverage, sampled at 4 points per pixel (0.0313 / 0.0711 px inside each
   // pixel corner): samples the dense mesh covers and the simplified one does not,
   // and samples the simplified mesh covers where the dense one has no surface.
   // Both 0 means silhouettes and borders did not move by more than ~0.07 px.

@@ -200,7 +200,8 @@ std::string tricky_ply(const std::string& format, const std::string& index_type)
   out += "element material 1\nproperty list uchar float weights\nproperty uchar id\n";
   out += "element vertex 4\nproperty double x\nproperty float y\nproperty int z\nproperty float confidence\n";
   out += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
-  out += "element face 2\nproperty list int short tags\nproperty list uchar " + index_type + " vertex_indices\n";
+  out +=
+      "element face 2\nproperty list int short tags\nproperty list uchar " + index_type + " vertex_indices\n";
   out += "property uchar flags\nend_header\n";
   const double xs[4] = {0, 10, 10, 0}, ys[4] = {0, 0, 10, 10};
   const int zs[4] = {-1, -1, -1, 5};
@@ -300,9 +301,10 @@ TEST(PlyReader, FacesBeforeVerticesFloatColoursAndTexcoords) {
 
 TEST(PlyReader, NoColoursMeansDefaultGrey) {
   TempDir dir;
-  write_text(dir / "g.ply",
-             "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-             "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  write_text(
+      dir / "g.ply",
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
   const ReadResult r = read_all(dir / "g.ply");
   ASSERT_EQ(r.triangles.size(), 1u);
   EXPECT_EQ(r.triangles[0].color[0], kGrey);
@@ -358,7 +360,8 @@ TEST(PlyReader, BadInputNamesFileAndPlace) {
   write_bytes(dir / "many.ply",
               "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\n"
               "property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n"
-              "end_header\n" + std::string(30, '\0'));
+              "end_header\n" +
+                  std::string(30, '\0'));
   expect_input_error(dir / "many.ply", "byte", "unexpected end of file");
 }
 
@@ -381,7 +384,8 @@ TEST(OffReader, PlainOffWithCommentsAndPolygon) {
 
 TEST(OffReader, CoffIntegerAndFloatColours) {
   TempDir dir;
-  write_text(dir / "c.off", "COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 128\n0 1 0 0 0 255 255\n3 0 1 2\n");
+  write_text(dir / "c.off",
+             "COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 128\n0 1 0 0 0 255 255\n3 0 1 2\n");
   const ReadResult r = read_all(dir / "c.off");
   ASSERT_EQ(r.triangles.size(), 1u);
   EXPECT_EQ(r.triangles[0].color[0], (Rgba8{255, 0, 0, 255}));
@@ -434,7 +438,8 @@ std::string binary_stl(const std::string& header_text, const std::vector<std::ar
 
 TEST(StlReader, BinaryEvenWhenHeaderSaysSolid) {
   TempDir dir;
-  const std::vector<std::array<float, 9>> triangles = {{0, 0, 0, 1, 0, 0, 0, 1, 0}, {2, 2, 2, 3, 2, 2, 2, 3, 2.5f}};
+  const std::vector<std::array<float, 9>> triangles = {{0, 0, 0, 1, 0, 0, 0, 1, 0},
+                                                       {2, 2, 2, 3, 2, 2, 2, 3, 2.5f}};
   write_bytes(dir / "b.stl", binary_stl("binary export", triangles));
   write_bytes(dir / "s.stl", binary_stl("solid but binary facet", triangles));
   for (const char* name : {"b.stl", "s.stl"}) {
@@ -469,8 +474,9 @@ TEST(GzipInput, ObjAndPlyDecompressOnTheFly) {
   const ReadResult binary = read_all(dir / "b.stl.gz");
   ASSERT_EQ(binary.triangles.size(), 1u);
   EXPECT_EQ(binary.triangles[0].p[2], (Vec3d{0, 1, 0}));
-  write_gzip(dir / "a.stl.gz", "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
-                                "vertex 0 1 0\nvertex 0 0 1\nendloop\nendfacet\nendsolid a\n");
+  write_gzip(dir / "a.stl.gz",
+             "solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+             "vertex 0 1 0\nvertex 0 0 1\nendloop\nendfacet\nendsolid a\n");
   const ReadResult ascii = read_all(dir / "a.stl.gz");
   EXPECT_EQ(ascii.info.polygons_triangulated, 1u);
   ASSERT_EQ(ascii.triangles.size(), 2u);
@@ -482,7 +488,8 @@ TEST(GzipInput, ObjAndPlyDecompressOnTheFly) {
   write_gzip(dir / "damaged.obj.gz", text);
   std::ifstream in(dir / "damaged.obj.gz", std::ios::binary);
   std::string compressed((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  for (std::size_t i = 20; i < compressed.size() - 8; i += 7) compressed[i] = static_cast<char>(compressed[i] ^ 0x5a);
+  for (std::size_t i = 20; i < compressed.size() - 8; i += 7)
+    compressed[i] = static_cast<char>(compressed[i] ^ 0x5a);
   write_bytes(dir / "damaged.obj.gz", compressed);
   expect_input_error(dir / "damaged.obj.gz", "byte", "gzip error");
   // So is a compressed stream cut short (zlib alone would report a clean end).

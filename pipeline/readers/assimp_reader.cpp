@@ -3,12 +3,12 @@
 // are baked into the vertices (aiProcess_PreTransformVertices), polygons are
 // triangulated, points and lines are dropped. Material i of the scene becomes
 // material i + 1 of ours (0 stays the default grey).
-#include <assimp/Importer.hpp>
 #include <assimp/config.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <assimp/Importer.hpp>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -32,7 +32,8 @@ Material convert_material(const aiMaterial& source) {
   if (source.Get(AI_MATKEY_BASE_COLOR, colour) != AI_SUCCESS) source.Get(AI_MATKEY_COLOR_DIFFUSE, colour);
   float opacity = 1;
   if (source.Get(AI_MATKEY_OPACITY, opacity) == AI_SUCCESS) colour.a *= opacity;
-  material.color = {unit_to_byte(colour.r), unit_to_byte(colour.g), unit_to_byte(colour.b), unit_to_byte(colour.a)};
+  material.color = {unit_to_byte(colour.r), unit_to_byte(colour.g), unit_to_byte(colour.b),
+                    unit_to_byte(colour.a)};
   aiString texture;
   if (source.GetTexture(aiTextureType_BASE_COLOR, 0, &texture) == AI_SUCCESS ||
       source.GetTexture(aiTextureType_DIFFUSE, 0, &texture) == AI_SUCCESS)
@@ -103,7 +104,8 @@ ModelInfo read_with_assimp(const std::filesystem::path& file, const std::string&
   ModelInfo info;
   info.format = "assimp:" + extension;
   info.materials.push_back(default_material());
-  for (unsigned m = 0; m < scene->mNumMaterials; ++m) info.materials.push_back(convert_material(*scene->mMaterials[m]));
+  for (unsigned m = 0; m < scene->mNumMaterials; ++m)
+    info.materials.push_back(convert_material(*scene->mMaterials[m]));
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) emit_mesh(name, m, *scene->mMeshes[m], info, emit);
   return info;
 }

@@ -47,7 +47,8 @@ std::size_t BufferedInput::read_raw(char* dst, std::size_t n) {
   if (plain_) {
     const std::size_t got = std::fread(dst, 1, n, plain_);
     if (got < n && std::ferror(plain_))
-      throw InputError(name_, at_byte(offset_ + buffered()), std::string("read error: ") + std::strerror(errno));
+      throw InputError(name_, at_byte(offset_ + buffered()),
+                       std::string("read error: ") + std::strerror(errno));
     return got;
   }
   const unsigned chunk = static_cast<unsigned>(std::min<std::size_t>(n, std::size_t{1} << 30));
@@ -61,7 +62,8 @@ std::size_t BufferedInput::read_raw(char* dst, std::size_t n) {
     int code = Z_OK;
     gzerror(gz_, &code);
     if (code == Z_BUF_ERROR)  // zlib's report of a compressed stream cut short
-      throw InputError(name_, at_byte(offset_ + buffered()), "gzip error: compressed data ends early (truncated file)");
+      throw InputError(name_, at_byte(offset_ + buffered()),
+                       "gzip error: compressed data ends early (truncated file)");
   }
   return static_cast<std::size_t>(got);
 }

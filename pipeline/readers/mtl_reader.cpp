@@ -34,7 +34,9 @@ bool read_mtl(const std::filesystem::path& mtl_file, std::vector<Material>& mate
     return false;
   }
   BufferedInput& in = *opened;
-  const auto fail = [&](const std::string& what) { throw InputError(in.name(), at_line(in.line_number()), what); };
+  const auto fail = [&](const std::string& what) {
+    throw InputError(in.name(), at_line(in.line_number()), what);
+  };
 
   std::vector<Material> parsed;
   Material* current = nullptr;

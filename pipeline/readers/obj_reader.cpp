@@ -27,7 +27,8 @@ struct ObjCorner {
 
 class ObjReader {
  public:
-  ObjReader(const std::filesystem::path& file, const TriangleCallback& emit) : file_(file), in_(file), emit_(emit) {
+  ObjReader(const std::filesystem::path& file, const TriangleCallback& emit)
+      : file_(file), in_(file), emit_(emit) {
     info_.format = "obj";
     info_.materials.push_back(default_material());
   }
@@ -67,7 +68,8 @@ class ObjReader {
 
   void parse_vertex(TextScan& scan) {
     Vec3d p;
-    if (!scan.number(p.x) || !scan.number(p.y) || !scan.number(p.z)) fail("malformed vertex (expected 'v x y z')");
+    if (!scan.number(p.x) || !scan.number(p.y) || !scan.number(p.z))
+      fail("malformed vertex (expected 'v x y z')");
     if (!is_finite(p)) fail("non-finite coordinate");
     double extra[4];
     int extras = 0;
@@ -82,7 +84,8 @@ class ObjReader {
         has_colour_.resize(positions_.size(), 0);
       }
       const std::uint8_t alpha = extras == 4 ? unit_to_byte(extra[3]) : 255;
-      vertex_colours_.push_back({unit_to_byte(extra[0]), unit_to_byte(extra[1]), unit_to_byte(extra[2]), alpha});
+      vertex_colours_.push_back(
+          {unit_to_byte(extra[0]), unit_to_byte(extra[1]), unit_to_byte(extra[2]), alpha});
       has_colour_.push_back(1);
     } else if (!vertex_colours_.empty()) {
       vertex_colours_.emplace_back();

@@ -43,9 +43,7 @@ bool parse_keyword(std::string_view word, OffLayout& layout, bool& unsupported) 
   return true;
 }
 
-bool is_integer_token(std::string_view token) {
-  return token.find_first_of(".eE") == std::string_view::npos;
-}
+bool is_integer_token(std::string_view token) { return token.find_first_of(".eE") == std::string_view::npos; }
 
 class OffReader {
  public:
@@ -61,7 +59,8 @@ class OffReader {
     OffLayout layout;
     bool unsupported = false;
     const std::string_view first = scan.token();
-    if (!parse_keyword(first, layout, unsupported)) scan = TextScan(line);  // headerless OFF: counts come first
+    if (!parse_keyword(first, layout, unsupported))
+      scan = TextScan(line);  // headerless OFF: counts come first
     if (unsupported) fail("unsupported OFF variant '" + std::string(first) + "' (only 3D is supported)");
     if (scan.at_end()) {
       if (!next_significant(line)) fail("missing vertex and face counts");

@@ -44,26 +44,40 @@ T load_value(const char* p, bool swap) {
 
 inline double decode_double(const char* p, PlyType type, bool swap) {
   switch (type) {
-    case PlyType::int8: return load_value<std::int8_t>(p, swap);
-    case PlyType::uint8: return load_value<std::uint8_t>(p, swap);
-    case PlyType::int16: return load_value<std::int16_t>(p, swap);
-    case PlyType::uint16: return load_value<std::uint16_t>(p, swap);
-    case PlyType::int32: return load_value<std::int32_t>(p, swap);
-    case PlyType::uint32: return load_value<std::uint32_t>(p, swap);
-    case PlyType::float32: return load_value<float>(p, swap);
-    case PlyType::float64: return load_value<double>(p, swap);
+    case PlyType::int8:
+      return load_value<std::int8_t>(p, swap);
+    case PlyType::uint8:
+      return load_value<std::uint8_t>(p, swap);
+    case PlyType::int16:
+      return load_value<std::int16_t>(p, swap);
+    case PlyType::uint16:
+      return load_value<std::uint16_t>(p, swap);
+    case PlyType::int32:
+      return load_value<std::int32_t>(p, swap);
+    case PlyType::uint32:
+      return load_value<std::uint32_t>(p, swap);
+    case PlyType::float32:
+      return load_value<float>(p, swap);
+    case PlyType::float64:
+      return load_value<double>(p, swap);
   }
   return 0;
 }
 
 inline std::int64_t decode_integer(const char* p, PlyType type, bool swap) {
   switch (type) {
-    case PlyType::int8: return load_value<std::int8_t>(p, swap);
-    case PlyType::uint8: return load_value<std::uint8_t>(p, swap);
-    case PlyType::int16: return load_value<std::int16_t>(p, swap);
-    case PlyType::uint16: return load_value<std::uint16_t>(p, swap);
-    case PlyType::int32: return load_value<std::int32_t>(p, swap);
-    case PlyType::uint32: return load_value<std::uint32_t>(p, swap);
+    case PlyType::int8:
+      return load_value<std::int8_t>(p, swap);
+    case PlyType::uint8:
+      return load_value<std::uint8_t>(p, swap);
+    case PlyType::int16:
+      return load_value<std::int16_t>(p, swap);
+    case PlyType::uint16:
+      return load_value<std::uint16_t>(p, swap);
+    case PlyType::int32:
+      return load_value<std::int32_t>(p, swap);
+    case PlyType::uint32:
+      return load_value<std::uint32_t>(p, swap);
     case PlyType::float32:
     case PlyType::float64: {
       const double value = decode_double(p, type, swap);
@@ -78,7 +92,8 @@ inline std::int64_t decode_integer(const char* p, PlyType type, bool swap) {
 // when the file ends early.
 class BinarySource {
  public:
-  BinarySource(BufferedInput& in, bool big_endian) : in_(in), swap_(big_endian != (std::endian::native == std::endian::big)) {}
+  BinarySource(BufferedInput& in, bool big_endian)
+      : in_(in), swap_(big_endian != (std::endian::native == std::endian::big)) {}
 
   // A cheap mark of the current place, turned into text only for messages.
   std::uint64_t position() const { return in_.offset(); }
@@ -109,7 +124,8 @@ class BinarySource {
       const std::size_t items = static_cast<std::size_t>(std::min(count, kBlockItems));
       const std::uint64_t start = in_.offset();
       const char* p = need(items * size);
-      for (std::size_t i = 0; i < items; ++i) visit(decode_integer(p + i * size, type, swap_), start + i * size);
+      for (std::size_t i = 0; i < items; ++i)
+        visit(decode_integer(p + i * size, type, swap_), start + i * size);
       in_.consume(items * size);
       count -= items;
     }
@@ -261,7 +277,8 @@ class PlyReader {
   std::size_t find_index_property(const BufferedInput& in, const PlyElement& face) const {
     for (std::size_t p = 0; p < face.properties.size(); ++p) {
       const PlyProperty& property = face.properties[p];
-      if (property.is_list && (property.name == "vertex_indices" || property.name == "vertex_index")) return p;
+      if (property.is_list && (property.name == "vertex_indices" || property.name == "vertex_index"))
+        return p;
     }
     throw InputError(in.name(), "", "PLY face element has no 'vertex_indices' list property");
   }
@@ -311,7 +328,8 @@ class PlyReader {
     const std::uint64_t position = source.position();
     const std::int64_t count = source.integer(property.count_type);
     if (count < 0)
-      throw InputError(source.name(), Source::describe(position), "negative list count " + std::to_string(count) + " in '" + property.name + "'");
+      throw InputError(source.name(), Source::describe(position),
+                       "negative list count " + std::to_string(count) + " in '" + property.name + "'");
     return static_cast<std::uint64_t>(count);
   }
 
@@ -380,7 +398,8 @@ class PlyReader {
       const char* record = source.record(record_size);
       VertexValues values;
       for (const Field& field : fields)
-        values.assign(field.role, decode_double(record + field.offset, field.type, source.swapped()), field.type);
+        values.assign(field.role, decode_double(record + field.offset, field.type, source.swapped()),
+                      field.type);
       source.consume(record_size);
       store_vertex<BinarySource>(values, has_colour, has_uv, in.name(), start, i);
     }
@@ -393,16 +412,35 @@ class PlyReader {
     Uv uv;
     void assign(VertexRole role, double value, PlyType type) {
       switch (role) {
-        case VertexRole::x: p.x = value; break;
-        case VertexRole::y: p.y = value; break;
-        case VertexRole::z: p.z = value; break;
-        case VertexRole::red: colour.r = colour_byte(value, type); break;
-        case VertexRole::green: colour.g = colour_byte(value, type); break;
-        case VertexRole::blue: colour.b = colour_byte(value, type); break;
-        case VertexRole::alpha: colour.a = colour_byte(value, type); break;
-        case VertexRole::u: uv.u = static_cast<float>(value); break;
-        case VertexRole::v: uv.v = static_cast<float>(value); break;
-        case VertexRole::none: break;
+        case VertexRole::x:
+          p.x = value;
+          break;
+        case VertexRole::y:
+          p.y = value;
+          break;
+        case VertexRole::z:
+          p.z = value;
+          break;
+        case VertexRole::red:
+          colour.r = colour_byte(value, type);
+          break;
+        case VertexRole::green:
+          colour.g = colour_byte(value, type);
+          break;
+        case VertexRole::blue:
+          colour.b = colour_byte(value, type);
+          break;
+        case VertexRole::alpha:
+          colour.a = colour_byte(value, type);
+          break;
+        case VertexRole::u:
+          uv.u = static_cast<float>(value);
+          break;
+        case VertexRole::v:
+          uv.v = static_cast<float>(value);
+          break;
+        case VertexRole::none:
+          break;
       }
     }
   };
@@ -411,7 +449,8 @@ class PlyReader {
   void store_vertex(const VertexValues& values, bool has_colour, bool has_uv, const std::string& name,
                     std::uint64_t position, std::uint64_t index) {
     if (!is_finite(values.p))
-      throw InputError(name, Source::describe(position), "non-finite coordinate in vertex " + std::to_string(index));
+      throw InputError(name, Source::describe(position),
+                       "non-finite coordinate in vertex " + std::to_string(index));
     vertices_.positions.push_back(values.p);
     if (has_colour) vertices_.colours.push_back(values.colour);
     if (has_uv) vertices_.uvs.push_back(values.uv);

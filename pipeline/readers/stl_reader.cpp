@@ -22,7 +22,8 @@ constexpr std::size_t kBinaryRecord = 50;
 
 std::uint32_t load_u32_le(const char* p) {
   const auto* b = reinterpret_cast<const unsigned char*>(p);
-  return std::uint32_t{b[0]} | std::uint32_t{b[1]} << 8 | std::uint32_t{b[2]} << 16 | std::uint32_t{b[3]} << 24;
+  return std::uint32_t{b[0]} | std::uint32_t{b[1]} << 8 | std::uint32_t{b[2]} << 16 |
+         std::uint32_t{b[3]} << 24;
 }
 
 float load_f32_le(const char* p) {
@@ -78,17 +79,21 @@ class StlReader {
     in_.consume(kBinaryHeader);
     if (in_.plain_size() && *in_.plain_size() < kBinaryHeader + kBinaryRecord * triangles)
       throw InputError(in_.name(), at_byte(80),
-                       "binary STL header announces " + std::to_string(triangles) + " triangles but the file has only " +
-                           std::to_string(*in_.plain_size()) + " bytes");
+                       "binary STL header announces " + std::to_string(triangles) +
+                           " triangles but the file has only " + std::to_string(*in_.plain_size()) +
+                           " bytes");
     for (std::uint64_t i = 0; i < triangles; ++i) {
       const char* record = in_.fetch(kBinaryRecord);
-      if (!record) throw InputError(in_.name(), at_byte(in_.offset()), "unexpected end of file in triangle " + std::to_string(i));
+      if (!record)
+        throw InputError(in_.name(), at_byte(in_.offset()),
+                         "unexpected end of file in triangle " + std::to_string(i));
       for (int corner = 0; corner < 3; ++corner) {
         const char* v = record + 12 + 12 * corner;
         triangle_.p[corner] = {load_f32_le(v), load_f32_le(v + 4), load_f32_le(v + 8)};
       }
       if (!is_finite(triangle_.p[0]) || !is_finite(triangle_.p[1]) || !is_finite(triangle_.p[2]))
-        throw InputError(in_.name(), at_byte(in_.offset()), "non-finite coordinate in triangle " + std::to_string(i));
+        throw InputError(in_.name(), at_byte(in_.offset()),
+                         "non-finite coordinate in triangle " + std::to_string(i));
       in_.consume(kBinaryRecord);
       emit_(triangle_);
       ++info_.triangles_emitted;
