@@ -17,7 +17,7 @@
 namespace cellbake {
 namespace {
 
-constexpr int kSides = 16, kRings = 111;  // 16 * 110 * 2 = 3520 triangles per pipe chunk
+constexpr int kSides = 16, kRings = 111;   // 16 * 110 * 2 = 3520 triangles per pipe chunk
 constexpr int kPlateX = 40, kPlateY = 44;  // 40 * 44 * 2 = 3520 triangles per plate chunk
 
 // A pipe segment of radius r from `start` along axis `axis` for `length`.
@@ -38,7 +38,8 @@ Chunk pipe_chunk(std::int64_t id, const Vec3d& start, int axis, double radius, d
     }
   for (std::uint32_t ring = 0; ring + 1 < kRings; ++ring)
     for (std::uint32_t s = 0; s < kSides; ++s) {
-      const std::uint32_t a = ring * kSides + s, b = ring * kSides + (s + 1) % kSides, d = a + kSides, e = b + kSides;
+      const std::uint32_t a = ring * kSides + s, b = ring * kSides + (s + 1) % kSides, d = a + kSides,
+                          e = b + kSides;
       c.indices.insert(c.indices.end(), {a, b, d, b, e, d});
     }
   test::compute_memory_chunk_bounds(c);
@@ -89,18 +90,21 @@ const PlantScene& plant_scene() {
     };
     std::vector<Cluster> clusters;
     for (int k = 0; k < 10; ++k)
-      clusters.push_back({{10 + 130 * unit(rng), 10 + 130 * unit(rng), 2 + 20 * unit(rng)}, 6 + 8 * unit(rng)});
+      clusters.push_back(
+          {{10 + 130 * unit(rng), 10 + 130 * unit(rng), 2 + 20 * unit(rng)}, 6 + 8 * unit(rng)});
     for (int i = 0; i < 2900; ++i) {
       const Cluster& cl = clusters[i % clusters.size()];
       const int axis = static_cast<int>(rng() % 3);
       const double length = std::min(2.0, cl.size);
-      Vec3d start{cl.lo.x + cl.size * unit(rng), cl.lo.y + cl.size * unit(rng), cl.lo.z + cl.size * unit(rng)};
+      Vec3d start{cl.lo.x + cl.size * unit(rng), cl.lo.y + cl.size * unit(rng),
+                  cl.lo.z + cl.size * unit(rng)};
       start[axis] = cl.lo[axis] + (cl.size - length) * unit(rng);
       s.source.add(pipe_chunk(id++, start, axis, 0.03 + 0.2 * unit(rng), length));
     }
     for (int i = 0; i < 730; ++i) {
       const int n = i % 4 == 0 ? static_cast<int>(rng() % 2) : 2;  // mostly floors, some walls
-      Vec3d corner{150 * unit(rng), 150 * unit(rng), n == 2 ? 8.0 * static_cast<int>(rng() % 5) : 32 * unit(rng)};
+      Vec3d corner{150 * unit(rng), 150 * unit(rng),
+                   n == 2 ? 8.0 * static_cast<int>(rng() % 5) : 32 * unit(rng)};
       s.source.add(plate_chunk(id++, corner, n, 8, 8));
     }
     s.triangles = 3520ull * (2900 + 730);
@@ -108,7 +112,8 @@ const PlantScene& plant_scene() {
     for (int i = 0; i < 64; ++i) {
       if (i % 2 == 0) {
         const Cluster& cl = clusters[(i / 2) % clusters.size()];
-        s.cells.push_back({cl.lo.x + cl.size * unit(rng), cl.lo.y + cl.size * unit(rng), cl.lo.z + cl.size * unit(rng)});
+        s.cells.push_back(
+            {cl.lo.x + cl.size * unit(rng), cl.lo.y + cl.size * unit(rng), cl.lo.z + cl.size * unit(rng)});
       } else {
         s.cells.push_back({160 * unit(rng), 160 * unit(rng), 1 + 38 * unit(rng)});
       }
@@ -157,7 +162,8 @@ std::vector<Rgba8> face_image() {
         p = {static_cast<std::uint8_t>(90 + 100 * shade), static_cast<std::uint8_t>(95 + 90 * shade),
              static_cast<std::uint8_t>(110 + 80 * shade), 255};
       } else {
-        p = {static_cast<std::uint8_t>(160 + 40 * shade), 150, static_cast<std::uint8_t>(120 + (x ^ y) % 16), 255};
+        p = {static_cast<std::uint8_t>(160 + 40 * shade), 150, static_cast<std::uint8_t>(120 + (x ^ y) % 16),
+             255};
       }
     }
   return px;

@@ -101,7 +101,13 @@ BakeSummary run_bake(const BakeConfig& config, const BakeOptions& options) {
           const int size = config.face_size * config.supersample;
           renderer = std::make_unique<ChunkRenderer>(create_gl_context(GlBackend::osmesa, size, size));
         }
-        run_sample(*w, config, store, *renderer);
+        try {
+          run_sample(*w, config, store, *renderer);
+        } catch (...) {
+          renderer->release_context();
+          throw;
+        }
+        renderer->release_context();  // renderers are destroyed on another thread
       });
       return w;
     });

@@ -7,8 +7,8 @@
 #include "stages/cull_box.h"
 
 #include <algorithm>
-#include <limits>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -52,7 +52,8 @@ double weighted_select(std::vector<Weighted>& v, std::uint64_t k) {
   while (end - begin > 24) {
     const double a = v[begin].value, b = v[begin + (end - begin) / 2].value, c = v[end - 1].value;
     const double pivot = std::max(std::min(a, b), std::min(std::max(a, b), c));
-    auto first = v.begin() + static_cast<std::ptrdiff_t>(begin), last = v.begin() + static_cast<std::ptrdiff_t>(end);
+    auto first = v.begin() + static_cast<std::ptrdiff_t>(begin),
+         last = v.begin() + static_cast<std::ptrdiff_t>(end);
     auto mid_lo = std::partition(first, last, [&](const Weighted& w) { return w.value < pivot; });
     auto mid_hi = std::partition(mid_lo, last, [&](const Weighted& w) { return w.value == pivot; });
     std::uint64_t below = 0, equal = 0;
@@ -117,8 +118,8 @@ void load_chunk(Candidate& cand, const Vec3d& center, const ChunkSource& source,
 void refine_triangle(Candidate& cand, std::size_t t) {
   if (cand.lower[t] == cand.upper[t]) return;
   const std::uint32_t* idx = cand.chunk->indices.data() + 3 * t;
-  const double d = triangle_linf_distance_relative(relative_corner(cand, idx[0]), relative_corner(cand, idx[1]),
-                                                   relative_corner(cand, idx[2]));
+  const double d = triangle_linf_distance_relative(
+      relative_corner(cand, idx[0]), relative_corner(cand, idx[1]), relative_corner(cand, idx[2]));
   cand.lower[t] = cand.upper[t] = d;
 }
 
@@ -136,8 +137,8 @@ void validate(const Vec3d& center, const CullBoxParams& params) {
 // smallest doubling h >= min_half such that either the chunks wholly inside
 // that cube already exceed the budget (so the answer is <= h and no farther
 // chunk matters) or h reached `max_half`. Sorted by chunk id.
-std::vector<Candidate> gather_candidates(const Vec3d& center, double min_half, double max_half, std::uint64_t budget,
-                                         const ChunkSource& source) {
+std::vector<Candidate> gather_candidates(const Vec3d& center, double min_half, double max_half,
+                                         std::uint64_t budget, const ChunkSource& source) {
   double h = min_half > 0 ? min_half : max_half / 1024;
   for (;;) {
     h = std::min(h, max_half);
@@ -179,15 +180,16 @@ struct Item {
 // until every active item is exact. Stops early (with a value just as good for
 // the clamped answer) once d* is known to exceed `max_half` or to be at most
 // `min_half`.
-double select_threshold(std::vector<Candidate>& cands, const Vec3d& center, std::uint64_t budget, double min_half,
-                        double max_half, const ChunkSource& source, std::uint64_t& loads) {
+double select_threshold(std::vector<Candidate>& cands, const Vec3d& center, std::uint64_t budget,
+                        double min_half, double max_half, const ChunkSource& source, std::uint64_t& loads) {
   std::uint64_t total = 0;
   for (const Candidate& c : cands) total += c.ref.triangle_count;
   if (total <= budget) return std::numeric_limits<double>::infinity();
 
   std::uint64_t k = budget + 1;  // rank of d* among the active items' distances
   std::vector<Item> active;
-  for (std::uint32_t i = 0; i < cands.size(); ++i) active.push_back({cands[i].lo, cands[i].hi, i, kWholeChunk});
+  for (std::uint32_t i = 0; i < cands.size(); ++i)
+    active.push_back({cands[i].lo, cands[i].hi, i, kWholeChunk});
   auto weight = [&](const Item& it) -> std::uint64_t {
     return it.triangle == kWholeChunk ? cands[it.cand].ref.triangle_count : 1;
   };
@@ -200,7 +202,7 @@ double select_threshold(std::vector<Candidate>& cands, const Vec3d& center, std:
     entries.clear();
     for (const Item& it : active) entries.push_back({it.hi, weight(it)});
     const double bracket_hi = weighted_select(entries, k);
-    if (bracket_lo > max_half) return bracket_lo;  // d* > max: the answer is max
+    if (bracket_lo > max_half) return bracket_lo;   // d* > max: the answer is max
     if (bracket_hi <= min_half) return bracket_hi;  // d* <= min: the budget is exceeded at min
 
     // Retire items wholly below or above the bracket.
@@ -269,20 +271,24 @@ double select_threshold(std::vector<Candidate>& cands, const Vec3d& center, std:
 
 }  // namespace
 
-CullBoxResult find_cull_box(const Vec3d& cell_center, const CullBoxParams& params, const ChunkSource& source) {
+CullBoxResult find_cull_box(const Vec3d& cell_center, const CullBoxParams& params,
+                            const ChunkSource& source) {
   validate(cell_center, params);
   const double min_half = params.min_half_size;
   const Box3d model = source.model_bounds();
   const double max_half =
-      model.empty() ? min_half : std::max(min_half, std::min(params.max_half_size, box_linf_reach(cell_center, model)));
+      model.empty() ? min_half
+                    : std::max(min_half, std::min(params.max_half_size, box_linf_reach(cell_center, model)));
 
   CullBoxResult result;
-  std::vector<Candidate> cands = gather_candidates(cell_center, min_half, max_half, params.triangle_budget, source);
+  std::vector<Candidate> cands =
+      gather_candidates(cell_center, min_half, max_half, params.triangle_budget, source);
   result.chunks_queried = cands.size();
-  const double threshold =
-      select_threshold(cands, cell_center, params.triangle_budget, min_half, max_half, source, result.chunks_loaded);
-  const double half =
-      threshold <= max_half ? std::clamp(threshold - safety_gap(cell_center, threshold), min_half, max_half) : max_half;
+  const double threshold = select_threshold(cands, cell_center, params.triangle_budget, min_half, max_half,
+                                            source, result.chunks_loaded);
+  const double half = threshold <= max_half
+                          ? std::clamp(threshold - safety_gap(cell_center, threshold), min_half, max_half)
+                          : max_half;
   result.half_size = half;
 
   // Exact evaluation at the chosen half size.

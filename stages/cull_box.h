@@ -31,11 +31,11 @@ struct NearChunk {
 };
 
 struct CullBoxResult {
-  double half_size = 0;              // metres; the cube is [centre - half_size, centre + half_size]^3
-  std::uint64_t triangle_count = 0;  // exact number of triangles intersecting the cube
-  std::vector<NearChunk> near_field; // chunks with at least one intersecting triangle, sorted by id
-  std::uint64_t chunks_loaded = 0;   // ChunkSource::load calls made
-  std::uint64_t chunks_queried = 0;  // distinct chunks returned by ChunkSource::query
+  double half_size = 0;                 // metres; the cube is [centre - half_size, centre + half_size]^3
+  std::uint64_t triangle_count = 0;     // exact number of triangles intersecting the cube
+  std::vector<NearChunk> near_field;    // chunks with at least one intersecting triangle, sorted by id
+  std::uint64_t chunks_loaded = 0;      // ChunkSource::load calls made
+  std::uint64_t chunks_queried = 0;     // distinct chunks returned by ChunkSource::query
   bool budget_exceeded_at_min = false;  // even min_half_size holds more than the budget
 };
 

@@ -6,10 +6,11 @@
 // (N - 2 cj) up. The pixels touching a lattice point are gathered from every
 // face containing it (4 inside a face or on a cube edge, 3 at a cube corner),
 // sorted, split into connected components by the skin test, and each component's
-// depth is the average of its pixels' depths summed in that sorted order. We
-// average inverse depths (a harmonic mean) rather than depths as the thesis
-// does: 1/z is affine over a world plane in screen space, so a plane seen at
-// any angle gives exactly coplanar corners, which the simplifier exploits.
+// depth at the corner is interpolated from its pixels (corner_inverse_depth):
+// inside a face the mean inverse depth of 4 pixels, where the thesis averages
+// depths; inverse depth is affine over a world plane in screen space, so planes
+// seen at any angle, also across cube edges, give exactly coplanar corners,
+// which the simplifier exploits.
 // The vertex is then D * (depth / N): the same arithmetic on the same numbers
 // for every face that shares the point, hence bit-identical positions.
 #include "stages/depth_mesh.h"
@@ -164,6 +165,71 @@ bool edge_point_fully_connected(const Corner& c) {
          c.pair_connected[pair_index(2, 3)];
 }
 
+// Inverse depth at the corner ray D of component l of corner c: the pixels'
+// surface points are expressed in the screen frame of the component's lowest
+// face (s, t, w = 1 / planar depth; w is affine in (s, t) over any world plane,
+// also beyond the face border), and w at the corner is read from the plane
+// fitted to them (least squares; exact for 3 pixels; the mean for 1 or 2). For
+// 4 pixels of one face this is their mean inverse depth, for 3 it interpolates
+// the two pixels diagonal to each other: a world plane gives exactly coplanar
+// corners, also across cube edges. Across a cube edge, when the pixels do not
+// fit one plane (a crease along the edge), the mean of each pixel's inverse
+// depth in its own face's frame is used instead. Deterministic: the same sorted pixels and
+// frame give the same bits for every face sharing the corner.
+double corner_inverse_depth(const CubeLattice& lat, const Corner& c, int l, const Lattice& d) {
+  int frame = kCubeFaces, last_face = -1;
+  bool frame_spans_one_face = true;
+  for (std::size_t a = 0; a < c.pixels.size(); ++a)
+    if (c.label[a] == l) {
+      frame = std::min(frame, c.pixels[a].face);
+      if (last_face >= 0 && c.pixels[a].face != last_face) frame_spans_one_face = false;
+      last_face = c.pixels[a].face;
+    }
+  const FaceBasis b = cube_face_basis(frame);
+  const double n = lat.size();
+  const double s0 = (d[0] * b.right.x + d[1] * b.right.y + d[2] * b.right.z) / n;
+  const double t0 = (d[0] * b.up.x + d[1] * b.up.y + d[2] * b.up.z) / n;
+  double m00 = 0, m01 = 0, m02 = 0, m11 = 0, m12 = 0, m22 = 0, r0 = 0, r1 = 0, r2 = 0, sum_w = 0;
+  int k = 0;
+  for (std::size_t a = 0; a < c.pixels.size(); ++a) {
+    if (c.label[a] != l) continue;
+    const Vec3d p = lat.point(c.pixels[a]);
+    const double z = dot(p, b.forward);
+    const double w = 1.0 / z, s = dot(p, b.right) / z - s0, t = dot(p, b.up) / z - t0;
+    m00 += 1, m01 += s, m02 += t, m11 += s * s, m12 += s * t, m22 += t * t;
+    r0 += w, r1 += s * w, r2 += t * w;
+    sum_w += w;
+    ++k;
+  }
+  // Fallback: mean of the pixels' inverse depths, each in its own face's frame
+  // (the frames of all faces through D agree on the corner ray itself).
+  double own_mean = 0;
+  for (std::size_t a = 0; a < c.pixels.size(); ++a)
+    if (c.label[a] == l) own_mean += 1.0 / double(lat.depth(c.pixels[a]));
+  own_mean /= k;
+  if (k < 3) return frame_spans_one_face ? sum_w / k : own_mean;
+  const double det = m00 * (m11 * m22 - m12 * m12) - m01 * (m01 * m22 - m12 * m02) + m02 * (m01 * m12 - m11 * m02);
+  if (!(std::abs(det) > 1e-12 * std::max(1.0, m11 * m22))) return own_mean;
+  const double w0 = (r0 * (m11 * m22 - m12 * m12) - m01 * (r1 * m22 - m12 * r2) + m02 * (r1 * m12 - m11 * r2)) / det;
+  const double w1 = (m00 * (r1 * m22 - m12 * r2) - r0 * (m01 * m22 - m12 * m02) + m02 * (m01 * r2 - r1 * m02)) / det;
+  const double w2 = (m00 * (m11 * r2 - r1 * m12) - m01 * (m01 * r2 - r1 * m02) + r0 * (m01 * m12 - m11 * m02)) / det;
+  if (!frame_spans_one_face) {
+    // Across a cube edge the pixels may lie on two surfaces meeting at the edge
+    // (a crease, e.g. the walls of a room seen from its centre): there the
+    // fitted plane is wrong and each face's own inverse depth is right.
+    double worst = 0;
+    for (std::size_t a = 0; a < c.pixels.size(); ++a) {
+      if (c.label[a] != l) continue;
+      const Vec3d p = lat.point(c.pixels[a]);
+      const double z = dot(p, b.forward);
+      const double s = dot(p, b.right) / z - s0, t = dot(p, b.up) / z - t0;
+      worst = std::max(worst, std::abs(w0 + w1 * s + w2 * t - 1.0 / z));
+    }
+    if (!(worst <= 1e-6 * own_mean)) return own_mean;
+  }
+  return w0 > 0 ? w0 : own_mean;
+}
+
 bool cube_corner_fully_connected(const CubeLattice& lat, const Lattice& d) {
   Corner c;
   lat.gather(d, c.pixels);
@@ -231,15 +297,9 @@ FaceMesh build_face(const CubeLattice& lat, int f) {
           }
         }
       }
-      // Harmonic mean of the planar depths per component (inverse depth is affine
-      // in screen space over a plane, so planes stay exactly planar), summed in
-      // sorted pixel order.
-      std::array<double, 4> sum{}, cnt{};
-      for (int a = 0; a < count; ++a) {
-        if (lat.background(c.pixels[a])) continue;
-        sum[c.label[a]] += 1.0 / double(lat.depth(c.pixels[a]));
-        cnt[c.label[a]] += 1;
-      }
+      // Inverse planar depth of each component at the corner ray.
+      std::array<double, 4> corner_w{};
+      for (int l = 0; l < c.components; ++l) corner_w[l] = corner_inverse_depth(lat, c, l, d);
       std::array<std::uint32_t, 4> component_vertex{kNone, kNone, kNone, kNone};
       for (int a = 0; a < count; ++a) {
         const PixelRef& p = c.pixels[a];
@@ -247,7 +307,7 @@ FaceMesh build_face(const CubeLattice& lat, int f) {
         const int l = c.label[a];
         std::uint32_t id = split_per_pixel ? kNone : component_vertex[l];
         if (id == kNone) {
-          const double scale = (cnt[l] / sum[l]) / double(n);
+          const double scale = (1.0 / corner_w[l]) / double(n);
           mesh.positions.push_back({float(double(d[0]) * scale), float(double(d[1]) * scale), float(double(d[2]) * scale)});
           mesh.uvs.push_back({float(ci) * inv_n, float(cj) * inv_n});
           id = std::uint32_t(mesh.positions.size() - 1);

@@ -33,9 +33,10 @@ struct DepthMeshStats {
 // Builds one dense mesh per cube face (order of `cube_map.h`). Every pixel that
 // is not background gets two triangles (NW, SW, SE) and (NW, SE, NE), counter-
 // clockwise as seen from the eye. A corner vertex lies on the eye ray through the
-// pixel corner; its planar depth is the average (harmonic mean, so planes stay
-// planar) of the depths of the pixels around that corner that are connected to
-// the pixel (connected components of the
+// pixel corner; its depth interpolates the pixels around that corner that are
+// connected to the pixel (the thesis' average, taken over inverse depth with a
+// plane fit so that world planes give exactly coplanar corners, also across
+// cube edges) (connected components of the
 // 8-neighbour, non-skin adjacency among the pixels touching the corner). Corners
 // on cube-face borders are computed from the pixels of every face touching them,
 // so neighbouring faces get bit-identical positions there. Where a border

@@ -1,13 +1,13 @@
 // Stage `encode`, colour images: JPEG / WebP / PNG through OpenImageIO with
 // in-memory I/O proxies (no files). Face meshes are in encode_face_mesh.cpp.
+#include "stages/encode.h"
+
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <cstring>
 #include <stdexcept>
 #include <string>
-
-#include "stages/encode.h"
 
 namespace cellbake {
 namespace {
@@ -20,7 +20,8 @@ std::string oiio_format(const std::string& format) {
   if (format == "jpeg") return "jpg";
   if (format == "webp") return "webp";
   if (format == "png") return "png";
-  throw std::invalid_argument("encode_image: unknown image format '" + format + "' (expected jpeg, webp or png)");
+  throw std::invalid_argument("encode_image: unknown image format '" + format +
+                              "' (expected jpeg, webp or png)");
 }
 
 // Reads and clears OpenImageIO's pending global error text.
@@ -41,12 +42,14 @@ std::vector<std::uint8_t> encode_image(const std::vector<Rgba8>& pixels, int wid
                                        const ImageEncodeParams& params) {
   const std::string format = oiio_format(params.format);
   if (width <= 0 || height <= 0 || width > kMaxImageSide || height > kMaxImageSide)
-    throw std::invalid_argument("encode_image: bad image size " + std::to_string(width) + "x" + std::to_string(height));
+    throw std::invalid_argument("encode_image: bad image size " + std::to_string(width) + "x" +
+                                std::to_string(height));
   if (pixels.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
     throw std::invalid_argument("encode_image: " + std::to_string(pixels.size()) + " pixels for a " +
                                 std::to_string(width) + "x" + std::to_string(height) + " image");
   if (params.quality < 1 || params.quality > 100)
-    throw std::invalid_argument("encode_image: quality " + std::to_string(params.quality) + " is outside 1..100");
+    throw std::invalid_argument("encode_image: quality " + std::to_string(params.quality) +
+                                " is outside 1..100");
 
   const int channels = format == "jpg" ? 3 : 4;
   std::vector<std::uint8_t> raw(pixels.size() * static_cast<std::size_t>(channels));
@@ -69,10 +72,13 @@ std::vector<std::uint8_t> encode_image(const std::vector<Rgba8>& pixels, int wid
   // Our pixels are straight (unassociated) alpha: stop OIIO from converting.
   spec.attribute("oiio:UnassociatedAlpha", 1);
   auto output = OIIO::ImageOutput::create(format);
-  if (!output) throw std::runtime_error("encode_image: no OpenImageIO writer for " + params.format + ": " + take_global_error());
+  if (!output)
+    throw std::runtime_error("encode_image: no OpenImageIO writer for " + params.format + ": " +
+                             take_global_error());
   const bool ok = output->open("memory." + format, spec) &&
                   output->write_image(OIIO::TypeDesc::UINT8, raw.data()) && output->close();
-  if (!ok) throw std::runtime_error("encode_image: writing " + params.format + " failed: " + output->geterror());
+  if (!ok)
+    throw std::runtime_error("encode_image: writing " + params.format + " failed: " + output->geterror());
   return {bytes.begin(), bytes.end()};
 }
 

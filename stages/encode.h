@@ -44,7 +44,9 @@ std::vector<std::uint8_t> encode_image(const std::vector<Rgba8>& pixels, int wid
 // cannot decode, including images above 16384 pixels on a side or 2^26 pixels
 // in all. Never crashes on garbage.
 DecodedImage decode_image(const std::uint8_t* data, std::size_t size);
-inline DecodedImage decode_image(const std::vector<std::uint8_t>& bytes) { return decode_image(bytes.data(), bytes.size()); }
+inline DecodedImage decode_image(const std::vector<std::uint8_t>& bytes) {
+  return decode_image(bytes.data(), bytes.size());
+}
 
 // ------------------------------------------------------------- face meshes
 

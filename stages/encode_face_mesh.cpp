@@ -88,7 +88,8 @@ Header read_header(const std::uint8_t* data, std::size_t size) {
   if (data[4] != kVersion) fail("unsupported version " + std::to_string(data[4]));
   Header h;
   h.position_bits = data[5];
-  if (h.position_bits < 1 || h.position_bits > 16) fail("position bits " + std::to_string(h.position_bits) + " outside 1..16");
+  if (h.position_bits < 1 || h.position_bits > 16)
+    fail("position bits " + std::to_string(h.position_bits) + " outside 1..16");
   if (data[6] != kUvBits) fail("uv bits " + std::to_string(data[6]) + " (expected 16)");
   h.flags = data[7];
   if ((h.flags & ~kFlagHasUvs) != 0) fail("unknown flags " + std::to_string(h.flags));
@@ -102,21 +103,27 @@ Header read_header(const std::uint8_t* data, std::size_t size) {
   h.index_bytes = get_u32(data + 60);
 
   for (int i = 0; i < 3; ++i)
-    if (!std::isfinite(h.pos_lo[i]) || !std::isfinite(h.pos_hi[i]) || !(h.pos_lo[i] <= h.pos_hi[i])) fail("bad position bounds");
+    if (!std::isfinite(h.pos_lo[i]) || !std::isfinite(h.pos_hi[i]) || !(h.pos_lo[i] <= h.pos_hi[i]))
+      fail("bad position bounds");
   for (int i = 0; i < 2; ++i)
-    if (!std::isfinite(h.uv_lo[i]) || !std::isfinite(h.uv_hi[i]) || !(h.uv_lo[i] <= h.uv_hi[i])) fail("bad uv bounds");
+    if (!std::isfinite(h.uv_lo[i]) || !std::isfinite(h.uv_hi[i]) || !(h.uv_lo[i] <= h.uv_hi[i]))
+      fail("bad uv bounds");
   if (std::uint64_t{kHeaderSize} + h.vertex_bytes + h.index_bytes != size)
     fail("stream sizes " + std::to_string(h.vertex_bytes) + " + " + std::to_string(h.index_bytes) +
          " do not match the blob size " + std::to_string(size));
-  if (h.index_count % 3 != 0) fail("index count " + std::to_string(h.index_count) + " is not a multiple of 3");
-  if (h.vertex_count == 0 && (h.index_count != 0 || h.vertex_bytes != 0)) fail("indices or vertex data without vertices");
+  if (h.index_count % 3 != 0)
+    fail("index count " + std::to_string(h.index_count) + " is not a multiple of 3");
+  if (h.vertex_count == 0 && (h.index_count != 0 || h.vertex_bytes != 0))
+    fail("indices or vertex data without vertices");
   if (h.index_count == 0 && h.index_bytes != 0) fail("index data without indices");
   // The codecs cannot represent more than this per byte (vertex codec: >= 2
   // header bits per 16 vertices per byte column; index codec: a code byte per
   // triangle plus a 17-byte frame), so a larger count is a lie that would
   // otherwise make us allocate on the blob's word.
-  if (std::uint64_t{h.vertex_count} > 8 * std::uint64_t{h.vertex_bytes}) fail("vertex count too large for its stream");
-  if (h.index_count > 0 && std::uint64_t{h.index_count} / 3 + 17 > h.index_bytes) fail("index count too large for its stream");
+  if (std::uint64_t{h.vertex_count} > 8 * std::uint64_t{h.vertex_bytes})
+    fail("vertex count too large for its stream");
+  if (h.index_count > 0 && std::uint64_t{h.index_count} / 3 + 17 > h.index_bytes)
+    fail("index count too large for its stream");
   return h;
 }
 
@@ -132,12 +139,14 @@ float dequantize(std::uint16_t q, float lo, float hi, std::uint32_t max_q) {
 
 void check_mesh(const FaceMesh& mesh, int bits) {
   const std::string where = "encode_face_mesh: ";
-  if (bits < 1 || bits > 16) throw std::invalid_argument(where + "position_bits " + std::to_string(bits) + " outside 1..16");
+  if (bits < 1 || bits > 16)
+    throw std::invalid_argument(where + "position_bits " + std::to_string(bits) + " outside 1..16");
   if (mesh.indices.size() % 3 != 0)
-    throw std::invalid_argument(where + "index count " + std::to_string(mesh.indices.size()) + " is not a multiple of 3");
+    throw std::invalid_argument(where + "index count " + std::to_string(mesh.indices.size()) +
+                                " is not a multiple of 3");
   if (!mesh.uvs.empty() && mesh.uvs.size() != mesh.positions.size())
-    throw std::invalid_argument(where + std::to_string(mesh.uvs.size()) + " uvs for " + std::to_string(mesh.positions.size()) +
-                                " positions");
+    throw std::invalid_argument(where + std::to_string(mesh.uvs.size()) + " uvs for " +
+                                std::to_string(mesh.positions.size()) + " positions");
   if (mesh.positions.size() > std::numeric_limits<std::uint32_t>::max() / 2 ||
       mesh.indices.size() > std::numeric_limits<std::uint32_t>::max() / 2)
     throw std::invalid_argument(where + "mesh too large");
@@ -151,8 +160,9 @@ void check_mesh(const FaceMesh& mesh, int bits) {
       throw std::invalid_argument(where + "uv " + std::to_string(i) + " is not finite");
   for (std::size_t i = 0; i < mesh.indices.size(); ++i)
     if (mesh.indices[i] >= mesh.positions.size())
-      throw std::invalid_argument(where + "index " + std::to_string(i) + " = " + std::to_string(mesh.indices[i]) +
-                                  " is past the " + std::to_string(mesh.positions.size()) + " vertices");
+      throw std::invalid_argument(where + "index " + std::to_string(i) + " = " +
+                                  std::to_string(mesh.indices[i]) + " is past the " +
+                                  std::to_string(mesh.positions.size()) + " vertices");
 }
 
 // The mesh with triangles in vertex-cache order and vertices in first-use
@@ -192,7 +202,8 @@ std::vector<std::uint8_t> encode_face_mesh(const FaceMesh& input, const MeshEnco
     h.pos_hi = h.pos_lo;
     for (const Vec3f& p : mesh.positions) {
       const std::array<float, 3> c = {p.x, p.y, p.z};
-      for (int i = 0; i < 3; ++i) h.pos_lo[i] = std::min(h.pos_lo[i], c[i]), h.pos_hi[i] = std::max(h.pos_hi[i], c[i]);
+      for (int i = 0; i < 3; ++i)
+        h.pos_lo[i] = std::min(h.pos_lo[i], c[i]), h.pos_hi[i] = std::max(h.pos_hi[i], c[i]);
     }
   }
   if (!mesh.uvs.empty()) {
@@ -220,14 +231,15 @@ std::vector<std::uint8_t> encode_face_mesh(const FaceMesh& input, const MeshEnco
   std::vector<std::uint8_t> vertex_stream, index_stream;
   if (!vertices.empty()) {
     vertex_stream.resize(meshopt_encodeVertexBufferBound(vertices.size(), sizeof(QuantizedVertex)));
-    vertex_stream.resize(meshopt_encodeVertexBuffer(vertex_stream.data(), vertex_stream.size(), vertices.data(),
-                                                    vertices.size(), sizeof(QuantizedVertex)));
+    vertex_stream.resize(meshopt_encodeVertexBuffer(vertex_stream.data(), vertex_stream.size(),
+                                                    vertices.data(), vertices.size(),
+                                                    sizeof(QuantizedVertex)));
     if (vertex_stream.empty()) throw std::runtime_error("encode_face_mesh: vertex codec failed");
   }
   if (!mesh.indices.empty()) {
     index_stream.resize(meshopt_encodeIndexBufferBound(mesh.indices.size(), mesh.positions.size()));
-    index_stream.resize(
-        meshopt_encodeIndexBuffer(index_stream.data(), index_stream.size(), mesh.indices.data(), mesh.indices.size()));
+    index_stream.resize(meshopt_encodeIndexBuffer(index_stream.data(), index_stream.size(),
+                                                  mesh.indices.data(), mesh.indices.size()));
     if (index_stream.empty()) throw std::runtime_error("encode_face_mesh: index codec failed");
   }
   h.vertex_bytes = static_cast<std::uint32_t>(vertex_stream.size());
@@ -247,8 +259,8 @@ FaceMesh decode_face_mesh(const std::uint8_t* data, std::size_t size) {
   if (h.vertex_count == 0) return mesh;
 
   std::vector<QuantizedVertex> vertices(h.vertex_count);
-  if (meshopt_decodeVertexBuffer(vertices.data(), vertices.size(), sizeof(QuantizedVertex), data + kHeaderSize,
-                                 h.vertex_bytes) != 0)
+  if (meshopt_decodeVertexBuffer(vertices.data(), vertices.size(), sizeof(QuantizedVertex),
+                                 data + kHeaderSize, h.vertex_bytes) != 0)
     fail("vertex stream does not decode");
   const std::uint32_t max_pos = (1u << h.position_bits) - 1, max_uv = (1u << kUvBits) - 1;
   const bool has_uvs = (h.flags & kFlagHasUvs) != 0;
@@ -256,11 +268,16 @@ FaceMesh decode_face_mesh(const std::uint8_t* data, std::size_t size) {
   if (has_uvs) mesh.uvs.resize(vertices.size());
   for (std::size_t i = 0; i < vertices.size(); ++i) {
     const QuantizedVertex& q = vertices[i];
-    if (q.x > max_pos || q.y > max_pos || q.z > max_pos) fail("vertex " + std::to_string(i) + " exceeds the position bits");
-    if (q.pad != 0 || (!has_uvs && (q.u != 0 || q.v != 0))) fail("vertex " + std::to_string(i) + " has stray bits");
-    mesh.positions[i] = {dequantize(q.x, h.pos_lo[0], h.pos_hi[0], max_pos), dequantize(q.y, h.pos_lo[1], h.pos_hi[1], max_pos),
+    if (q.x > max_pos || q.y > max_pos || q.z > max_pos)
+      fail("vertex " + std::to_string(i) + " exceeds the position bits");
+    if (q.pad != 0 || (!has_uvs && (q.u != 0 || q.v != 0)))
+      fail("vertex " + std::to_string(i) + " has stray bits");
+    mesh.positions[i] = {dequantize(q.x, h.pos_lo[0], h.pos_hi[0], max_pos),
+                         dequantize(q.y, h.pos_lo[1], h.pos_hi[1], max_pos),
                          dequantize(q.z, h.pos_lo[2], h.pos_hi[2], max_pos)};
-    if (has_uvs) mesh.uvs[i] = {dequantize(q.u, h.uv_lo[0], h.uv_hi[0], max_uv), dequantize(q.v, h.uv_lo[1], h.uv_hi[1], max_uv)};
+    if (has_uvs)
+      mesh.uvs[i] = {dequantize(q.u, h.uv_lo[0], h.uv_hi[0], max_uv),
+                     dequantize(q.v, h.uv_lo[1], h.uv_hi[1], max_uv)};
   }
 
   mesh.indices.resize(h.index_count);

@@ -231,7 +231,7 @@ class FaceSimplifier {
     if (!(std::abs(det) > 0)) return false;
     const double a = (sxw * (syy * s1 - sy * sy) - sxy * (syw * s1 - sy * sw) + sx * (syw * sy - syy * sw)) / det;
     const double b = (sxx * (syw * s1 - sw * sy) - sxw * (sxy * s1 - sy * sx) + sx * (sxy * sw - syw * sx)) / det;
-    const double c = (sxx * (syy * sw - sy * syw) - sxy * (sxy * sw - sy * sxw) + sxw * (sxy * sy - syy * sx)) / det;
+    const double c = (sxx * (syy * sw - sy * syw) - sxy * (sxy * sw - syw * sx) + sxw * (sxy * sy - syy * sx)) / det;
     const double tol = 0.5 * eps_ * w_min / (1.0 + eps_);
     for (int y = r.y0; y <= r.y1; ++y)
       for (int x = r.x0; x <= r.x1; ++x) {

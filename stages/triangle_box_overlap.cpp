@@ -42,11 +42,14 @@ bool for_each_axis(const Vec3d& v0, const Vec3d& v1, const Vec3d& v2, Visit&& vi
   // Edge x box axis: x -> (0, e.z, -e.y), y -> (-e.z, 0, e.x), z -> (e.y, -e.x, 0).
   for (const Vec3d& d : e) {
     const Vec3d a{std::fabs(d.x), std::fabs(d.y), std::fabs(d.z)};
-    if (!visit(project3(v0.y * d.z - v0.z * d.y, v1.y * d.z - v1.z * d.y, v2.y * d.z - v2.z * d.y), Vec3d{0, a.z, a.y}))
+    if (!visit(project3(v0.y * d.z - v0.z * d.y, v1.y * d.z - v1.z * d.y, v2.y * d.z - v2.z * d.y),
+               Vec3d{0, a.z, a.y}))
       return false;
-    if (!visit(project3(v0.z * d.x - v0.x * d.z, v1.z * d.x - v1.x * d.z, v2.z * d.x - v2.x * d.z), Vec3d{a.z, 0, a.x}))
+    if (!visit(project3(v0.z * d.x - v0.x * d.z, v1.z * d.x - v1.x * d.z, v2.z * d.x - v2.x * d.z),
+               Vec3d{a.z, 0, a.x}))
       return false;
-    if (!visit(project3(v0.x * d.y - v0.y * d.x, v1.x * d.y - v1.y * d.x, v2.x * d.y - v2.y * d.x), Vec3d{a.y, a.x, 0}))
+    if (!visit(project3(v0.x * d.y - v0.y * d.x, v1.x * d.y - v1.y * d.x, v2.x * d.y - v2.y * d.x),
+               Vec3d{a.y, a.x, 0}))
       return false;
   }
   return true;
@@ -57,7 +60,8 @@ bool for_each_axis(const Vec3d& v0, const Vec3d& v1, const Vec3d& v2, Visit&& vi
 bool triangle_box_overlap(const Vec3d& box_center, const Vec3d& box_half, const Vec3d& a, const Vec3d& b,
                           const Vec3d& c) {
   const Vec3d v0 = a - box_center, v1 = b - box_center, v2 = c - box_center;
-  return for_each_axis(v0, v1, v2, [&](Interval p, const Vec3d& n_abs) { return !separated(p, dot(box_half, n_abs)); });
+  return for_each_axis(v0, v1, v2,
+                       [&](Interval p, const Vec3d& n_abs) { return !separated(p, dot(box_half, n_abs)); });
 }
 
 namespace {

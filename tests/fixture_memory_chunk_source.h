@@ -64,7 +64,8 @@ class MemoryChunkSource : public ChunkSource {
 
   std::shared_ptr<const Chunk> load(std::int64_t id) const override {
     loads_.fetch_add(1, std::memory_order_relaxed);
-    auto it = std::lower_bound(chunks_.begin(), chunks_.end(), id, [](const auto& c, std::int64_t v) { return c->id < v; });
+    auto it = std::lower_bound(chunks_.begin(), chunks_.end(), id,
+                               [](const auto& c, std::int64_t v) { return c->id < v; });
     if (it == chunks_.end() || (*it)->id != id)
       throw std::runtime_error("MemoryChunkSource: chunk " + std::to_string(id) + " is missing");
     return *it;

@@ -26,7 +26,9 @@ bool clipped_overlap(const Box3d& box, const Tri& t) {
   std::vector<Vec3d> poly(t.begin(), t.end());
   for (int axis = 0; axis < 3 && !poly.empty(); ++axis) {
     for (int side = 0; side < 2 && !poly.empty(); ++side) {
-      auto inside = [&](const Vec3d& p) { return side == 0 ? p[axis] >= box.lo[axis] : p[axis] <= box.hi[axis]; };
+      auto inside = [&](const Vec3d& p) {
+        return side == 0 ? p[axis] >= box.lo[axis] : p[axis] <= box.hi[axis];
+      };
       const double plane = side == 0 ? box.lo[axis] : box.hi[axis];
       std::vector<Vec3d> out;
       for (std::size_t i = 0; i < poly.size(); ++i) {
@@ -54,11 +56,11 @@ Tri random_triangle(std::mt19937_64& rng, double spread, double size) {
   Tri t{a, a + Vec3d{off(rng), off(rng), off(rng)}, a + Vec3d{off(rng), off(rng), off(rng)}};
   std::uniform_int_distribution<int> kind(0, 9);
   const int k = kind(rng);
-  if (k == 0) t[2] = t[1];                             // segment
-  if (k == 1) t[1] = t[2] = t[0];                      // point
-  if (k == 2) t[2] = t[0] + (t[1] - t[0]) * 0.37;      // collinear
-  if (k == 3) t[1].x = t[0].x, t[2].x = t[0].x;        // axis-aligned plane
-  if (k == 4) t[1].y = t[0].y, t[1].z = t[0].z;        // edge parallel to x
+  if (k == 0) t[2] = t[1];                         // segment
+  if (k == 1) t[1] = t[2] = t[0];                  // point
+  if (k == 2) t[2] = t[0] + (t[1] - t[0]) * 0.37;  // collinear
+  if (k == 3) t[1].x = t[0].x, t[2].x = t[0].x;    // axis-aligned plane
+  if (k == 4) t[1].y = t[0].y, t[1].z = t[0].z;    // edge parallel to x
   return t;
 }
 
@@ -156,10 +158,12 @@ TEST(TriangleLinfDistance, IsALowerBoundOfSampledPointsAndIsApproached) {
 TEST(TriangleLinfDistance, AnalyticValues) {
   const Vec3d o{0, 0, 0};
   EXPECT_DOUBLE_EQ(triangle_linf_distance(o, {2, -1, 3}, {2, 1, 3}, {2, 0, -3}), 2.0);  // face-on plane x = 2
-  EXPECT_DOUBLE_EQ(triangle_linf_distance(o, {3, 0, 0}, {0, 3, 0}, {0, 0, 3}), 1.0);    // touches cube corner (1,1,1)
-  EXPECT_DOUBLE_EQ(triangle_linf_distance(o, {-5, -5, 0}, {5, -5, 0}, {0, 5, 0}), 0.0); // through the point
-  EXPECT_DOUBLE_EQ(triangle_linf_distance(o, {4, 4, 4}, {4, 4, 4}, {4, 4, 4}), 4.0);    // a point
-  EXPECT_DOUBLE_EQ(triangle_linf_distance(o, {2, 0, -9}, {0, 2, -9}, {0, 2, 9}), 1.0);  // edge-edge: x + y = 2 meets the cube edge at (1,1)
+  EXPECT_DOUBLE_EQ(triangle_linf_distance(o, {3, 0, 0}, {0, 3, 0}, {0, 0, 3}),
+                   1.0);  // touches cube corner (1,1,1)
+  EXPECT_DOUBLE_EQ(triangle_linf_distance(o, {-5, -5, 0}, {5, -5, 0}, {0, 5, 0}), 0.0);  // through the point
+  EXPECT_DOUBLE_EQ(triangle_linf_distance(o, {4, 4, 4}, {4, 4, 4}, {4, 4, 4}), 4.0);     // a point
+  EXPECT_DOUBLE_EQ(triangle_linf_distance(o, {2, 0, -9}, {0, 2, -9}, {0, 2, 9}),
+                   1.0);  // edge-edge: x + y = 2 meets the cube edge at (1,1)
 }
 
 // ---------------------------------------------------------------- cull box
@@ -187,7 +191,8 @@ std::unique_ptr<LatticeScene> lattice_scene(int n, int block, const Vec3d& offse
       }
   std::int64_t id = 1;
   for (const auto& [key, tris] : blocks) {
-    const Vec3d origin = offset + Vec3d{double(key[0] * block - n), double(key[1] * block - n), double(key[2] * block - n)};
+    const Vec3d origin =
+        offset + Vec3d{double(key[0] * block - n), double(key[1] * block - n), double(key[2] * block - n)};
     scene->source.add(test::make_memory_chunk(id++, tris, origin));
   }
   return scene;
@@ -308,8 +313,8 @@ TEST(CullBox, MaxHalfSizeCapsAndMinHalfSizeFloors) {
   EXPECT_EQ(r.triangle_count, lattice_count(3.0, 6));  // 6^3
   EXPECT_FALSE(r.budget_exceeded_at_min);
 
-  params.triangle_budget = 100;   // would give h just below 2.5 (216 > 100 >= 64)
-  params.min_half_size = 3.0;     // but the cell itself is larger
+  params.triangle_budget = 100;  // would give h just below 2.5 (216 > 100 >= 64)
+  params.min_half_size = 3.0;    // but the cell itself is larger
   params.max_half_size = 10.0;
   r = find_cull_box({0, 0, 0}, params, scene->source);
   EXPECT_EQ(r.half_size, 3.0);
@@ -324,7 +329,8 @@ TEST(CullBox, MaxHalfSizeCapsAndMinHalfSizeFloors) {
 
 TEST(CullBox, GiantTriangleCrossesEveryBox) {
   auto scene = lattice_scene(4, 2, {0, 0, 0});
-  scene->source.add(test::make_memory_chunk(1000, {Tri{Vec3d{-1e4, -1e4, 0.01}, Vec3d{1e4, -1e4, 0.01}, Vec3d{0, 1e4, 0.01}}}));
+  scene->source.add(test::make_memory_chunk(
+      1000, {Tri{Vec3d{-1e4, -1e4, 0.01}, Vec3d{1e4, -1e4, 0.01}, Vec3d{0, 1e4, 0.01}}}));
   CullBoxParams params;
   params.triangle_budget = 64;
   params.min_half_size = 0.1;
@@ -350,7 +356,8 @@ TEST(CullBox, GiantTriangleCrossesEveryBox) {
 TEST(CullBox, AllGeometryAtOnePoint) {
   test::MemoryChunkSource source;
   const Vec3d q{3, -2, 1};
-  for (int c = 0; c < 4; ++c) source.add(test::make_memory_chunk(c + 1, std::vector<Tri>(500, Tri{q, q, q}), q));
+  for (int c = 0; c < 4; ++c)
+    source.add(test::make_memory_chunk(c + 1, std::vector<Tri>(500, Tri{q, q, q}), q));
   CullBoxParams params;
   params.triangle_budget = 100;
   params.min_half_size = 0.5;
@@ -442,7 +449,8 @@ TEST(CullBox, RandomScenesMatchBruteForce) {
       if (params.triangle_budget < d.size() && d[params.triangle_budget] <= extent)
         expected = std::max(0.5, d[params.triangle_budget]);
       EXPECT_NEAR(r.half_size, expected, 1e-9) << "seed " << seed << " trial " << trial;
-      const auto exact = static_cast<std::uint64_t>(std::upper_bound(d.begin(), d.end(), r.half_size) - d.begin());
+      const auto exact =
+          static_cast<std::uint64_t>(std::upper_bound(d.begin(), d.end(), r.half_size) - d.begin());
       EXPECT_EQ(r.triangle_count, exact);
       EXPECT_EQ(r.budget_exceeded_at_min, exact > params.triangle_budget);
       if (!r.budget_exceeded_at_min) {

@@ -106,12 +106,15 @@ TEST(DecodeImage, GarbageThrowsOrDecodesWithoutCrashing) {
   const auto px = test_image(32, 32, true);
   for (const char* format : {"jpeg", "webp", "png"}) {
     const auto good = encode_image(px, 32, 32, {format, 80});
-    for (std::size_t len : {std::size_t{3}, std::size_t{12}, good.size() / 4, good.size() / 2, good.size() - 1})
-      expect_decode_safe(std::vector<std::uint8_t>(good.begin(), good.begin() + static_cast<std::ptrdiff_t>(len)));
+    for (std::size_t len :
+         {std::size_t{3}, std::size_t{12}, good.size() / 4, good.size() / 2, good.size() - 1})
+      expect_decode_safe(
+          std::vector<std::uint8_t>(good.begin(), good.begin() + static_cast<std::ptrdiff_t>(len)));
     for (int trial = 0; trial < 150; ++trial) {
       auto bad = good;
       const int flips = 1 + static_cast<int>(rng() % 8);
-      for (int f = 0; f < flips; ++f) bad[12 + rng() % (bad.size() - 12)] ^= static_cast<std::uint8_t>(1u << (rng() % 8));
+      for (int f = 0; f < flips; ++f)
+        bad[12 + rng() % (bad.size() - 12)] ^= static_cast<std::uint8_t>(1u << (rng() % 8));
       expect_decode_safe(bad);
     }
     // Valid magic followed by noise.
@@ -150,7 +153,8 @@ std::array<std::uint32_t, 3> canonical(std::uint32_t a, std::uint32_t b, std::ui
 
 // Maps each decoded vertex to the original vertex it came from (nearest
 // position), checking the error bounds on the way.
-std::vector<std::uint32_t> match_vertices(const FaceMesh& original, const FaceMesh& decoded, double pos_bound, double uv_bound) {
+std::vector<std::uint32_t> match_vertices(const FaceMesh& original, const FaceMesh& decoded, double pos_bound,
+                                          double uv_bound) {
   std::vector<std::uint32_t> map(decoded.positions.size());
   for (std::size_t i = 0; i < decoded.positions.size(); ++i) {
     const Vec3f& p = decoded.positions[i];
@@ -201,7 +205,8 @@ TEST(FaceMeshCodec, OptimizedOrderKeepsTheSameTrianglesAndIsSmaller) {
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::shuffle(order.begin(), order.end(), rng);
   std::vector<std::uint32_t> shuffled;
-  for (std::size_t t : order) shuffled.insert(shuffled.end(), m.indices.begin() + 3 * t, m.indices.begin() + 3 * t + 3);
+  for (std::size_t t : order)
+    shuffled.insert(shuffled.end(), m.indices.begin() + 3 * t, m.indices.begin() + 3 * t + 3);
   m.indices = shuffled;
 
   MeshEncodeParams keep, optimize;
@@ -213,7 +218,8 @@ TEST(FaceMeshCodec, OptimizedOrderKeepsTheSameTrianglesAndIsSmaller) {
   const FaceMesh d = decode_face_mesh(optimized_bytes);
   const auto map = match_vertices(m, d, face_mesh_position_error_bound(m, 16), face_mesh_uv_error_bound(m));
   std::map<std::array<std::uint32_t, 3>, int> expected, got;
-  for (std::size_t t = 0; t < m.triangle_count(); ++t) ++expected[canonical(m.indices[3 * t], m.indices[3 * t + 1], m.indices[3 * t + 2])];
+  for (std::size_t t = 0; t < m.triangle_count(); ++t)
+    ++expected[canonical(m.indices[3 * t], m.indices[3 * t + 1], m.indices[3 * t + 2])];
   for (std::size_t t = 0; t < d.triangle_count(); ++t)
     ++got[canonical(map[d.indices[3 * t]], map[d.indices[3 * t + 1]], map[d.indices[3 * t + 2]])];
   EXPECT_EQ(got, expected);
@@ -308,9 +314,15 @@ TEST(FaceMeshCodec, CorruptBlobsAreRejectedWithoutCrashing) {
     for (int e = 0; e < edits; ++e) {
       const std::size_t at = rng() % bad.size();
       switch (rng() % 3) {
-        case 0: bad[at] = static_cast<std::uint8_t>(rng()); break;
-        case 1: bad.insert(bad.begin() + static_cast<std::ptrdiff_t>(at), static_cast<std::uint8_t>(rng())); break;
-        default: if (bad.size() > 1) bad.erase(bad.begin() + static_cast<std::ptrdiff_t>(at)); break;
+        case 0:
+          bad[at] = static_cast<std::uint8_t>(rng());
+          break;
+        case 1:
+          bad.insert(bad.begin() + static_cast<std::ptrdiff_t>(at), static_cast<std::uint8_t>(rng()));
+          break;
+        default:
+          if (bad.size() > 1) bad.erase(bad.begin() + static_cast<std::ptrdiff_t>(at));
+          break;
       }
     }
     expect_mesh_decode_safe(bad.data(), bad.size());

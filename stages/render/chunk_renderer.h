@@ -76,6 +76,10 @@ class ChunkRenderer {
   ChunkRenderer(const ChunkRenderer&) = delete;
   ChunkRenderer& operator=(const ChunkRenderer&) = delete;
 
+  // Leaves the calling thread without a current context (the next call makes
+  // it current again). Call after each unit of work on a pooled thread so the
+  // renderer can later be used or destroyed from any thread.
+  void release_context() { context_->release_current(); }
   // True when chunk `id` has cached buffers.
   bool is_cached(std::int64_t id) const;
   // Drops every cached chunk (call when the ids' geometry changed).

@@ -41,7 +41,10 @@ class OsMesaContext final : public GlContext {
       throw;
     }
   }
-  ~OsMesaContext() override { OSMesaDestroyContext(context_); }
+  ~OsMesaContext() override {
+    release_current();
+    OSMesaDestroyContext(context_);
+  }
   OsMesaContext(const OsMesaContext&) = delete;
   OsMesaContext& operator=(const OsMesaContext&) = delete;
 
@@ -49,6 +52,9 @@ class OsMesaContext final : public GlContext {
     if (!OSMesaMakeCurrent(context_, buffer_.data(), GL_UNSIGNED_BYTE, width_, height_))
       throw std::runtime_error("gl_context(osmesa): OSMesaMakeCurrent failed (" + std::to_string(width_) + "x" +
                                std::to_string(height_) + ")");
+  }
+  void release_current() override {
+    if (is_current()) OSMesaMakeCurrent(nullptr, nullptr, 0, 0, 0);
   }
   bool is_current() const override { return OSMesaGetCurrentContext() == context_; }
   GlProc get_proc_address(const char* name) const override { return OSMesaGetProcAddress(name); }

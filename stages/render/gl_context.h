@@ -27,6 +27,11 @@ class GlContext {
   // Makes this context current on the calling thread. Throws std::runtime_error
   // naming the backend when that fails.
   virtual void make_current() = 0;
+  // Leaves the calling thread with no current context when this one is current
+  // there. Call it before another thread may destroy or use the context: a
+  // context destroyed while still current on some thread leaves that thread's
+  // driver state dangling.
+  virtual void release_current() = 0;
   // True when this context is the calling thread's current context.
   virtual bool is_current() const = 0;
   // The entry point `name` (e.g. "glClipControl"), or nullptr when the
