@@ -15,6 +15,8 @@ int main(int argc, char** argv) {
   cellbake::add_bake_command(app);
   cellbake::add_status_command(app);
   cellbake::add_demo_command(app);
+  cellbake::add_submit_command(app);
+  cellbake::add_merge_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

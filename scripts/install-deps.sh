@@ -8,7 +8,7 @@ packages=(
   libtbb-dev libopenmesh-dev libcgal-dev libopenimageio-dev libosmesa6-dev
   libsqlite3-dev sqlite3 libtomlplusplus-dev libassimp-dev libmeshoptimizer-dev
   libcli11-dev nlohmann-json3-dev libspdlog-dev libxxhash-dev zlib1g-dev
-  libgtest-dev libbenchmark-dev
+  libgtest-dev libbenchmark-dev slurmctld slurmd slurm-client munge
 )
 
 missing=()

@@ -172,59 +172,71 @@ bool edge_point_fully_connected(const Corner& c) {
 // fitted to them (least squares; exact for 3 pixels; the mean for 1 or 2). For
 // 4 pixels of one face this is their mean inverse depth, for 3 it interpolates
 // the two pixels diagonal to each other: a world plane gives exactly coplanar
-// corners, also across cube edges. Across a cube edge, when the pixels do not
-// fit one plane (a crease along the edge), the mean of each pixel's inverse
-// depth in its own face's frame is used instead. Deterministic: the same sorted pixels and
+// corners. Across cube edges the fit also takes the pixels' 4-neighbours on
+// their faces and is used only when all those points fit one plane (to rounding);
+// otherwise (a crease along the edge, a curved surface) the corner takes the
+// mean of each pixel's inverse depth in its own face's frame. Deterministic: the same sorted pixels and
 // frame give the same bits for every face sharing the corner.
 double corner_inverse_depth(const CubeLattice& lat, const Corner& c, int l, const Lattice& d) {
-  int frame = kCubeFaces, last_face = -1;
-  bool frame_spans_one_face = true;
+  std::vector<PixelRef> fit;
+  int frame = kCubeFaces;
+  bool one_face = true;
   for (std::size_t a = 0; a < c.pixels.size(); ++a)
     if (c.label[a] == l) {
+      if (!fit.empty() && c.pixels[a].face != fit.back().face) one_face = false;
       frame = std::min(frame, c.pixels[a].face);
-      if (last_face >= 0 && c.pixels[a].face != last_face) frame_spans_one_face = false;
-      last_face = c.pixels[a].face;
+      fit.push_back(c.pixels[a]);
     }
+  const int k = int(fit.size());
+  // Mean of the pixels' inverse depths, each in its own face's frame (the frames
+  // of all faces through D agree on the corner ray itself).
+  double own_mean = 0;
+  for (const PixelRef& p : fit) own_mean += 1.0 / double(lat.depth(p));
+  own_mean /= k;
+  if (!one_face) {
+    // Across a cube edge, 2 pixels per face lie on two lines parallel to the
+    // edge, which always fit a plane, and the 3 pixels at a cube corner always
+    // do: add the pixels' 4-neighbours on their own faces so that a plane can be
+    // told from a crease along the edge (the corner of a room).
+    const int n = lat.size();
+    for (int a = 0; a < k; ++a) {
+      const PixelRef p = fit[a];
+      for (PixelRef q : {PixelRef{p.face, p.i - 1, p.j}, PixelRef{p.face, p.i + 1, p.j}, PixelRef{p.face, p.i, p.j - 1},
+                         PixelRef{p.face, p.i, p.j + 1}})
+        if (q.i >= 0 && q.j >= 0 && q.i < n && q.j < n && !lat.background(q) &&
+            std::find(fit.begin(), fit.end(), q) == fit.end())
+          fit.push_back(q);
+    }
+  }
   const FaceBasis b = cube_face_basis(frame);
   const double n = lat.size();
   const double s0 = (d[0] * b.right.x + d[1] * b.right.y + d[2] * b.right.z) / n;
   const double t0 = (d[0] * b.up.x + d[1] * b.up.y + d[2] * b.up.z) / n;
-  double m00 = 0, m01 = 0, m02 = 0, m11 = 0, m12 = 0, m22 = 0, r0 = 0, r1 = 0, r2 = 0, sum_w = 0;
-  int k = 0;
-  for (std::size_t a = 0; a < c.pixels.size(); ++a) {
-    if (c.label[a] != l) continue;
-    const Vec3d p = lat.point(c.pixels[a]);
+  struct Sample {
+    double s, t, w;
+  };
+  std::vector<Sample> samples;
+  double m00 = 0, m01 = 0, m02 = 0, m11 = 0, m12 = 0, m22 = 0, r0 = 0, r1 = 0, r2 = 0;
+  for (const PixelRef& q : fit) {
+    const Vec3d p = lat.point(q);
     const double z = dot(p, b.forward);
-    const double w = 1.0 / z, s = dot(p, b.right) / z - s0, t = dot(p, b.up) / z - t0;
-    m00 += 1, m01 += s, m02 += t, m11 += s * s, m12 += s * t, m22 += t * t;
-    r0 += w, r1 += s * w, r2 += t * w;
-    sum_w += w;
-    ++k;
+    const Sample x{dot(p, b.right) / z - s0, dot(p, b.up) / z - t0, 1.0 / z};
+    samples.push_back(x);
+    m00 += 1, m01 += x.s, m02 += x.t, m11 += x.s * x.s, m12 += x.s * x.t, m22 += x.t * x.t;
+    r0 += x.w, r1 += x.s * x.w, r2 += x.t * x.w;
   }
-  // Fallback: mean of the pixels' inverse depths, each in its own face's frame
-  // (the frames of all faces through D agree on the corner ray itself).
-  double own_mean = 0;
-  for (std::size_t a = 0; a < c.pixels.size(); ++a)
-    if (c.label[a] == l) own_mean += 1.0 / double(lat.depth(c.pixels[a]));
-  own_mean /= k;
-  if (k < 3) return frame_spans_one_face ? sum_w / k : own_mean;
+  if (k < 3 && one_face) return r0 / m00;  // 1 or 2 pixels of one face: their mean
   const double det = m00 * (m11 * m22 - m12 * m12) - m01 * (m01 * m22 - m12 * m02) + m02 * (m01 * m12 - m11 * m02);
   if (!(std::abs(det) > 1e-12 * std::max(1.0, m11 * m22))) return own_mean;
   const double w0 = (r0 * (m11 * m22 - m12 * m12) - m01 * (r1 * m22 - m12 * r2) + m02 * (r1 * m12 - m11 * r2)) / det;
   const double w1 = (m00 * (r1 * m22 - m12 * r2) - r0 * (m01 * m22 - m12 * m02) + m02 * (m01 * r2 - r1 * m02)) / det;
   const double w2 = (m00 * (m11 * r2 - r1 * m12) - m01 * (m01 * r2 - r1 * m02) + r0 * (m01 * m12 - m11 * m02)) / det;
-  if (!frame_spans_one_face) {
+  if (!one_face) {
     // Across a cube edge the pixels may lie on two surfaces meeting at the edge
     // (a crease, e.g. the walls of a room seen from its centre): there the
     // fitted plane is wrong and each face's own inverse depth is right.
     double worst = 0;
-    for (std::size_t a = 0; a < c.pixels.size(); ++a) {
-      if (c.label[a] != l) continue;
-      const Vec3d p = lat.point(c.pixels[a]);
-      const double z = dot(p, b.forward);
-      const double s = dot(p, b.right) / z - s0, t = dot(p, b.up) / z - t0;
-      worst = std::max(worst, std::abs(w0 + w1 * s + w2 * t - 1.0 / z));
-    }
+    for (const Sample& x : samples) worst = std::max(worst, std::abs(w0 + w1 * x.s + w2 * x.t - x.w));
     if (!(worst <= 1e-6 * own_mean)) return own_mean;
   }
   return w0 > 0 ? w0 : own_mean;

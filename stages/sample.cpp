@@ -132,14 +132,7 @@ CubeSample sample_cube(const Vec3d& eye, const Box3d& cull_box, const SamplePara
   std::vector<float> depth;
   for (int face = 0; face < kCubeFaces; ++face) {
     ids.clear();
-    std::vector<ChunkRef> refs = chunks_in_face(face, eye, cull_box, params.near_plane, source);
-    const auto gap = [&](const ChunkRef& r) {
-      double g = 0;
-      for (int k = 0; k < 3; ++k) g += std::pow(std::max({0.0, r.bounds.lo[k] - eye[k], eye[k] - r.bounds.hi[k]}), 2);
-      return g;
-    };
-    std::stable_sort(refs.begin(), refs.end(), [&](const ChunkRef& a, const ChunkRef& c) { return gap(a) < gap(c); });
-    for (const ChunkRef& ref : refs) ids.push_back(ref.id);
+    for (const ChunkRef& ref : chunks_in_face(face, eye, cull_box, params.near_plane, source)) ids.push_back(ref.id);
     const FaceBasis b = cube_face_basis(face);
     RenderCamera camera;
     camera.eye = eye;

@@ -1,0 +1,35 @@
+// `cellbake merge OUT.db SHARD.db...`: combine the shard databases of a
+// distributed bake into one cell database (see runner/merge_shards.h).
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+
+#include "runner/commands.h"
+#include "runner/merge_shards.h"
+
+namespace cellbake {
+
+void add_merge_command(CLI::App& app) {
+  struct Options {
+    std::string out;
+    std::vector<std::string> shards;
+  };
+  auto opt = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand(
+      "merge", "Merge shard databases of a distributed bake into one (idempotent; a missing shard is skipped with a warning)");
+  cmd->add_option("out", opt->out, "Merged cell database (created, or added to)")->required();
+  cmd->add_option("shards", opt->shards, "Shard cell databases")->required();
+  cmd->callback([opt] {
+    std::vector<std::filesystem::path> shards(opt->shards.begin(), opt->shards.end());
+    const MergeSummary s =
+        merge_shards(opt->out, shards, [](const std::string& w) { std::fprintf(stderr, "warning: %s\n", w.c_str()); });
+    std::printf("merge %s: %llu shard(s) merged, %zu missing; %llu cells copied, %llu unchanged, %llu failed cells "
+                "not copied over done ones; now %llu done, %llu failed of %llu\n",
+                opt->out.c_str(), (unsigned long long)s.shards_merged, s.missing_shards.size(),
+                (unsigned long long)s.cells_copied, (unsigned long long)s.cells_unchanged,
+                (unsigned long long)s.cells_kept_done, (unsigned long long)s.cells_done,
+                (unsigned long long)s.cells_failed, (unsigned long long)s.cells_total);
+  });
+}
+
+}  // namespace cellbake

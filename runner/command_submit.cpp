@@ -1,0 +1,131 @@
+// `cellbake submit CONFIG --shards N [--partition P] [--time T] [--mem M]
+// [--set k=v]... [--out MERGED.db] [--out-dir DIR] [--dry-run]`: a distributed
+// bake on Slurm — a job array of shard bakes plus a merge job that runs after
+// every task succeeded (see runner/slurm_scripts.h).
+#include <CLI/CLI.hpp>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <sys/wait.h>
+
+#include "runner/bake_command_options.h"
+#include "runner/commands.h"
+#include "runner/slurm_scripts.h"
+
+namespace cellbake {
+namespace {
+
+struct SubmitOptions {
+  std::string config_file, out, out_dir, partition, time, mem;
+  std::vector<std::string> sets;
+  int shards = 0;
+  bool dry_run = false;
+};
+
+// True for an override of output.database (the shard tasks get their own --out).
+bool sets_output_database(const std::string& assignment) {
+  std::string key = assignment.substr(0, assignment.find('='));
+  key.erase(0, key.find_first_not_of(" \t"));
+  key.erase(key.find_last_not_of(" \t") + 1);
+  return key == "output.database";
+}
+
+std::string absolute_text(const std::filesystem::path& p) {
+  return std::filesystem::absolute(p).lexically_normal().string();
+}
+
+void write_file(const std::filesystem::path& file, const std::string& text) {
+  std::ofstream out(file, std::ios::binary);
+  out << text;
+  if (!out) throw std::runtime_error(file.string() + ": cannot write");
+}
+
+// Runs `sbatch --parsable ARGS SCRIPT` and returns the job id it prints.
+std::string sbatch(const std::string& args, const std::string& script) {
+  const std::string cmd = "sbatch --parsable " + args + " " + shell_quote(script) + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) throw std::runtime_error("cannot run sbatch");
+  std::string output;
+  std::array<char, 4096> buf{};
+  for (std::size_t n; (n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0;) output.append(buf.data(), n);
+  const int status = pclose(pipe);
+  const std::string id = output.substr(0, output.find_first_of(";\n"));
+  const bool numeric = !id.empty() && id.find_first_not_of("0123456789") == std::string::npos;
+  if (status != 0 || !numeric)
+    throw std::runtime_error("`" + cmd.substr(0, cmd.size() - 5) + "` failed" +
+                             (WIFEXITED(status) && WEXITSTATUS(status) == 127 ? " (sbatch not found)" : "") + ": " +
+                             output);
+  return id;
+}
+
+}  // namespace
+
+void add_submit_command(CLI::App& app) {
+  auto opt = std::make_shared<SubmitOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "submit", "Bake on a Slurm cluster: a job array of N shard bakes, then a merge job into one database");
+  cmd->add_option("config", opt->config_file, "Bake configuration (TOML)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--shards", opt->shards, "Number of shards = array tasks")->required()->check(CLI::Range(1, 100000));
+  cmd->add_option("--set", opt->sets, "Override a config key: section.key=value (repeatable; passed to every task)");
+  cmd->add_option("--out", opt->out, "Merged cell database (default: the config's [output] database)");
+  cmd->add_option("--out-dir", opt->out_dir, "Folder for shard databases, scripts and logs (default: MERGED_shards)");
+  cmd->add_option("--partition", opt->partition, "Slurm partition (sbatch --partition)");
+  cmd->add_option("--time", opt->time, "Time limit per task (sbatch --time)");
+  cmd->add_option("--mem", opt->mem, "Memory per task (sbatch --mem)");
+  cmd->add_flag("--dry-run", opt->dry_run, "Print both scripts and submit nothing");
+  cmd->callback([opt] {
+    // Validate the configuration here, before anything reaches the cluster.
+    BakeCommandOptions bake;
+    bake.config_file = opt->config_file;
+    bake.sets = opt->sets;
+    bake.out = opt->out;
+    const BakeConfig config = bake_config_from_options(bake);
+
+    SlurmBakeJob job;
+    job.binary = absolute_text(std::filesystem::read_symlink("/proc/self/exe"));
+    job.bake_args.push_back(absolute_text(opt->config_file));
+    for (const auto& s : opt->sets)
+      if (!sets_output_database(s)) job.bake_args.insert(job.bake_args.end(), {"--set", s});
+    job.shards = opt->shards;
+    job.merged_db = absolute_text(config.database);
+    const std::filesystem::path merged(job.merged_db);
+    job.out_dir = absolute_text(opt->out_dir.empty() ? merged.parent_path() / (merged.stem().string() + "_shards")
+                                                     : std::filesystem::path(opt->out_dir));
+    job.workdir = absolute_text(std::filesystem::current_path());
+    job.partition = opt->partition;
+    job.time = opt->time;
+    job.mem = opt->mem;
+
+    const std::string array_file = job.out_dir + "/bake_array.sbatch", merge_file = job.out_dir + "/merge.sbatch";
+    if (opt->dry_run) {
+      std::printf("# %s\n%s\n# %s\n%s\n", array_file.c_str(), array_script(job).c_str(), merge_file.c_str(),
+                  merge_script(job).c_str());
+      std::printf("# dry run: would run `sbatch --parsable %s`, then `sbatch --parsable "
+                  "--dependency=afterok:ARRAY_JOB_ID %s`; nothing submitted\n",
+                  array_file.c_str(), merge_file.c_str());
+      return;
+    }
+    std::filesystem::create_directories(job.out_dir + "/logs");
+    std::filesystem::create_directories(merged.parent_path());
+    write_file(array_file, array_script(job));
+    write_file(merge_file, merge_script(job));
+    const std::string array_id = sbatch("", array_file);
+    std::string merge_id;
+    try {
+      merge_id = sbatch("--dependency=afterok:" + array_id, merge_file);
+    } catch (const std::exception& e) {
+      throw std::runtime_error("array job " + array_id + " was submitted but the merge job was not (" + e.what() +
+                               "); submit it with: sbatch --dependency=afterok:" + array_id + " " + merge_file);
+    }
+    std::printf("array job %s: %d shard bakes -> %s/shard_<K>.db (logs in %s/logs)\n", array_id.c_str(), job.shards,
+                job.out_dir.c_str(), job.out_dir.c_str());
+    std::printf("merge job %s: after array job %s succeeds -> %s\n", merge_id.c_str(), array_id.c_str(),
+                job.merged_db.c_str());
+    std::printf("watch: squeue -j %s,%s; cellbake status %s/shard_*.db\n", array_id.c_str(), merge_id.c_str(),
+                job.out_dir.c_str());
+    std::printf("rerun a failed task K: sbatch --array=K %s, then: sbatch %s\n", array_file.c_str(), merge_file.c_str());
+  });
+}
+
+}  // namespace cellbake

@@ -1,0 +1,75 @@
+#include "storage/cell_db_merge.h"
+
+#include <vector>
+
+#include "storage/sqlite_db.h"
+
+namespace cellbake {
+namespace {
+
+// The target's existing row of a cell compared with the source's.
+enum class CopyDecision { copy, unchanged, keep_done };
+
+CopyDecision decide(const CellStamp* existing, const CellStamp& incoming) {
+  if (!existing) return CopyDecision::copy;
+  if (existing->status == incoming.status && existing->input_hash == incoming.input_hash &&
+      existing->content_hash == incoming.content_hash)
+    return CopyDecision::unchanged;
+  if (existing->status == "done" && incoming.status != "done") return CopyDecision::keep_done;
+  return CopyDecision::copy;
+}
+
+}  // namespace
+
+CellCopyCounts copy_cells(CellDb& target, const CellDb& source) {
+  const auto have = target.stamps();
+  const auto incoming = source.stamps();
+  std::vector<std::int64_t> to_copy;
+  CellCopyCounts counts;
+  for (const auto& [id, stamp] : incoming) {
+    auto it = have.find(id);
+    switch (decide(it == have.end() ? nullptr : &it->second, stamp)) {
+      case CopyDecision::copy: to_copy.push_back(id); break;
+      case CopyDecision::unchanged: ++counts.unchanged; break;
+      case CopyDecision::keep_done: ++counts.kept_done; break;
+    }
+  }
+  if (to_copy.empty()) return counts;
+
+  // A second connection to the target (WAL allows it) with the source
+  // attached; both are the same schema version, so SELECT * matches column
+  // for column.
+  SqliteDb db(target.path(), SqliteDb::Mode::read_write_create);
+  {
+    SqliteStatement attach(db, "ATTACH DATABASE ? AS source");
+    attach.bind(1, source.path().string()).run();
+  }
+  {
+    SqliteStatement del_faces(db, "DELETE FROM main.faces WHERE cell_id=?");
+    SqliteStatement del_samples(db, "DELETE FROM main.samples WHERE cell_id=?");
+    SqliteStatement del_cell(db, "DELETE FROM main.cells WHERE id=?");
+    SqliteStatement ins_cell(db, "INSERT INTO main.cells SELECT * FROM source.cells WHERE id=?");
+    SqliteStatement ins_samples(db, "INSERT INTO main.samples SELECT * FROM source.samples WHERE cell_id=?");
+    SqliteStatement ins_faces(db, "INSERT INTO main.faces SELECT * FROM source.faces WHERE cell_id=?");
+    for (std::int64_t id : to_copy) {
+      SqliteTransaction tx(db);
+      for (SqliteStatement* s : {&del_faces, &del_samples, &del_cell, &ins_cell, &ins_samples, &ins_faces})
+        s->bind(1, id).run();
+      tx.commit();
+      ++counts.copied;
+    }
+  }
+  db.exec("DETACH DATABASE source");
+  return counts;
+}
+
+std::map<std::string, std::string> metas_with_prefix(const CellDb& cells, const std::string& prefix) {
+  SqliteDb db(cells.path(), SqliteDb::Mode::read_only);
+  SqliteStatement s(db, "SELECT key, value FROM meta WHERE substr(key, 1, ?) = ? ORDER BY key");
+  s.bind(1, std::int64_t(prefix.size())).bind(2, prefix);
+  std::map<std::string, std::string> out;
+  while (s.step()) out[s.column_text(0)] = s.column_text(1);
+  return out;
+}
+
+}  // namespace cellbake
