@@ -98,8 +98,8 @@ BakeSummary run_bake(const BakeConfig& config, const BakeOptions& options) {
       run_stage(*w, "sample", [&] {
         auto& renderer = renderers.local();
         if (!renderer) {
-          const int size = config.face_size * config.supersample;
-          renderer = std::make_unique<ChunkRenderer>(create_gl_context(GlBackend::osmesa, size, size));
+          // Drawing goes to framebuffer objects; the default framebuffer is never used.
+          renderer = std::make_unique<ChunkRenderer>(create_gl_context(GlBackend::osmesa, 1, 1));
         }
         try {
           run_sample(*w, config, store, *renderer);
