@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <deque>
 #include <limits>
 #include <cstdio>
 #include <fstream>
@@ -23,32 +24,39 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-// Appends triangles to a temporary file and maps it back for random access.
+// Holds triangles in memory up to a byte budget, then continues in a
+// temporary file that is mapped back for random access: small and medium
+// models never touch the disk, huge ones keep memory bounded.
 class TriangleSpill {
  public:
-  explicit TriangleSpill(const std::filesystem::path& file) : path_(file) {
-    out_ = std::fopen(file.c_str(), "wb");
-    if (!out_) throw std::runtime_error(file.string() + ": cannot create spill file");
-    buffer_.reserve(kBuffer);
-  }
+  TriangleSpill(const std::filesystem::path& file, std::size_t memory_budget_bytes)
+      : path_(file), memory_limit_(std::max<std::size_t>(1, memory_budget_bytes / sizeof(Triangle))) {}
   ~TriangleSpill() {
     if (out_) std::fclose(out_);
     if (map_) munmap(map_, map_bytes_);
-    std::error_code ec;
-    std::filesystem::remove(path_, ec);
+    if (spilled_) {
+      std::error_code ec;
+      std::filesystem::remove(path_, ec);
+    }
   }
   void add(const Triangle& t) {
-    buffer_.push_back(t);
-    if (buffer_.size() == kBuffer) flush();
     ++count_;
+    if (!spilled_) {
+      memory_.push_back(t);  // a deque: no reallocation copies, no 2x peak
+      if (memory_.size() > memory_limit_) flush_to_file();
+      return;
+    }
+    buffer_.push_back(t);
+    if (buffer_.size() == kFileBuffer) flush_to_file();
   }
   std::uint64_t count() const { return count_; }
-  // Finishes writing and maps the file; triangles are then readable by index.
-  void map() {
-    flush();
+  bool spilled() const { return spilled_; }
+  // Finishes adding; triangles are then readable by index.
+  void finish() {
+    if (!spilled_) return;
+    flush_to_file();
     if (std::fclose(out_) != 0) throw std::runtime_error(path_.string() + ": cannot write spill file");
     out_ = nullptr;
-    if (count_ == 0) return;
     int fd = ::open(path_.c_str(), O_RDONLY);
     if (fd < 0) throw std::runtime_error(path_.string() + ": cannot reopen spill file");
     map_bytes_ = count_ * sizeof(Triangle);
@@ -59,17 +67,32 @@ class TriangleSpill {
       throw std::runtime_error(path_.string() + ": cannot map spill file");
     }
   }
-  const Triangle& operator[](std::size_t i) const { return static_cast<const Triangle*>(map_)[i]; }
+  const Triangle& operator[](std::size_t i) const {
+    return spilled_ ? static_cast<const Triangle*>(map_)[i] : memory_[i];
+  }
 
  private:
-  static constexpr std::size_t kBuffer = 1 << 14;
-  void flush() {
-    if (!buffer_.empty() && std::fwrite(buffer_.data(), sizeof(Triangle), buffer_.size(), out_) != buffer_.size())
-      throw std::runtime_error(path_.string() + ": cannot write spill file (disk full?)");
+  static constexpr std::size_t kFileBuffer = 1 << 14;
+  void flush_to_file() {
+    if (!spilled_) {
+      out_ = std::fopen(path_.c_str(), "wb");
+      if (!out_) throw std::runtime_error(path_.string() + ": cannot create spill file");
+      spilled_ = true;
+      for (const Triangle& t : memory_) write(&t, 1);
+      std::deque<Triangle>().swap(memory_);
+    }
+    write(buffer_.data(), buffer_.size());
     buffer_.clear();
   }
+  void write(const Triangle* t, std::size_t n) {
+    if (n && std::fwrite(t, sizeof(Triangle), n, out_) != n)
+      throw std::runtime_error(path_.string() + ": cannot write spill file (disk full?)");
+  }
   std::filesystem::path path_;
+  std::size_t memory_limit_;
   std::FILE* out_ = nullptr;
+  bool spilled_ = false;
+  std::deque<Triangle> memory_;
   std::vector<Triangle> buffer_;
   std::uint64_t count_ = 0;
   void* map_ = nullptr;
@@ -103,7 +126,8 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   const std::filesystem::path temp_dir =
       params.temp_dir.empty() ? std::filesystem::absolute(store).parent_path() : params.temp_dir;
   std::filesystem::create_directories(temp_dir);
-  TriangleSpill spill(temp_dir / (store.filename().string() + ".spill-" + std::to_string(::getpid())));
+  TriangleSpill spill(temp_dir / (store.filename().string() + ".spill-" + std::to_string(::getpid())),
+                      params.memory_budget_bytes);
 
   std::vector<Material> materials;
   std::vector<SourceFileRecord> sources;
@@ -145,7 +169,7 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
     src.triangles = file_triangles;
     sources.push_back(src);
   }
-  spill.map();
+  spill.finish();
   if (spill.count() == 0)
     throw InputError(models.front().string(), "",
                      report.triangles_read ? "model has only degenerate triangles" : "model contains no triangles");

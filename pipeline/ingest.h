@@ -1,7 +1,8 @@
 // Ingest: reads model files, drops degenerate and duplicate triangles (counted),
 // splits the rest into spatially coherent chunks and writes a geometry store.
-// Memory is bounded: triangles are spilled to a temporary file (112 bytes each)
-// and only 40-byte sort keys per triangle are held in memory.
+// Memory is bounded: triangles (112 bytes each) stay in memory up to a budget
+// and then go to a temporary spill file; only 40-byte sort keys per triangle
+// are always held in memory.
 #pragma once
 
 #include <cstdint>
@@ -25,6 +26,7 @@ struct IngestParams {
   std::size_t max_chunk_triangles = 4096;  // chunks hold (max/2, max] triangles, except runs of duplicates
   Vec3d translate{0, 0, 0};                // added to every coordinate (tests, survey offsets)
   std::string units = "m";
+  std::size_t memory_budget_bytes = std::size_t(6) << 30;  // triangles beyond this go to a spill file
   std::filesystem::path temp_dir;          // for the spill file; empty = next to the store
 };
 

@@ -16,5 +16,7 @@ void add_status_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
 void add_submit_command(CLI::App& app);
 void add_merge_command(CLI::App& app);
+void add_render_command(CLI::App& app);
+void add_view_command(CLI::App& app);
 
 }  // namespace cellbake

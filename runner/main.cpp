@@ -17,6 +17,8 @@ int main(int argc, char** argv) {
   cellbake::add_demo_command(app);
   cellbake::add_submit_command(app);
   cellbake::add_merge_command(app);
+  cellbake::add_render_command(app);
+  cellbake::add_view_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -9,6 +9,7 @@ packages=(
   libsqlite3-dev sqlite3 libtomlplusplus-dev libassimp-dev libmeshoptimizer-dev
   libcli11-dev nlohmann-json3-dev libspdlog-dev libxxhash-dev zlib1g-dev
   libgtest-dev libbenchmark-dev slurmctld slurmd slurm-client munge
+  libglfw3-dev libimgui-dev libstb-dev xvfb xauth
 )
 
 missing=()

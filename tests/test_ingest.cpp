@@ -96,6 +96,26 @@ TEST(Ingest, SameChunksWhateverTheThreadCount) {
   }
 }
 
+TEST(Ingest, SpillFileGivesTheSameStoreAsMemory) {
+  test::TempDir dir;
+  test::write_text(dir / "m.obj", grid_obj(50));
+  IngestParams params;
+  params.max_chunk_triangles = 300;
+  const IngestReport a = ingest_models({dir / "m.obj"}, dir / "mem.db", params, serial());
+  params.memory_budget_bytes = 100 * sizeof(Triangle);  // spills after 100 triangles
+  params.temp_dir = dir / "spill";
+  const IngestReport b = ingest_models({dir / "m.obj"}, dir / "file.db", params, tbb_parallel_for());
+  EXPECT_EQ(a.content_hash, b.content_hash);
+  GeometryStore sa(dir / "mem.db"), sb(dir / "file.db");
+  auto ca = sa.all_chunks(), cb = sb.all_chunks();
+  ASSERT_EQ(ca.size(), cb.size());
+  for (std::size_t i = 0; i < ca.size(); ++i) {
+    EXPECT_EQ(sa.load(ca[i].id)->positions, sb.load(cb[i].id)->positions);
+    EXPECT_EQ(sa.load(ca[i].id)->indices, sb.load(cb[i].id)->indices);
+  }
+  EXPECT_TRUE(std::filesystem::is_empty(dir / "spill"));  // the spill file is gone
+}
+
 TEST(Ingest, FarFromOriginKeepsChunkGeometry) {
   test::TempDir dir;
   test::write_text(dir / "m.obj", grid_obj(40));

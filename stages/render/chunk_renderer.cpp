@@ -40,10 +40,12 @@ in float v_view_depth;
 in vec4 v_color;
 uniform vec3 u_discard_lo;  // discard box relative to the eye
 uniform vec3 u_discard_hi;
+uniform int u_keep_inside;  // 0: drop fragments inside the box, 1: keep only those
 layout(location = 0) out vec4 o_color;
 layout(location = 1) out float o_view_depth;
 void main() {
-  if (all(greaterThan(v_relative, u_discard_lo)) && all(lessThan(v_relative, u_discard_hi))) discard;
+  bool inside = all(greaterThan(v_relative, u_discard_lo)) && all(lessThan(v_relative, u_discard_hi));
+  if (inside != (u_keep_inside != 0)) discard;
   o_color = v_color;
   o_view_depth = v_view_depth;
 }
@@ -130,6 +132,15 @@ GlFunctions load_current_functions(GlContext* context) {
 
 }  // namespace
 
+std::array<float, 16> camera_view_projection(const RenderCamera& camera, bool reversed_z) {
+  validate_camera(camera);
+  const Mat4 view_projection = multiply(projection(camera, reversed_z), view_rotation(camera));
+  std::array<float, 16> matrix;
+  std::transform(view_projection.begin(), view_projection.end(), matrix.begin(),
+                 [](double v) { return static_cast<float>(v); });
+  return matrix;
+}
+
 ChunkRenderer::ChunkRenderer(std::unique_ptr<GlContext> context, ChunkRendererParams params)
     : context_(std::move(context)),
       params_(params),
@@ -181,6 +192,7 @@ void ChunkRenderer::build_program() {
   u_forward_ = gl_.GetUniformLocation(program_, "u_forward");
   u_discard_lo_ = gl_.GetUniformLocation(program_, "u_discard_lo");
   u_discard_hi_ = gl_.GetUniformLocation(program_, "u_discard_hi");
+  u_keep_inside_ = gl_.GetUniformLocation(program_, "u_keep_inside");
   check_gl_error(gl_, "chunk_renderer: build_program");
 }
 
@@ -340,14 +352,11 @@ const ChunkRenderer::CachedChunk& ChunkRenderer::upload(const Chunk& chunk) {
   return stored;
 }
 
-void ChunkRenderer::set_camera_uniforms(const RenderCamera& camera, const Box3d& discard_box) {
-  validate_camera(camera);
+void ChunkRenderer::set_camera_uniforms(const RenderCamera& camera, const Box3d& discard_box, BoxClip clip) {
+  const std::array<float, 16> matrix = camera_view_projection(camera, reversed_z());
   gl_.UseProgram(program_);
-  const Mat4 view_projection = multiply(projection(camera, reversed_z()), view_rotation(camera));
-  std::array<float, 16> matrix;
-  std::transform(view_projection.begin(), view_projection.end(), matrix.begin(),
-                 [](double v) { return static_cast<float>(v); });
   gl_.UniformMatrix4fv(u_view_projection_, 1, GL_FALSE, matrix.data());
+  gl_.Uniform1i(u_keep_inside_, clip == BoxClip::keep_inside ? 1 : 0);
   gl_.Uniform3f(u_forward_, static_cast<float>(camera.forward.x), static_cast<float>(camera.forward.y),
                 static_cast<float>(camera.forward.z));
   if (discard_box.empty()) {
@@ -373,10 +382,10 @@ void ChunkRenderer::draw_cached(const CachedChunk& entry, const Vec3d& eye) {
 }
 
 void ChunkRenderer::draw(const RenderCamera& camera, const Box3d& discard_box, std::span<const std::int64_t> ids,
-                         const ChunkLoader& load) {
+                         const ChunkLoader& load, BoxClip clip) {
   require_frame("draw");
   make_current();
-  set_camera_uniforms(camera, discard_box);
+  set_camera_uniforms(camera, discard_box, clip);
   for (std::int64_t id : ids) {
     auto it = cache_.find(id);
     if (it != cache_.end()) {
@@ -396,7 +405,7 @@ void ChunkRenderer::draw(const RenderCamera& camera, const Box3d& discard_box, s
 }
 
 void ChunkRenderer::draw(const RenderCamera& camera, const Box3d& discard_box,
-                         std::span<const std::shared_ptr<const Chunk>> chunks) {
+                         std::span<const std::shared_ptr<const Chunk>> chunks, BoxClip clip) {
   std::vector<std::int64_t> ids;
   std::unordered_map<std::int64_t, const std::shared_ptr<const Chunk>*> by_id;
   ids.reserve(chunks.size());
@@ -405,7 +414,7 @@ void ChunkRenderer::draw(const RenderCamera& camera, const Box3d& discard_box,
     ids.push_back(c->id);
     by_id[c->id] = &c;
   }
-  draw(camera, discard_box, ids, [&](std::int64_t id) { return *by_id.at(id); });
+  draw(camera, discard_box, ids, [&](std::int64_t id) { return *by_id.at(id); }, clip);
 }
 
 void ChunkRenderer::read_frame(std::vector<Rgba8>& color, std::vector<float>& depth) {

@@ -11,9 +11,11 @@
 // control is missing; what is read back is the exact planar view depth written
 // by the fragment shader into an R32F attachment, independent of that choice.
 // A discard box removes every fragment whose world position lies strictly
-// inside it (the far field of a view cell is everything outside its cull box).
+// inside it (the far field of a view cell is everything outside its cull box);
+// with BoxClip::keep_inside it keeps exactly those instead (the near field).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -42,6 +44,21 @@ struct RenderCamera {
   double tan_left = -1, tan_right = 1, tan_bottom = -1, tan_top = 1;
   double near_plane = 0.01;  // metres along forward; nearer geometry is clipped
 };
+
+// What draw() does with fragments relative to its box. The two modes are exact
+// complements: a fragment on the box boundary is kept by discard_inside only.
+enum class BoxClip {
+  discard_inside,  // drop fragments strictly inside the box (the sampler's far field)
+  keep_inside,     // keep only fragments strictly inside the box (a viewer's near field); an empty box keeps nothing
+};
+
+// The column-major 4x4 matrix (projection * rotation into the camera frame)
+// that ChunkRenderer applies to eye-relative world positions: off-axis
+// perspective with an infinite far plane, reversed-Z ([0, 1], 1 at the near
+// plane) when `reversed_z`, else standard [-1, 1]. Other drawers that share a
+// renderer's frame (the viewer's textured depth meshes) use it to match its
+// depth test exactly.
+std::array<float, 16> camera_view_projection(const RenderCamera& camera, bool reversed_z);
 
 struct ChunkRendererParams {
   // Cap on the bytes of cached chunk buffers (vertex + index data); the least
@@ -90,14 +107,15 @@ class ChunkRenderer {
   void begin_frame(int width, int height);
   // Draws the chunks `ids` in the given order, uploading through `load` those
   // not cached, with fragments strictly inside `discard_box` (world
-  // coordinates; an empty box discards nothing) dropped. Throws
-  // std::logic_error without a frame, std::runtime_error on a malformed chunk
-  // (indices out of range, colours not one per position) naming its id.
+  // coordinates; an empty box discards nothing) dropped, or with `clip` =
+  // keep_inside only those kept. Throws std::logic_error without a frame,
+  // std::runtime_error on a malformed chunk (indices out of range, colours not
+  // one per position) naming its id.
   void draw(const RenderCamera& camera, const Box3d& discard_box, std::span<const std::int64_t> ids,
-            const ChunkLoader& load);
+            const ChunkLoader& load, BoxClip clip = BoxClip::discard_inside);
   // Same, for chunks the caller already holds (uploaded unless cached).
   void draw(const RenderCamera& camera, const Box3d& discard_box,
-            std::span<const std::shared_ptr<const Chunk>> chunks);
+            std::span<const std::shared_ptr<const Chunk>> chunks, BoxClip clip = BoxClip::discard_inside);
   // Reads the frame back, row-major with row 0 at the top: RGBA8 colour and
   // planar view depth in metres (+infinity where nothing was drawn). Resizes
   // both vectors to width * height.
@@ -124,7 +142,7 @@ class ChunkRenderer {
   const CachedChunk& upload(const Chunk& chunk);
   void evict_beyond_cap();
   void release(CachedChunk& entry);
-  void set_camera_uniforms(const RenderCamera& camera, const Box3d& discard_box);
+  void set_camera_uniforms(const RenderCamera& camera, const Box3d& discard_box, BoxClip clip);
   void draw_cached(const CachedChunk& entry, const Vec3d& eye);
   void require_frame(const char* what) const;
 
@@ -133,7 +151,7 @@ class ChunkRenderer {
   std::unique_ptr<GlFunctions> gl_functions_;
   const GlFunctions& gl_;  // *gl_functions_
   unsigned program_ = 0;
-  int u_offset_ = -1, u_view_projection_ = -1, u_forward_ = -1, u_discard_lo_ = -1, u_discard_hi_ = -1;
+  int u_offset_ = -1, u_view_projection_ = -1, u_forward_ = -1, u_discard_lo_ = -1, u_discard_hi_ = -1, u_keep_inside_ = -1;
   unsigned framebuffer_ = 0, color_buffer_ = 0, view_depth_buffer_ = 0, depth_buffer_ = 0;
   int frame_width_ = 0, frame_height_ = 0;
   bool in_frame_ = false;

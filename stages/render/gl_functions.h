@@ -61,7 +61,17 @@ namespace cellbake {
   X(PFNGLBUFFERDATAPROC, BufferData, "glBufferData")                                    \
   X(PFNGLENABLEVERTEXATTRIBARRAYPROC, EnableVertexAttribArray, "glEnableVertexAttribArray") \
   X(PFNGLVERTEXATTRIBPOINTERPROC, VertexAttribPointer, "glVertexAttribPointer")         \
-  X(PFNGLDRAWELEMENTSPROC, DrawElements, "glDrawElements")
+  X(PFNGLDRAWELEMENTSPROC, DrawElements, "glDrawElements")                             \
+  X(PFNGLUNIFORM1IPROC, Uniform1i, "glUniform1i")                                       \
+  X(PFNGLUNIFORM4FPROC, Uniform4f, "glUniform4f")                                       \
+  X(PFNGLGENTEXTURESPROC, GenTextures, "glGenTextures")                                 \
+  X(PFNGLDELETETEXTURESPROC, DeleteTextures, "glDeleteTextures")                        \
+  X(PFNGLBINDTEXTUREPROC, BindTexture, "glBindTexture")                                 \
+  X(PFNGLACTIVETEXTUREPROC, ActiveTexture, "glActiveTexture")                           \
+  X(PFNGLTEXIMAGE2DPROC, TexImage2D, "glTexImage2D")                                    \
+  X(PFNGLTEXPARAMETERIPROC, TexParameteri, "glTexParameteri")                           \
+  X(PFNGLPOLYGONMODEPROC, PolygonMode, "glPolygonMode")                                 \
+  X(PFNGLBLITFRAMEBUFFERPROC, BlitFramebuffer, "glBlitFramebuffer")
 
 struct GlFunctions {
 #define CELLBAKE_GL_MEMBER(type, member, name) type member = nullptr;

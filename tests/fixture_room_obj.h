@@ -1,0 +1,50 @@
+// A small OBJ test scene for bake tests: a 12 x 12 x 4 m room with a 4 x 4
+// grid of pillars (a few thousand triangles, per-vertex colours), written as
+// text so tests can ingest it through the library or the `cellbake` CLI.
+#pragma once
+
+#include <sstream>
+#include <string>
+
+#include "stages/geometry.h"
+
+namespace cellbake::test {
+
+// Appends an axis-aligned box (each face split into n x n quads) to an OBJ stream.
+inline void obj_box(std::ostringstream& o, int& next_vertex, Vec3d lo, Vec3d hi, int n = 2) {
+  auto quad_grid = [&](Vec3d origin, Vec3d du, Vec3d dv) {
+    const int base = next_vertex;
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) {
+        const Vec3d p = origin + du * (double(i) / n) + dv * (double(j) / n);
+        o << "v " << p.x << " " << p.y << " " << p.z << " " << (0.3 + 0.1 * (i % 3)) << " 0.5 " << (0.2 + 0.2 * (j % 2))
+          << "\n";
+        ++next_vertex;
+      }
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const int a = base + j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+        o << "f " << a << " " << b << " " << d << "\nf " << a << " " << d << " " << c << "\n";
+      }
+  };
+  const Vec3d e = hi - lo;
+  quad_grid(lo, {e.x, 0, 0}, {0, e.y, 0});
+  quad_grid({lo.x, lo.y, hi.z}, {e.x, 0, 0}, {0, e.y, 0});
+  quad_grid(lo, {e.x, 0, 0}, {0, 0, e.z});
+  quad_grid({lo.x, hi.y, lo.z}, {e.x, 0, 0}, {0, 0, e.z});
+  quad_grid(lo, {0, e.y, 0}, {0, 0, e.z});
+  quad_grid({hi.x, lo.y, lo.z}, {0, e.y, 0}, {0, 0, e.z});
+}
+
+// The room as OBJ text; `pillars` = false leaves the room empty (a different store).
+inline std::string room_obj(bool pillars = true) {
+  std::ostringstream o;
+  int next = 1;
+  obj_box(o, next, {0, 0, 0}, {12, 12, 4}, 8);
+  if (pillars)
+    for (int y = 0; y < 4; ++y)
+      for (int x = 0; x < 4; ++x) obj_box(o, next, {1.5 + 3 * x, 1.5 + 3 * y, 0}, {1.8 + 3 * x, 1.8 + 3 * y, 4}, 3);
+  return o.str();
+}
+
+}  // namespace cellbake::test

@@ -1,0 +1,139 @@
+// Image metrics on hand-built frames with analytic answers: identical frames,
+// a known uniform colour error, a known hole mask, known skins and depth errors.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "viewer/image_metrics.h"
+
+namespace cellbake {
+namespace {
+
+constexpr float kSky = std::numeric_limits<float>::infinity();
+
+// A w x h frame with colour `c` and depth `d` everywhere.
+ViewFrame flat(int w, int h, Rgba8 c, float d) {
+  ViewFrame f;
+  f.width = w, f.height = h;
+  f.color.assign(static_cast<std::size_t>(w) * h, c);
+  f.depth.assign(static_cast<std::size_t>(w) * h, d);
+  return f;
+}
+
+// A frame with a vertical stripe pattern, so SSIM sees structure.
+ViewFrame stripes(int w, int h, int phase) {
+  ViewFrame f = flat(w, h, {}, 5.0f);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::uint8_t v = ((x + phase) / 2) % 2 ? 220 : 30;
+      f.color[static_cast<std::size_t>(y) * w + x] = {v, v, v, 255};
+    }
+  return f;
+}
+
+TEST(ImageMetrics, IdenticalFramesHaveInfinitePsnrAndNoError) {
+  const ViewFrame a = stripes(32, 24, 0);
+  const ImageMetrics m = compare_frames(a, a);
+  EXPECT_TRUE(std::isinf(m.psnr_db));
+  EXPECT_DOUBLE_EQ(m.ssim, 1.0);
+  EXPECT_EQ(m.hole_fraction, 0.0);
+  EXPECT_EQ(m.skin_fraction, 0.0);
+  EXPECT_EQ(m.depth_error_median, 0.0);
+  EXPECT_EQ(m.extra_fraction, 0.0);
+  EXPECT_EQ(m.truth_covered_pixels, 32u * 24u);
+}
+
+TEST(ImageMetrics, UniformColourOffsetGivesKnownPsnr) {
+  // Every covered pixel off by 10 in each channel: MSE = 100.
+  const ViewFrame truth = flat(16, 16, {100, 100, 100, 255}, 2.0f);
+  const ViewFrame impostor = flat(16, 16, {110, 110, 110, 255}, 2.0f);
+  const ImageMetrics m = compare_frames(impostor, truth);
+  EXPECT_NEAR(m.psnr_db, 10 * std::log10(255.0 * 255.0 / 100.0), 1e-9);
+  // Constant images: SSIM reduces to the luminance term (2 ab + C1) / (a^2 + b^2 + C1).
+  const double c1 = 2.55 * 2.55;
+  EXPECT_NEAR(m.ssim, (2 * 100.0 * 110.0 + c1) / (100.0 * 100.0 + 110.0 * 110.0 + c1), 1e-9);
+}
+
+TEST(ImageMetrics, OnlyCoveredPixelsCountTowardsPsnr) {
+  // Half the image is sky in both (ignored); the other half differs by 30 in red only: MSE = 900 / 3.
+  ViewFrame truth = flat(8, 8, {50, 50, 50, 255}, 3.0f);
+  ViewFrame impostor = truth;
+  for (std::size_t i = 0; i < 32; ++i) truth.depth[i] = impostor.depth[i] = kSky;
+  for (std::size_t i = 32; i < 64; ++i) impostor.color[i].r = 80;
+  const ImageMetrics m = compare_frames(impostor, truth);
+  EXPECT_NEAR(m.psnr_db, 10 * std::log10(255.0 * 255.0 / 300.0), 1e-9);
+}
+
+TEST(ImageMetrics, ShiftedStripesLowerSsim) {
+  const ViewFrame a = stripes(32, 32, 0), b = stripes(32, 32, 2);  // stripes inverted
+  const ImageMetrics m = compare_frames(b, a);
+  EXPECT_LT(m.ssim, 0.0);  // anti-correlated structure
+  EXPECT_GT(compare_frames(stripes(32, 32, 1), a).ssim, m.ssim);
+}
+
+TEST(ImageMetrics, KnownHoleMaskGivesExactHoleFraction) {
+  // Truth covers 60 of 100 pixels; the impostor misses 15 of those and covers 4 sky pixels.
+  ViewFrame truth = flat(10, 10, {90, 90, 90, 255}, 4.0f);
+  for (std::size_t i = 60; i < 100; ++i) truth.depth[i] = kSky;
+  ViewFrame impostor = truth;
+  for (std::size_t i = 0; i < 15; ++i) impostor.depth[i * 4] = kSky;  // 0, 4, ..., 56: all truth-covered
+  for (std::size_t i = 60; i < 64; ++i) impostor.depth[i] = 4.0f;
+  const ImageMetrics m = compare_frames(impostor, truth);
+  EXPECT_EQ(m.truth_covered_pixels, 60u);
+  EXPECT_DOUBLE_EQ(m.hole_fraction, 15.0 / 60.0);
+  EXPECT_DOUBLE_EQ(m.extra_fraction, 4.0 / 40.0);
+  EXPECT_EQ(m.skin_fraction, 0.0);
+}
+
+TEST(ImageMetrics, SkinsAreNearerSurfacesBeyondTheThreshold) {
+  // Truth at depth 10 everywhere. Impostor: 10 pixels at 9 (10 % nearer: skin),
+  // 10 at 9.6 (4 % nearer: not a skin), 10 at 12 (farther: never a skin), rest exact.
+  ViewFrame truth = flat(10, 10, {90, 90, 90, 255}, 10.0f);
+  ViewFrame impostor = truth;
+  for (std::size_t i = 0; i < 10; ++i) impostor.depth[i] = 9.0f;
+  for (std::size_t i = 10; i < 20; ++i) impostor.depth[i] = 9.6f;
+  for (std::size_t i = 20; i < 30; ++i) impostor.depth[i] = 12.0f;
+  const ImageMetrics m = compare_frames(impostor, truth);
+  EXPECT_DOUBLE_EQ(m.skin_fraction, 0.1);
+  EXPECT_EQ(m.hole_fraction, 0.0);
+  // Relative errors: 10 x 0.1, 10 x 0.04, 10 x 0.2, 70 x 0: median 0.
+  EXPECT_EQ(m.depth_error_median, 0.0);
+  ImageMetricsParams strict;
+  strict.skin_relative_depth = 0.03;
+  EXPECT_DOUBLE_EQ(compare_frames(impostor, truth, strict).skin_fraction, 0.2);
+}
+
+TEST(ImageMetrics, DepthErrorMedianOfEvenCountAveragesTheMiddle) {
+  ViewFrame truth = flat(2, 2, {90, 90, 90, 255}, 10.0f);
+  ViewFrame impostor = truth;
+  impostor.depth = {10.0f, 11.0f, 12.0f, 14.0f};  // relative errors 0, 0.1, 0.2, 0.4
+  EXPECT_NEAR(compare_frames(impostor, truth).depth_error_median, 0.15, 1e-6);
+}
+
+TEST(ImageMetrics, ErrorImageMarksHolesSkinsAndExtras) {
+  ViewFrame truth = flat(4, 1, {90, 90, 90, 255}, 10.0f);
+  truth.depth[3] = kSky;
+  ViewFrame impostor = truth;
+  impostor.depth[0] = kSky;  // hole
+  impostor.depth[1] = 5.0f;  // skin
+  impostor.depth[3] = 7.0f;  // extra surface
+  const std::vector<Rgba8> e = error_image(impostor, truth);
+  ASSERT_EQ(e.size(), 4u);
+  EXPECT_EQ(e[0], (Rgba8{255, 0, 255, 255}));
+  EXPECT_EQ(e[1], (Rgba8{255, 255, 0, 255}));
+  EXPECT_EQ(e[2], (Rgba8{0, 0, 64, 255}));  // exact match: the ramp's start
+  EXPECT_EQ(e[3], (Rgba8{0, 255, 255, 255}));
+}
+
+TEST(ImageMetrics, MismatchedFramesAreRejected) {
+  const ViewFrame a = flat(4, 4, {}, 1.0f), b = flat(4, 5, {}, 1.0f);
+  EXPECT_THROW(compare_frames(a, b), std::invalid_argument);
+  ViewFrame broken = a;
+  broken.depth.pop_back();
+  EXPECT_THROW(compare_frames(broken, a), std::invalid_argument);
+  EXPECT_THROW(error_image(a, b), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace cellbake

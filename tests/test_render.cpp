@@ -1,0 +1,253 @@
+// The headless viewer end to end on a small baked room: the impostor at the
+// sample point matches the ground truth, a disoccluded region behind a pillar
+// shows up as holes, camera paths write numbered images and a CSV, corrupt
+// blobs fall back to ground truth with a warning, near and far clipping are
+// exact complements, and the interactive viewer takes a screenshot under Xvfb.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "pipeline/bake_config.h"
+#include "pipeline/ingest.h"
+#include "runner/bake_runner.h"
+#include "runner/parallel.h"
+#include "stages/encode.h"
+#include "stages/render/chunk_renderer.h"
+#include "stages/render/gl_context.h"
+#include "storage/cell_db.h"
+#include "test_support.h"
+#include "viewer/view_session.h"
+
+namespace cellbake {
+namespace {
+
+// Appends an axis-aligned box (each face an n x n grid of quads) to an OBJ stream.
+void obj_box(std::ostringstream& o, int& next_vertex, Vec3d lo, Vec3d hi, int n) {
+  auto quad_grid = [&](Vec3d origin, Vec3d du, Vec3d dv) {
+    const int base = next_vertex;
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) {
+        const Vec3d p = origin + du * (double(i) / n) + dv * (double(j) / n);
+        o << "v " << p.x << " " << p.y << " " << p.z << " " << (0.3 + 0.2 * (i % 3)) << " " << (0.3 + 0.1 * (j % 4))
+          << " " << (0.2 + 0.3 * ((i + j) % 2)) << "\n";
+        ++next_vertex;
+      }
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const int a = base + j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+        o << "f " << a << " " << b << " " << d << "\nf " << a << " " << d << " " << c << "\n";
+      }
+  };
+  const Vec3d e = hi - lo;
+  quad_grid(lo, {e.x, 0, 0}, {0, e.y, 0});
+  quad_grid({lo.x, lo.y, hi.z}, {e.x, 0, 0}, {0, e.y, 0});
+  quad_grid(lo, {e.x, 0, 0}, {0, 0, e.z});
+  quad_grid({lo.x, hi.y, lo.z}, {e.x, 0, 0}, {0, 0, e.z});
+  quad_grid(lo, {0, e.y, 0}, {0, 0, e.z});
+  quad_grid({hi.x, lo.y, lo.z}, {0, e.y, 0}, {0, 0, e.z});
+}
+
+// A 12 x 12 x 4 m room with one pillar (x 7..8, y 5..7) and two 2 m view
+// cells centred at (2, 6, 1.6) and (4, 6, 1.6), baked with 64-pixel PNG faces.
+struct BakedRoom {
+  test::TempDir dir;
+  std::filesystem::path db;
+  BakedRoom() {
+    std::ostringstream o;
+    int next = 1;
+    obj_box(o, next, {0, 0, 0}, {12, 12, 4}, 8);
+    obj_box(o, next, {7, 5, 0}, {8, 7, 4}, 4);
+    test::write_text(dir / "room.obj", o.str());
+    IngestParams ip;
+    ip.max_chunk_triangles = 128;
+    ingest_models({dir / "room.obj"}, dir / "room.store.db", ip, tbb_parallel_for());
+    BakeConfig c;
+    c.store = dir / "room.store.db";
+    c.regions = {Box3d{{1, 5, 1.6}, {5, 7, 1.6}}};
+    c.cell_size = 2.0;
+    c.near_budget = 300;
+    c.face_size = 64;
+    c.image_format = "png";
+    c.database = dir / "cells.db";
+    BakeOptions bo;
+    bo.threads = 2;
+    bo.quiet = true;
+    const BakeSummary s = run_bake(c, bo);
+    EXPECT_EQ(s.cells_baked, 2u);
+    db = c.database;
+  }
+};
+
+BakedRoom& room() {
+  static BakedRoom baked;
+  return baked;
+}
+
+ViewRequest request(Vec3d eye, Vec3d look, int size = 96) {
+  ViewRequest r;
+  r.eye = eye;
+  r.look = look;
+  r.width = r.height = size;
+  return r;
+}
+
+DecodedImage read_png(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return decode_image(bytes);
+}
+
+std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+
+TEST(Render, ImpostorAtTheSamplePointMatchesTheTruth) {
+  ViewSession session(room().db);
+  const ViewResult r = session.render(request({2, 6, 1.6}, {12, 6, 1.6}), ViewMode::diff, stderr);
+  EXPECT_EQ(r.cell_id, 1);
+  EXPECT_FALSE(r.fallback);
+  ASSERT_TRUE(r.metrics);
+  const ImageMetrics& m = *r.metrics;
+  EXPECT_GT(m.truth_covered_pixels, 96u * 96u * 9 / 10);
+  EXPECT_LT(m.hole_fraction, 0.01) << m.hole_fraction;
+  EXPECT_LT(m.skin_fraction, 0.01) << m.skin_fraction;
+  EXPECT_LT(m.depth_error_median, 0.01) << m.depth_error_median;
+  EXPECT_GT(m.psnr_db, 22.0) << m.psnr_db;
+  EXPECT_GT(m.ssim, 0.5) << m.ssim;
+  EXPECT_GT(r.triangles_impostor, 0u);
+  EXPECT_GT(r.triangles_truth, 0u);
+}
+
+TEST(Render, MovingBehindThePillarOpensHoles) {
+  ViewSession session(room().db);
+  ViewRequest r = request({2, 2.5, 1.6}, {12, 6, 1.6});
+  r.cell = 1;  // keep cell 1's sample at (2, 6, 1.6): the wall behind the pillar was hidden from it
+  const ViewResult moved = session.render(r, ViewMode::diff, stderr);
+  ASSERT_TRUE(moved.metrics);
+  EXPECT_GT(moved.metrics->hole_fraction, 0.02) << moved.metrics->hole_fraction;
+  const ViewResult home = session.render(request({2, 6, 1.6}, {12, 6, 1.6}), ViewMode::diff, stderr);
+  EXPECT_GT(moved.metrics->hole_fraction, 5 * home.metrics->hole_fraction + 0.01);
+}
+
+TEST(Render, NearestCellIsUsedOutsideEveryCell) {
+  ViewSession session(room().db);
+  EXPECT_EQ(session.cells().cells().size(), 2u);
+  EXPECT_EQ(session.cells().nearest({4.2, 6, 1.6})->id, 2);
+  EXPECT_EQ(session.cells().nearest({9, 6.5, 1.0})->id, 2);  // outside both: cell 2 is nearer
+  EXPECT_EQ(session.cells().containing({9, 6.5, 1.0}), nullptr);
+}
+
+TEST(Render, NearAndFarClipsAreComplements) {
+  // One chunk: a wall quad at x = 5 spanning y, z in [-2, 2]; a box around part of it.
+  auto chunk = std::make_shared<Chunk>();
+  chunk->id = 1;
+  chunk->positions = {{5, -2, -2}, {5, 2, -2}, {5, 2, 2}, {5, -2, 2}};
+  chunk->colors.assign(4, Rgba8{200, 100, 50, 255});
+  chunk->indices = {0, 1, 2, 0, 2, 3};
+  const std::vector<std::shared_ptr<const Chunk>> chunks = {chunk};
+  ChunkRenderer renderer(create_gl_context(GlBackend::osmesa, 1, 1));
+  RenderCamera cam;
+  cam.forward = {1, 0, 0};
+  cam.right = {0, -1, 0};
+  cam.up = {0, 0, 1};
+  const Box3d box{{4, -1, -0.5}, {6, 0.7, 1.5}};
+  std::vector<Rgba8> color;
+  std::vector<float> all, inside, outside;
+  const auto render = [&](const Box3d& b, BoxClip clip, std::vector<float>& depth) {
+    renderer.begin_frame(64, 64);
+    renderer.draw(cam, b, chunks, clip);
+    renderer.read_frame(color, depth);
+  };
+  render(Box3d{}, BoxClip::discard_inside, all);
+  render(box, BoxClip::keep_inside, inside);
+  render(box, BoxClip::discard_inside, outside);
+  int kept_inside = 0;
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    ASSERT_TRUE(std::isfinite(all[i]));
+    EXPECT_NE(std::isfinite(inside[i]), std::isfinite(outside[i])) << "pixel " << i;
+    kept_inside += std::isfinite(inside[i]);
+  }
+  // The box covers y in [-1, 0.7], z in [-0.5, 1.5] of the 4 x 4 wall: 1.7 * 2 / 16 of the pixels.
+  EXPECT_NEAR(kept_inside / double(all.size()), 1.7 * 2.0 / 16.0, 0.02);
+  render(Box3d{}, BoxClip::keep_inside, inside);  // an empty box keeps nothing
+  for (float d : inside) EXPECT_FALSE(std::isfinite(d));
+}
+
+TEST(Render, CommandWritesImagesAndJsonMetrics) {
+  test::TempDir dir;
+  const auto out = dir / "diff.png";
+  const auto r = test::run_cellbake("render " + q(room().db) +
+                                    " --eye 2,6,1.6 --look 12,6,1.6 --size 64x48 --mode diff --json --out " + q(out));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output.substr(r.output.find('{')));
+  for (const char* key : {"psnr_db", "ssim", "hole_fraction", "skin_fraction", "depth_error_median",
+                          "triangles_impostor", "triangles_truth", "ms_impostor", "ms_truth", "cell_id"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["cell_id"], 1);
+  const DecodedImage image = read_png(out);
+  EXPECT_EQ(image.width, 64);
+  EXPECT_EQ(image.height, 48);
+}
+
+TEST(Render, PathWritesNumberedImagesAndCsv) {
+  test::TempDir dir;
+  test::write_text(dir / "path.txt", "# eye, look\n2 6 1.6 12 6 1.6\n3 6 1.6 12 8 1.6\n\n4 6 1.6 0 6 1.6\n");
+  const auto r = test::run_cellbake("render " + q(room().db) + " --path " + q(dir / "path.txt") +
+                                    " --size 48x48 --out " + q(dir / "frame.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* name : {"frame_0000.png", "frame_0001.png", "frame_0002.png"})
+    EXPECT_EQ(read_png(dir / name).width, 48) << name;
+  EXPECT_FALSE(std::filesystem::exists(dir / "frame_0003.png"));
+  std::ifstream csv(dir / "frame.csv");
+  std::string line;
+  int lines = 0;
+  std::getline(csv, line);
+  EXPECT_EQ(line.rfind("frame,image,cell_id,fallback,", 0), 0u) << line;
+  while (std::getline(csv, line)) ++lines;
+  EXPECT_EQ(lines, 3);
+}
+
+TEST(Render, CorruptBlobsFallBackToGroundTruthWithAWarning) {
+  test::TempDir dir;
+  const auto db = dir / "cells.db";
+  std::filesystem::copy_file(room().db, db);
+  const std::string sql = "sqlite3 " + q(db) +
+                          " \"UPDATE faces SET mesh = x'0102' WHERE cell_id = 1;"
+                          " UPDATE faces SET image = substr(image, 1, 40) WHERE cell_id = 2\"";
+  ASSERT_EQ(std::system(sql.c_str()), 0);
+  for (const char* eye : {"2,6,1.6", "4,6,1.6"}) {
+    const std::string view = " --eye " + std::string(eye) + " --look 12,6,1.6 --size 48x48 ";
+    const auto impostor = test::run_cellbake("render " + q(db) + view + "--json --out " + q(dir / "i.png"));
+    ASSERT_EQ(impostor.exit_code, 0) << impostor.output;
+    EXPECT_NE(impostor.output.find("warning: cell"), std::string::npos) << impostor.output;
+    EXPECT_NE(impostor.output.find("\"fallback\": true"), std::string::npos) << impostor.output;
+    const auto truth = test::run_cellbake("render " + q(db) + view + "--mode truth --out " + q(dir / "t.png"));
+    ASSERT_EQ(truth.exit_code, 0) << truth.output;
+    EXPECT_EQ(read_png(dir / "i.png").pixels, read_png(dir / "t.png").pixels) << eye;
+  }
+}
+
+TEST(Render, InteractiveViewerTakesAScreenshotUnderXvfb) {
+  if (std::system("command -v xvfb-run > /dev/null 2>&1") != 0) GTEST_SKIP() << "xvfb-run is not installed";
+  test::TempDir dir;
+  const auto shot = dir / "shot.png";
+  const std::string cmd = "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(CELLBAKE_BINARY) + " view " +
+                          q(room().db) + " --frames 5 --size 320x240 --screenshot " + q(shot) + " > " +
+                          q(dir / "log.txt") + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  std::ifstream log(dir / "log.txt");
+  const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  ASSERT_EQ(status, 0) << text;
+  const DecodedImage image = read_png(shot);
+  EXPECT_EQ(image.width, 320);
+  EXPECT_EQ(image.height, 240);
+  int lit = 0;
+  for (const Rgba8& p : image.pixels) lit += (p.r + p.g + p.b) > 30;
+  EXPECT_GT(lit, 320 * 240 / 4);  // the room fills most of the view
+}
+
+}  // namespace
+}  // namespace cellbake

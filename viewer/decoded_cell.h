@@ -1,0 +1,38 @@
+// A view cell ready to draw: its cull box and near-field chunk list, and every
+// face of every panoramic sample decoded (textured depth mesh + colour image).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "stages/cube_map.h"
+#include "stages/encode.h"
+#include "stages/geometry.h"
+#include "storage/cell_db.h"
+
+namespace cellbake {
+
+struct DecodedFace {
+  int sample = 0, face = 0;
+  Vec3d eye;  // the sample's eye; mesh positions are relative to it
+  FaceMesh mesh;
+  DecodedImage image;
+};
+
+struct DecodedCell {
+  std::int64_t id = 0;
+  Box3d bounds;
+  Box3d cull_box;                     // cube of cull_half_size around the cell centre
+  std::vector<std::int64_t> near_ids;  // chunks of the near field, in stored order
+  std::uint64_t near_triangles = 0;    // triangles of those chunks inside the cull box
+  std::uint64_t far_triangles = 0;     // sum over the decoded faces
+  std::vector<DecodedFace> faces;
+  std::size_t bytes() const;  // decoded size in host memory
+};
+
+// Decodes `row` (loaded with blobs). Throws std::runtime_error naming the cell,
+// sample and face when the cell is not "done", a face index is out of range,
+// or a blob is corrupt or truncated (the validated decoders of stages/encode.h).
+DecodedCell decode_cell(const CellRow& row);
+
+}  // namespace cellbake

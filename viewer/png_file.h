@@ -1,0 +1,17 @@
+// PNG output of rendered frames through OpenImageIO.
+#pragma once
+
+#include <filesystem>
+#include <vector>
+
+#include "stages/geometry.h"
+
+namespace cellbake {
+
+// Writes a row-major RGBA8 image (row 0 at the top) as a PNG file, with alpha
+// when `keep_alpha`, else RGB. Throws std::invalid_argument for a mis-sized
+// image and std::runtime_error naming the file when OpenImageIO fails.
+void write_png(const std::filesystem::path& file, int width, int height, const std::vector<Rgba8>& pixels,
+               bool keep_alpha = false);
+
+}  // namespace cellbake

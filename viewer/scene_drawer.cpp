@@ -1,0 +1,134 @@
+#include "viewer/scene_drawer.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "stages/render/gl_functions.h"
+#include "viewer/shared_gl_context.h"
+#include "viewer/view_camera.h"
+
+namespace cellbake {
+namespace {
+
+double now_ms() {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// A stable, saturated colour per cell id (golden-ratio hue steps).
+void cell_tint(std::int64_t id, float tint[4]) {
+  const double hue = std::fmod(static_cast<double>(id) * 0.61803398875, 1.0) * 6.0;
+  const double x = 1.0 - std::abs(std::fmod(hue, 2.0) - 1.0);
+  const int sector = static_cast<int>(hue);
+  const double rgb[6][3] = {{1, x, 0}, {x, 1, 0}, {0, 1, x}, {0, x, 1}, {x, 0, 1}, {1, 0, x}};
+  for (int k = 0; k < 3; ++k) tint[k] = static_cast<float>(rgb[sector % 6][k]);
+  tint[3] = 0.4f;
+}
+
+std::unique_ptr<GlFunctions> load_functions(GlContext& context) {
+  context.make_current();
+  return std::make_unique<GlFunctions>(load_gl_functions(context));
+}
+
+}  // namespace
+
+SceneDrawer::SceneDrawer(std::shared_ptr<GlContext> context, const ChunkSource& source, SceneDrawerParams params)
+    : context_(std::move(context)),
+      source_(source),
+      params_(params),
+      chunks_(std::make_unique<SharedGlContext>(context_), ChunkRendererParams{params.chunk_cache_bytes}),
+      tdm_(context_),
+      gl_(load_functions(*context_)) {}
+
+SceneDrawer::~SceneDrawer() = default;
+
+void SceneDrawer::prepare(const DecodedCell& cell) {
+  if (auto it = cells_.find(cell.id); it != cells_.end()) {
+    lru_.splice(lru_.begin(), lru_, it->second.recency);
+    return;
+  }
+  ResidentCell resident;
+  try {
+    for (const DecodedFace& f : cell.faces) {
+      const std::size_t before = tdm_.gpu_bytes();
+      resident.handles.push_back(tdm_.upload(f.mesh, f.image, f.eye));
+      resident.bytes += tdm_.gpu_bytes() - before;
+    }
+  } catch (...) {
+    for (std::uint64_t h : resident.handles) tdm_.erase(h);
+    throw;
+  }
+  lru_.push_front(cell.id);
+  resident.recency = lru_.begin();
+  resident_bytes_ += resident.bytes;
+  cells_.emplace(cell.id, std::move(resident));
+  while (resident_bytes_ > params_.tdm_cache_bytes && lru_.size() > 1) {
+    const std::int64_t victim = lru_.back();
+    lru_.pop_back();
+    auto it = cells_.find(victim);
+    for (std::uint64_t h : it->second.handles) tdm_.erase(h);
+    resident_bytes_ -= it->second.bytes;
+    cells_.erase(it);
+  }
+}
+
+void SceneDrawer::set_wireframe(bool on) {
+  context_->make_current();
+  gl_->PolygonMode(GL_FRONT_AND_BACK, on ? GL_LINE : GL_FILL);
+}
+
+SceneFrameStats SceneDrawer::finish(SceneFrameStats stats, const ChunkRendererStats& before, double start_ms,
+                                    int width, int height, ViewFrame& out) {
+  out.width = width;
+  out.height = height;
+  chunks_.read_frame(out.color, out.depth);
+  const ChunkRendererStats after = chunks_.stats();
+  stats.chunk_triangles = after.triangles_drawn - before.triangles_drawn;
+  stats.chunks_drawn = after.chunks_drawn - before.chunks_drawn;
+  stats.milliseconds = now_ms() - start_ms;
+  return stats;
+}
+
+SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width, int height, const DecodedCell& cell,
+                                           const SceneDrawOptions& options, ViewFrame& out) {
+  const double start = now_ms();
+  const ChunkRendererStats before = chunks_.stats();
+  if (options.far_field) prepare(cell);
+  chunks_.begin_frame(width, height);
+  set_wireframe(options.wireframe);
+  SceneFrameStats stats;
+  try {
+    if (options.near_field)
+      chunks_.draw(camera, cell.cull_box, cell.near_ids, [this](std::int64_t id) { return source_.load(id); },
+                   BoxClip::keep_inside);
+    if (options.far_field) {
+      TdmDrawOptions tdm_options;
+      tdm_options.wireframe = options.wireframe;
+      if (options.tint_by_cell) cell_tint(cell.id, tdm_options.tint);
+      stats.far_triangles = tdm_.draw(camera, chunks_.reversed_z(), cells_.at(cell.id).handles, tdm_options);
+    }
+  } catch (...) {
+    set_wireframe(false);
+    throw;
+  }
+  set_wireframe(false);
+  return finish(stats, before, start, width, height, out);
+}
+
+SceneFrameStats SceneDrawer::draw_truth(const RenderCamera& camera, int width, int height,
+                                        const SceneDrawOptions& options, ViewFrame& out) {
+  const double start = now_ms();
+  const ChunkRendererStats before = chunks_.stats();
+  const std::vector<std::int64_t> ids = chunks_in_view(camera, source_);
+  chunks_.begin_frame(width, height);
+  set_wireframe(options.wireframe);
+  try {
+    chunks_.draw(camera, Box3d{}, ids, [this](std::int64_t id) { return source_.load(id); });
+  } catch (...) {
+    set_wireframe(false);
+    throw;
+  }
+  set_wireframe(false);
+  return finish({}, before, start, width, height, out);
+}
+
+}  // namespace cellbake

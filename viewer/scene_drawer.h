@@ -1,0 +1,90 @@
+// The drawing shared by `cellbake render` and the interactive viewer: a view
+// cell's impostor (near field = its chunk list drawn with only fragments
+// strictly inside the cull box kept, plus its textured depth meshes,
+// depth-tested together; Wilson 2002, ch. 2 and 7) and the ground truth (every
+// chunk in the view frustum, nothing discarded), on one GL context.
+#pragma once
+
+#include <cstdint>
+#include <list>
+#include <memory>
+#include <unordered_map>
+#include <vector>
+
+#include "stages/chunk_source.h"
+#include "stages/render/chunk_renderer.h"
+#include "stages/render/gl_context.h"
+#include "viewer/decoded_cell.h"
+#include "viewer/image_metrics.h"
+#include "viewer/tdm_renderer.h"
+
+namespace cellbake {
+
+struct GlFunctions;
+
+struct SceneDrawerParams {
+  std::size_t chunk_cache_bytes = std::size_t{512} << 20;  // GPU chunk buffers (ChunkRenderer's LRU cap)
+  std::size_t tdm_cache_bytes = std::size_t{512} << 20;    // GPU textured depth meshes, LRU by cell
+};
+
+struct SceneDrawOptions {
+  bool near_field = true;
+  bool far_field = true;
+  bool wireframe = false;
+  bool tint_by_cell = false;  // mix a colour derived from the cell id into its far field
+};
+
+struct SceneFrameStats {
+  std::uint64_t chunk_triangles = 0;  // chunk triangles submitted (whole chunks, before discard)
+  std::uint64_t far_triangles = 0;    // textured depth mesh triangles submitted
+  std::uint64_t chunks_drawn = 0;
+  double milliseconds = 0;  // begin_frame to read-back, wall clock
+};
+
+class SceneDrawer {
+ public:
+  // Draws `source` (which must outlive the drawer) with `context` (shared with
+  // nothing else). Throws std::runtime_error when the context cannot draw.
+  SceneDrawer(std::shared_ptr<GlContext> context, const ChunkSource& source, SceneDrawerParams params = {});
+  ~SceneDrawer();
+
+  // Uploads the cell's faces unless already resident; evicts least recently
+  // used cells beyond the cap (never `cell`).
+  void prepare(const DecodedCell& cell);
+  bool is_prepared(std::int64_t cell_id) const { return cells_.contains(cell_id); }
+
+  // Renders the impostor of `cell` (prepared on demand) into a width x height
+  // frame and reads it back into `out` (colour + planar depth).
+  SceneFrameStats draw_impostor(const RenderCamera& camera, int width, int height, const DecodedCell& cell,
+                                const SceneDrawOptions& options, ViewFrame& out);
+  // Renders every chunk in the camera's frustum, nothing discarded.
+  SceneFrameStats draw_truth(const RenderCamera& camera, int width, int height, const SceneDrawOptions& options,
+                             ViewFrame& out);
+
+  std::size_t tdm_gpu_bytes() const { return tdm_.gpu_bytes(); }
+  ChunkRendererStats chunk_stats() const { return chunks_.stats(); }
+  // Leaves the calling thread without a current context.
+  void release_context() { context_->release_current(); }
+
+ private:
+  struct ResidentCell {
+    std::vector<std::uint64_t> handles;
+    std::size_t bytes = 0;
+    std::list<std::int64_t>::iterator recency;
+  };
+  void set_wireframe(bool on);
+  SceneFrameStats finish(SceneFrameStats stats, const ChunkRendererStats& before, double start_ms, int width,
+                         int height, ViewFrame& out);
+
+  std::shared_ptr<GlContext> context_;
+  const ChunkSource& source_;
+  SceneDrawerParams params_;
+  ChunkRenderer chunks_;
+  TdmRenderer tdm_;
+  std::unique_ptr<GlFunctions> gl_;
+  std::unordered_map<std::int64_t, ResidentCell> cells_;
+  std::list<std::int64_t> lru_;
+  std::size_t resident_bytes_ = 0;
+};
+
+}  // namespace cellbake

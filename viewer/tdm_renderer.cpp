@@ -1,0 +1,225 @@
+// Textured depth meshes (Wilson 2002, ch. 4–5) drawn beside a ChunkRenderer's
+// chunks: positions relative to their sample's eye are moved to camera-relative
+// coordinates by one double-precision offset per mesh (as chunks are), the
+// fragment shader writes the texture colour and the exact planar view depth.
+#include "viewer/tdm_renderer.h"
+
+#include <array>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "stages/render/gl_functions.h"
+
+namespace cellbake {
+namespace {
+
+constexpr const char* kVertexShader = R"(#version 330 core
+layout(location = 0) in vec3 a_position;  // relative to the sample's eye
+layout(location = 1) in vec2 a_uv;
+uniform vec3 u_offset;                    // sample eye - camera eye, world axes
+uniform mat4 u_view_projection;
+uniform vec3 u_forward;
+out vec2 v_uv;
+out float v_view_depth;
+void main() {
+  vec3 relative = a_position + u_offset;
+  v_uv = a_uv;
+  v_view_depth = dot(relative, u_forward);
+  gl_Position = u_view_projection * vec4(relative, 1.0);
+}
+)";
+
+constexpr const char* kFragmentShader = R"(#version 330 core
+in vec2 v_uv;
+in float v_view_depth;
+uniform sampler2D u_image;
+uniform vec4 u_tint;
+layout(location = 0) out vec4 o_color;
+layout(location = 1) out float o_view_depth;
+void main() {
+  vec4 c = texture(u_image, v_uv);
+  o_color = vec4(mix(c.rgb, u_tint.rgb, u_tint.a), 1.0);
+  o_view_depth = v_view_depth;
+}
+)";
+
+struct Vertex {
+  float x, y, z, u, v;
+};
+
+GLuint compile(const GlFunctions& gl, GLenum type, const char* source) {
+  const GLuint shader = gl.CreateShader(type);
+  gl.ShaderSource(shader, 1, &source, nullptr);
+  gl.CompileShader(shader);
+  GLint ok = GL_FALSE;
+  gl.GetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    std::array<char, 4096> log{};
+    gl.GetShaderInfoLog(shader, static_cast<GLsizei>(log.size()), nullptr, log.data());
+    gl.DeleteShader(shader);
+    throw std::runtime_error(std::string("tdm_renderer: shader failed to compile: ") + log.data());
+  }
+  return shader;
+}
+
+std::unique_ptr<GlFunctions> load_for(GlContext* context) {
+  if (!context) throw std::invalid_argument("tdm_renderer: null GL context");
+  context->make_current();
+  return std::make_unique<GlFunctions>(load_gl_functions(*context));
+}
+
+}  // namespace
+
+TdmRenderer::TdmRenderer(std::shared_ptr<GlContext> context)
+    : context_(std::move(context)), gl_(load_for(context_.get())) {
+  const GlFunctions& gl = *gl_;
+  const GLuint vs = compile(gl, GL_VERTEX_SHADER, kVertexShader);
+  GLuint fs = 0;
+  try {
+    fs = compile(gl, GL_FRAGMENT_SHADER, kFragmentShader);
+  } catch (...) {
+    gl.DeleteShader(vs);
+    throw;
+  }
+  program_ = gl.CreateProgram();
+  gl.AttachShader(program_, vs);
+  gl.AttachShader(program_, fs);
+  gl.LinkProgram(program_);
+  gl.DeleteShader(vs);
+  gl.DeleteShader(fs);
+  GLint ok = GL_FALSE;
+  gl.GetProgramiv(program_, GL_LINK_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    std::array<char, 4096> log{};
+    gl.GetProgramInfoLog(program_, static_cast<GLsizei>(log.size()), nullptr, log.data());
+    gl.DeleteProgram(program_);
+    throw std::runtime_error(std::string("tdm_renderer: shader program failed to link: ") + log.data());
+  }
+  u_offset_ = gl.GetUniformLocation(program_, "u_offset");
+  u_view_projection_ = gl.GetUniformLocation(program_, "u_view_projection");
+  u_forward_ = gl.GetUniformLocation(program_, "u_forward");
+  u_image_ = gl.GetUniformLocation(program_, "u_image");
+  u_tint_ = gl.GetUniformLocation(program_, "u_tint");
+  check_gl_error(gl, "tdm_renderer: build program");
+}
+
+TdmRenderer::~TdmRenderer() {
+  try {
+    context_->make_current();
+    for (auto& [handle, u] : uploads_) free(u);
+    if (program_) gl_->DeleteProgram(program_);
+  } catch (...) {
+    // The context goes away with its last handle; its objects go with it.
+  }
+}
+
+void TdmRenderer::free(Upload& u) {
+  gl_->DeleteVertexArrays(1, &u.vertex_array);
+  gl_->DeleteBuffers(1, &u.vertex_buffer);
+  gl_->DeleteBuffers(1, &u.index_buffer);
+  gl_->DeleteTextures(1, &u.texture);
+  bytes_ -= u.bytes;
+}
+
+std::uint64_t TdmRenderer::upload(const FaceMesh& mesh, const DecodedImage& image, const Vec3d& sample_eye) {
+  const std::size_t n = mesh.positions.size();
+  if (image.width < 1 || image.height < 1 ||
+      image.pixels.size() != static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height))
+    throw std::invalid_argument("tdm_renderer: face image is empty or mis-sized");
+  if (mesh.uvs.size() != n) throw std::invalid_argument("tdm_renderer: face mesh uvs are not one per position");
+  if (mesh.indices.size() % 3 != 0) throw std::runtime_error("tdm_renderer: index count is not a multiple of 3");
+  for (std::uint32_t i : mesh.indices)
+    if (i >= n) throw std::runtime_error("tdm_renderer: index " + std::to_string(i) + " out of range");
+  std::vector<Vertex> vertices(n);
+  for (std::size_t i = 0; i < n; ++i)
+    vertices[i] = {mesh.positions[i].x, mesh.positions[i].y, mesh.positions[i].z, mesh.uvs[i].u, mesh.uvs[i].v};
+
+  context_->make_current();
+  const GlFunctions& gl = *gl_;
+  Upload u;
+  u.eye = sample_eye;
+  u.index_count = static_cast<int>(mesh.indices.size());
+  u.bytes = vertices.size() * sizeof(Vertex) + mesh.indices.size() * 4 + image.pixels.size() * 4;
+  gl.GenVertexArrays(1, &u.vertex_array);
+  gl.BindVertexArray(u.vertex_array);
+  gl.GenBuffers(1, &u.vertex_buffer);
+  gl.BindBuffer(GL_ARRAY_BUFFER, u.vertex_buffer);
+  gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(Vertex)), vertices.data(),
+                GL_STATIC_DRAW);
+  gl.EnableVertexAttribArray(0);
+  gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex), reinterpret_cast<const void*>(0));
+  gl.EnableVertexAttribArray(1);
+  gl.VertexAttribPointer(1, 2, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                         reinterpret_cast<const void*>(offsetof(Vertex, u)));
+  gl.GenBuffers(1, &u.index_buffer);
+  gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, u.index_buffer);
+  gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(mesh.indices.size() * 4), mesh.indices.data(),
+                GL_STATIC_DRAW);
+  gl.BindVertexArray(0);
+  // Row 0 of the image (the top, v = 0) becomes texture row t = 0, so v maps to t unchanged.
+  gl.GenTextures(1, &u.texture);
+  gl.ActiveTexture(GL_TEXTURE0);
+  gl.BindTexture(GL_TEXTURE_2D, u.texture);
+  gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, image.width, image.height, 0, GL_RGBA, GL_UNSIGNED_BYTE,
+                image.pixels.data());
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+  gl.BindTexture(GL_TEXTURE_2D, 0);
+  try {
+    check_gl_error(gl, "tdm_renderer: upload");
+  } catch (...) {
+    free(u);
+    throw;
+  }
+  const std::uint64_t handle = next_handle_++;
+  uploads_[handle] = u;
+  bytes_ += u.bytes;
+  return handle;
+}
+
+void TdmRenderer::erase(std::uint64_t handle) {
+  auto it = uploads_.find(handle);
+  if (it == uploads_.end()) return;
+  context_->make_current();
+  free(it->second);
+  uploads_.erase(it);
+}
+
+std::uint64_t TdmRenderer::draw(const RenderCamera& camera, bool reversed_z, std::span<const std::uint64_t> handles,
+                                const TdmDrawOptions& options) {
+  for (std::uint64_t handle : handles)
+    if (!uploads_.contains(handle))
+      throw std::out_of_range("tdm_renderer: unknown upload handle " + std::to_string(handle));
+  const std::array<float, 16> matrix = camera_view_projection(camera, reversed_z);
+  context_->make_current();
+  const GlFunctions& gl = *gl_;
+  gl.UseProgram(program_);
+  gl.UniformMatrix4fv(u_view_projection_, 1, GL_FALSE, matrix.data());
+  gl.Uniform3f(u_forward_, static_cast<float>(camera.forward.x), static_cast<float>(camera.forward.y),
+               static_cast<float>(camera.forward.z));
+  gl.Uniform4f(u_tint_, options.tint[0], options.tint[1], options.tint[2], options.tint[3]);
+  gl.Uniform1i(u_image_, 0);
+  gl.ActiveTexture(GL_TEXTURE0);
+  if (options.wireframe) gl.PolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+  std::uint64_t triangles = 0;
+  for (std::uint64_t handle : handles) {
+    const Upload& u = uploads_.at(handle);
+    const Vec3d offset = u.eye - camera.eye;  // double, then float: camera-relative
+    gl.Uniform3f(u_offset_, static_cast<float>(offset.x), static_cast<float>(offset.y), static_cast<float>(offset.z));
+    gl.BindTexture(GL_TEXTURE_2D, u.texture);
+    gl.BindVertexArray(u.vertex_array);
+    if (u.index_count > 0) gl.DrawElements(GL_TRIANGLES, u.index_count, GL_UNSIGNED_INT, nullptr);
+    triangles += static_cast<std::uint64_t>(u.index_count / 3);
+  }
+  if (options.wireframe) gl.PolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+  gl.BindVertexArray(0);
+  gl.BindTexture(GL_TEXTURE_2D, 0);
+  check_gl_error(gl, "tdm_renderer: draw");
+  return triangles;
+}
+
+}  // namespace cellbake

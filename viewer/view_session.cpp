@@ -1,0 +1,105 @@
+#include "viewer/view_session.h"
+
+#include <cstdio>
+#include <stdexcept>
+
+#include "stages/render/gl_context.h"
+#include "viewer/view_camera.h"
+
+namespace cellbake {
+namespace {
+
+std::filesystem::path store_of(const CellDb& db, const std::filesystem::path& override_path) {
+  if (!override_path.empty()) return override_path;
+  const auto store = db.meta("store");
+  if (!store) throw std::runtime_error("view: " + db.path().string() + " has no meta 'store' (not a cell database?)");
+  return *store;
+}
+
+}  // namespace
+
+ViewMode parse_view_mode(const std::string& text) {
+  if (text == "impostor") return ViewMode::impostor;
+  if (text == "truth") return ViewMode::truth;
+  if (text == "diff") return ViewMode::diff;
+  throw std::invalid_argument("view: mode must be impostor, truth or diff, got \"" + text + "\"");
+}
+
+ViewSession::ViewSession(const std::filesystem::path& database, const std::filesystem::path& store_override)
+    : db_(database, CellDb::Mode::read_only),
+      store_(std::make_unique<GeometryStore>(store_of(db_, store_override))),
+      index_(db_),
+      up_(up_axis(db_.meta("up").value_or("z"))),
+      drawer_(std::make_unique<SceneDrawer>(std::shared_ptr<GlContext>(create_gl_context(GlBackend::osmesa, 1, 1)),
+                                            *store_)) {}
+
+ViewSession::~ViewSession() = default;
+
+const DecodedCell* ViewSession::load_cell(std::int64_t id, std::string& reason, std::FILE* warn) {
+  if (auto it = decoded_.find(id); it != decoded_.end()) return it->second.get();
+  if (auto it = failures_.find(id); it != failures_.end()) {
+    reason = it->second;
+    return nullptr;
+  }
+  try {
+    const auto row = db_.get_cell(id, true);
+    if (!row) throw std::runtime_error("cell " + std::to_string(id) + " is not in the database");
+    auto cell = std::make_shared<const DecodedCell>(decode_cell(*row));
+    return (decoded_[id] = std::move(cell)).get();
+  } catch (const std::exception& e) {
+    reason = e.what();
+    failures_[id] = reason;
+    if (warn) std::fprintf(warn, "warning: %s; drawing ground truth there\n", reason.c_str());
+    return nullptr;
+  }
+}
+
+ViewResult ViewSession::render(const ViewRequest& r, ViewMode mode, std::FILE* warn) {
+  const RenderCamera camera = look_at_camera(r.eye, r.look, up_, r.fov_y_deg, r.width, r.height, r.near_plane);
+  ViewResult result;
+  const CellEntry* entry = r.cell ? index_.find(*r.cell) : index_.nearest(r.eye);
+  if (r.cell && !entry) throw std::invalid_argument("view: cell " + std::to_string(*r.cell) + " is not in the database");
+  const SceneDrawOptions options;
+  const bool want_impostor = mode != ViewMode::truth, want_truth = mode != ViewMode::impostor;
+
+  if (want_impostor) {
+    const DecodedCell* cell = nullptr;
+    if (entry) {
+      result.cell_id = entry->id;
+      cell = load_cell(entry->id, result.fallback_reason, warn);
+    } else {
+      result.fallback_reason = "the database has no cells";
+    }
+    if (cell) {
+      try {
+        ViewFrame frame;
+        drawer_->draw_impostor(camera, r.width, r.height, *cell, options, frame);  // warm-up: uploads
+        result.impostor_stats = drawer_->draw_impostor(camera, r.width, r.height, *cell, options, frame);
+        result.impostor = std::move(frame);
+        result.triangles_impostor = cell->near_triangles + result.impostor_stats.far_triangles;
+      } catch (const std::exception& e) {
+        result.fallback_reason = "cell " + std::to_string(cell->id) + ": " + e.what();
+        failures_[cell->id] = result.fallback_reason;
+        decoded_.erase(cell->id);
+        if (warn) std::fprintf(warn, "warning: %s; drawing ground truth there\n", result.fallback_reason.c_str());
+      }
+    }
+    result.fallback = !result.impostor.has_value();
+  }
+  if (want_truth || result.fallback) {
+    ViewFrame frame;
+    drawer_->draw_truth(camera, r.width, r.height, options, frame);  // warm-up: uploads
+    result.truth_stats = drawer_->draw_truth(camera, r.width, r.height, options, frame);
+    result.triangles_truth = result.truth_stats.chunk_triangles;
+    result.truth = std::move(frame);
+  }
+  if (result.fallback) {
+    result.impostor = result.truth;
+    result.impostor_stats = result.truth_stats;
+    result.triangles_impostor = result.triangles_truth;
+  }
+  if (mode == ViewMode::diff) result.metrics = compare_frames(*result.impostor, *result.truth);
+  return result;
+}
+
+}  // namespace cellbake
