@@ -25,29 +25,40 @@ void BM_GenerateInMemory(benchmark::State& state) {
   const SceneParams p = params(state);
   std::uint64_t triangles = 0;
   for (auto _ : state) {
-    const SceneSummary s = generate_scene(p, [](const TriangleMesh& part) { benchmark::DoNotOptimize(part.indices.data()); });
+    const SceneSummary s =
+        generate_scene(p, [](const TriangleMesh& part) { benchmark::DoNotOptimize(part.indices.data()); });
     triangles += s.triangles;
   }
-  state.counters["triangles/s"] = benchmark::Counter(static_cast<double>(triangles), benchmark::Counter::kIsRate);
+  state.counters["triangles/s"] =
+      benchmark::Counter(static_cast<double>(triangles), benchmark::Counter::kIsRate);
 }
 
 void BM_GeneratePly(benchmark::State& state) {
   const SceneParams p = params(state);
-  const auto out = std::filesystem::temp_directory_path() /
-                   ("cellbake-bench-scene-" + std::to_string(state.range(0)) + "-" + std::to_string(state.range(1)) + ".ply");
+  const auto out =
+      std::filesystem::temp_directory_path() / ("cellbake-bench-scene-" + std::to_string(state.range(0)) +
+                                                "-" + std::to_string(state.range(1)) + ".ply");
   std::uint64_t triangles = 0, bytes = 0;
   for (auto _ : state) {
     triangles += generate_scene_to_ply(p, out).triangles;
     bytes += std::filesystem::file_size(out);
   }
   std::filesystem::remove(out);
-  state.counters["triangles/s"] = benchmark::Counter(static_cast<double>(triangles), benchmark::Counter::kIsRate);
+  state.counters["triangles/s"] =
+      benchmark::Counter(static_cast<double>(triangles), benchmark::Counter::kIsRate);
   state.counters["bytes/s"] = benchmark::Counter(static_cast<double>(bytes), benchmark::Counter::kIsRate);
 }
 
 // kind: 0 plant, 1 house, 2 city; sizes: 2 M and the thesis power plant's 12.7 M.
-BENCHMARK(BM_GenerateInMemory)->ArgsProduct({{0, 1, 2}, {2'000'000, 12'700'000}})->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_GeneratePly)->ArgsProduct({{0, 1, 2}, {2'000'000, 12'700'000}})->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(2);
+BENCHMARK(BM_GenerateInMemory)
+    ->ArgsProduct({{0, 1, 2}, {2'000'000, 12'700'000}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_GeneratePly)
+    ->ArgsProduct({{0, 1, 2}, {2'000'000, 12'700'000}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(2);
 
 }  // namespace
 }  // namespace cellbake

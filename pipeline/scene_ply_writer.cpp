@@ -26,12 +26,14 @@ std::string ply_header(std::uint64_t vertices, std::uint64_t faces, const SceneP
   static constexpr const char* kKinds[] = {"plant", "house", "city"};
   return "ply\n"
          "format binary_little_endian 1.0\n"
-         "comment cellbake generate: kind " + std::string(kKinds[static_cast<int>(params.kind)]) + " seed " +
-         std::to_string(params.seed) + " target_triangles " + std::to_string(params.target_triangles) + "\n" +
-         "element vertex " + padded(vertices) + "\n" +
+         "comment cellbake generate: kind " +
+         std::string(kKinds[static_cast<int>(params.kind)]) + " seed " + std::to_string(params.seed) +
+         " target_triangles " + std::to_string(params.target_triangles) + "\n" + "element vertex " +
+         padded(vertices) + "\n" +
          "property float x\nproperty float y\nproperty float z\n"
          "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n"
-         "element face " + padded(faces) + "\n" +
+         "element face " +
+         padded(faces) + "\n" +
          "property list uchar uint vertex_indices\n"
          "end_header\n";
 }
@@ -62,7 +64,8 @@ class BinaryFile {
     if (bytes && std::fwrite(data, 1, bytes, file_) != bytes) fail("cannot write");
   }
   void flush() {
-    if (!buffer_.empty() && std::fwrite(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size()) fail("cannot write");
+    if (!buffer_.empty() && std::fwrite(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size())
+      fail("cannot write");
     buffer_.clear();
   }
   void seek(long offset) {
@@ -169,7 +172,8 @@ SceneSummary generate_scene_to_ply(const SceneParams& params, const std::filesys
 
   std::error_code ec;
   std::filesystem::rename(tmp, out, ec);
-  if (ec) throw std::runtime_error(out.string() + ": cannot rename " + tmp.string() + " onto it: " + ec.message());
+  if (ec)
+    throw std::runtime_error(out.string() + ": cannot rename " + tmp.string() + " onto it: " + ec.message());
   return summary;
 }
 

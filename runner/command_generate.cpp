@@ -25,9 +25,9 @@ void add_generate_command(CLI::App& app) {
   cmd->add_option("kind", opt->kind, "Scene kind: plant | house | city")
       ->required()
       ->check(CLI::IsMember({"plant", "house", "city"}));
-  cmd->add_option("--triangles,-n", opt->triangles, "Target triangle count (result within ~10 %)")
+  cmd->add_option("--triangles,-n", opt->triangles, "Target triangle count, 100 k to 2 G (result within ~10 %)")
       ->capture_default_str()
-      ->check(CLI::Range(std::uint64_t(1000), std::uint64_t(2'000'000'000)));
+      ->check(CLI::Range(std::uint64_t(100'000), std::uint64_t(2'000'000'000)));
   cmd->add_option("--seed,-s", opt->seed, "Random seed (same seed, same scene)")->capture_default_str();
   cmd->add_option("--out,-o", opt->out, "Output PLY file")->required();
   cmd->add_option("--store", opt->store, "Also ingest the scene into this geometry store");

@@ -37,12 +37,7 @@ void ProgressBar::draw(bool final, const std::string& note) {
     const double left = (total_ - std::min(done_, total_)) / rate;
     std::snprintf(eta, sizeof eta, " ETA %dm%02ds", int(left) / 60, int(left) % 60);
   }
-  char counts[96];
-  if (total_ > 0)
-    std::snprintf(counts, sizeof counts, "%llu/%llu %s", (unsigned long long)done_, (unsigned long long)total_,
-                  unit_.c_str());
-  else
-    std::snprintf(counts, sizeof counts, "%llu %s", (unsigned long long)done_, unit_.c_str());
+  std::string counts = std::to_string(done_) + (total_ > 0 ? "/" + std::to_string(total_) : "") + " " + unit_;
   std::string bar;
   if (tty_ && total_ > 0) {
     const int width = 30;
@@ -50,7 +45,7 @@ void ProgressBar::draw(bool final, const std::string& note) {
     bar = "[" + std::string(filled, '#') + std::string(width - filled, '.') + "] ";
   }
   std::fprintf(stderr, "%s%s: %s%s (%.1f %s/s, %.1fs)%s%s%s%s", tty_ ? "\r\033[K" : "", label_.c_str(), bar.c_str(),
-               counts, rate, unit_.c_str(), elapsed, eta, note.empty() ? "" : " ", note.c_str(),
+               counts.c_str(), rate, unit_.c_str(), elapsed, eta, note.empty() ? "" : " ", note.c_str(),
                (tty_ && !final) ? "" : "\n");
   std::fflush(stderr);
 }

@@ -13,11 +13,18 @@
 // which the simplifier exploits.
 // The vertex is then D * (depth / N): the same arithmetic on the same numbers
 // for every face that shares the point, hence bit-identical positions.
+//
+// Cost: the skin test of every in-face neighbour pair (4 per pixel) is made
+// once per face and cached as flags, with the face's surface points; corners
+// inside a face read the flags, only the 4N corners on a face border gather and
+// test their pixels across faces.
 #include "stages/depth_mesh.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -55,18 +62,74 @@ class CubeLattice {
     }
     angle_limit_ = params.skin_angle_degrees * 3.14159265358979323846 / 180.0;
     jump_limit_ = params.max_relative_depth_jump;
+    if (angle_limit_ < 1.5) {
+      const double tan_limit = std::tan(angle_limit_);
+      tan_low_ = tan_limit * (1 - 1e-9);
+      tan_high_ = tan_limit * (1 + 1e-9);
+    } else {  // near or past a right angle: always take the exact path
+      tan_low_ = -1;
+      tan_high_ = std::numeric_limits<double>::infinity();
+    }
   }
 
   int size() const { return n_; }
   float depth(const PixelRef& p) const { return sample_.faces[p.face].depth[std::size_t(p.j) * n_ + p.i]; }
   bool background(const PixelRef& p) const { return !std::isfinite(depth(p)); }
 
-  // Surface point of a pixel centre relative to the eye.
+  // Surface point of a pixel centre relative to the eye (from the cache when
+  // the pixel is on the cached face: the same bits either way).
   Vec3d point(const PixelRef& p) const {
+    if (p.face == cached_face_) return points_[std::size_t(p.j) * n_ + p.i];
+    return compute_point(p);
+  }
+
+  // Caches the surface points of face f (replacing the previous face's) and
+  // computes face f's skin flags (see skin_flags).
+  void cache_face(int f) {
+    cached_face_ = -1;
+    const std::size_t count = std::size_t(n_) * n_;
+    points_.resize(count);
+    distances_.resize(count);
+    for (int j = 0; j < n_; ++j)
+      for (int i = 0; i < n_; ++i) {
+        const std::size_t k = std::size_t(j) * n_ + i;
+        points_[k] = compute_point({f, i, j});
+        distances_[k] = length(points_[k]);
+      }
+    cached_face_ = f;
+    std::vector<std::uint8_t>& flags = flags_[f];
+    flags.assign(count, 0);
+    const std::vector<float>& depth = sample_.faces[f].depth;
+    auto pair_skin = [&](std::size_t a, int i, int j) {  // a before (i, j) in canonical order
+      if (i < 0 || j < 0 || i >= n_ || j >= n_) return false;
+      const std::size_t b = std::size_t(j) * n_ + i;
+      if (!std::isfinite(depth[a]) || !std::isfinite(depth[b])) return true;
+      return skin_between(points_[a], distances_[a], points_[b], distances_[b]);
+    };
+    for (int j = 0; j < n_; ++j)
+      for (int i = 0; i < n_; ++i) {
+        const std::size_t a = std::size_t(j) * n_ + i;
+        flags[a] = std::uint8_t((pair_skin(a, i + 1, j) ? kSkinEast : 0) | (pair_skin(a, i, j + 1) ? kSkinSouth : 0) |
+                                (pair_skin(a, i + 1, j + 1) ? kSkinSouthEast : 0) |
+                                (pair_skin(a, i - 1, j + 1) ? kSkinSouthWest : 0));
+      }
+  }
+
+  // Skin flags of face f's pixel (i, j) towards its neighbours (i+1, j),
+  // (i, j+1), (i+1, j+1), (i-1, j+1), as skin() would answer (false where
+  // the neighbour is off the face). Valid after cache_face(f).
+  std::uint8_t skin_flags(int f, int i, int j) const { return flags_[f][std::size_t(j) * n_ + i]; }
+
+  static constexpr std::uint8_t kSkinEast = 1, kSkinSouth = 2, kSkinSouthEast = 4, kSkinSouthWest = 8;
+
+ private:
+  Vec3d compute_point(const PixelRef& p) const {
     const double s = 2.0 * (p.i + 0.5) / n_ - 1.0;
     const double t = 1.0 - 2.0 * (p.j + 0.5) / n_;
     return cube_face_direction(basis_[p.face], s, t) * double(depth(p));
   }
+
+ public:
 
   // Skin test between neighbouring pixels; symmetric and deterministic (the
   // pair is put in canonical order before any arithmetic).
@@ -74,12 +137,21 @@ class CubeLattice {
     if (b < a) std::swap(a, b);
     if (background(a) || background(b)) return true;
     const Vec3d pa = point(a), pb = point(b);
-    const double da = length(pa), db = length(pb);
+    return skin_between(pa, length(pa), pb, length(pb));
+  }
+
+  // The skin test on the surface points of two covered pixels (a before b in
+  // canonical order) and their eye distances. The angle test compares tangents
+  // first and calls atan2 only within a relative 1e-9 of the limit, so the
+  // decision is the same as atan2(|e x m|, |e . m|) < limit.
+  bool skin_between(const Vec3d& pa, double da, const Vec3d& pb, double db) const {
     if (std::abs(da - db) > jump_limit_ * std::min(da, db)) return true;
     const Vec3d e = pb - pa;
     const Vec3d m = (pa + pb) * 0.5;
-    const double angle = std::atan2(length(cross(e, m)), std::abs(cellbake::dot(e, m)));
-    return angle < angle_limit_;
+    const double across = length(cross(e, m)), along = std::abs(cellbake::dot(e, m));
+    if (across < tan_low_ * along) return true;
+    if (across > tan_high_ * along) return false;
+    return std::atan2(across, along) < angle_limit_;
   }
 
   // Lattice direction of corner (ci, cj) of face f.
@@ -114,9 +186,13 @@ class CubeLattice {
  private:
   const CubeSample& sample_;
   int n_;
-  double angle_limit_ = 0, jump_limit_ = 0;
+  double angle_limit_ = 0, jump_limit_ = 0, tan_low_ = 0, tan_high_ = 0;
   std::array<FaceBasis, kCubeFaces> basis_;
   std::array<IntBasis, kCubeFaces> ibasis_;
+  int cached_face_ = -1;
+  std::vector<Vec3d> points_;
+  std::vector<double> distances_;
+  std::array<std::vector<std::uint8_t>, kCubeFaces> flags_;
 };
 
 // Connected components (labels 0..k-1, by first occurrence) of the pixels
@@ -133,7 +209,9 @@ int pair_index(int a, int b) {
   return table[a][b];
 }
 
-void analyse_corner(const CubeLattice& lat, Corner& c) {
+// `connected(a, b)` says whether pixels a < b of the corner are not a skin.
+template <class Connected>
+void analyse_corner_with(Corner& c, Connected connected_pair) {
   const int n = int(c.pixels.size());
   std::array<int, 4> parent{0, 1, 2, 3};
   auto find = [&](int x) {
@@ -142,7 +220,7 @@ void analyse_corner(const CubeLattice& lat, Corner& c) {
   };
   for (int a = 0; a < n; ++a)
     for (int b = a + 1; b < n; ++b) {
-      const bool connected = !lat.skin(c.pixels[a], c.pixels[b]);
+      const bool connected = connected_pair(a, b);
       c.pair_connected[pair_index(a, b)] = connected;
       if (connected) {
         const int ra = find(a), rb = find(b);
@@ -156,6 +234,26 @@ void analyse_corner(const CubeLattice& lat, Corner& c) {
     if (root_label[r] < 0) root_label[r] = c.components++;
     c.label[a] = root_label[r];
   }
+}
+
+void analyse_corner(const CubeLattice& lat, Corner& c) {
+  analyse_corner_with(c, [&](int a, int b) { return !lat.skin(c.pixels[a], c.pixels[b]); });
+}
+
+// A corner inside face f: pixels NW, NE, SW, SE (already in canonical order),
+// connectivity from the cached skin flags.
+void analyse_interior_corner(const CubeLattice& lat, int f, int ci, int cj, Corner& c) {
+  c.pixels.resize(4);
+  c.pixels[0] = {f, ci - 1, cj - 1};
+  c.pixels[1] = {f, ci, cj - 1};
+  c.pixels[2] = {f, ci - 1, cj};
+  c.pixels[3] = {f, ci, cj};
+  const std::uint8_t nw = lat.skin_flags(f, ci - 1, cj - 1), ne = lat.skin_flags(f, ci, cj - 1),
+                     sw = lat.skin_flags(f, ci - 1, cj);
+  const std::array<bool, 6> skin{bool(nw & CubeLattice::kSkinEast), bool(nw & CubeLattice::kSkinSouth),
+                                 bool(nw & CubeLattice::kSkinSouthEast), bool(ne & CubeLattice::kSkinSouthWest),
+                                 bool(ne & CubeLattice::kSkinSouth), bool(sw & CubeLattice::kSkinEast)};
+  analyse_corner_with(c, [&](int a, int b) { return !skin[pair_index(a, b)]; });
 }
 
 // True when a cube-edge lattice point is fully connected (see depth_mesh.h).
@@ -178,20 +276,22 @@ bool edge_point_fully_connected(const Corner& c) {
 // mean of each pixel's inverse depth in its own face's frame. Deterministic: the same sorted pixels and
 // frame give the same bits for every face sharing the corner.
 double corner_inverse_depth(const CubeLattice& lat, const Corner& c, int l, const Lattice& d) {
-  std::vector<PixelRef> fit;
+  // At most 4 pixels and 4 neighbours of each.
+  std::array<PixelRef, 20> fit;
+  int fit_count = 0;
   int frame = kCubeFaces;
   bool one_face = true;
   for (std::size_t a = 0; a < c.pixels.size(); ++a)
     if (c.label[a] == l) {
-      if (!fit.empty() && c.pixels[a].face != fit.back().face) one_face = false;
+      if (fit_count > 0 && c.pixels[a].face != fit[fit_count - 1].face) one_face = false;
       frame = std::min(frame, c.pixels[a].face);
-      fit.push_back(c.pixels[a]);
+      fit[fit_count++] = c.pixels[a];
     }
-  const int k = int(fit.size());
+  const int k = fit_count;
   // Mean of the pixels' inverse depths, each in its own face's frame (the frames
   // of all faces through D agree on the corner ray itself).
   double own_mean = 0;
-  for (const PixelRef& p : fit) own_mean += 1.0 / double(lat.depth(p));
+  for (int a = 0; a < k; ++a) own_mean += 1.0 / double(lat.depth(fit[a]));
   own_mean /= k;
   if (!one_face) {
     // Across a cube edge, 2 pixels per face lie on two lines parallel to the
@@ -204,8 +304,8 @@ double corner_inverse_depth(const CubeLattice& lat, const Corner& c, int l, cons
       for (PixelRef q : {PixelRef{p.face, p.i - 1, p.j}, PixelRef{p.face, p.i + 1, p.j}, PixelRef{p.face, p.i, p.j - 1},
                          PixelRef{p.face, p.i, p.j + 1}})
         if (q.i >= 0 && q.j >= 0 && q.i < n && q.j < n && !lat.background(q) &&
-            std::find(fit.begin(), fit.end(), q) == fit.end())
-          fit.push_back(q);
+            std::find(fit.begin(), fit.begin() + fit_count, q) == fit.begin() + fit_count)
+          fit[fit_count++] = q;
     }
   }
   const FaceBasis b = cube_face_basis(frame);
@@ -215,13 +315,14 @@ double corner_inverse_depth(const CubeLattice& lat, const Corner& c, int l, cons
   struct Sample {
     double s, t, w;
   };
-  std::vector<Sample> samples;
+  std::array<Sample, 20> samples;
+  int sample_count = 0;
   double m00 = 0, m01 = 0, m02 = 0, m11 = 0, m12 = 0, m22 = 0, r0 = 0, r1 = 0, r2 = 0;
-  for (const PixelRef& q : fit) {
-    const Vec3d p = lat.point(q);
+  for (int a = 0; a < fit_count; ++a) {
+    const Vec3d p = lat.point(fit[a]);
     const double z = dot(p, b.forward);
     const Sample x{dot(p, b.right) / z - s0, dot(p, b.up) / z - t0, 1.0 / z};
-    samples.push_back(x);
+    samples[sample_count++] = x;
     m00 += 1, m01 += x.s, m02 += x.t, m11 += x.s * x.s, m12 += x.s * x.t, m22 += x.t * x.t;
     r0 += x.w, r1 += x.s * x.w, r2 += x.t * x.w;
   }
@@ -236,7 +337,10 @@ double corner_inverse_depth(const CubeLattice& lat, const Corner& c, int l, cons
     // (a crease, e.g. the walls of a room seen from its centre): there the
     // fitted plane is wrong and each face's own inverse depth is right.
     double worst = 0;
-    for (const Sample& x : samples) worst = std::max(worst, std::abs(w0 + w1 * x.s + w2 * x.t - x.w));
+    for (int a = 0; a < sample_count; ++a) {
+      const Sample& x = samples[a];
+      worst = std::max(worst, std::abs(w0 + w1 * x.s + w2 * x.t - x.w));
+    }
     if (!(worst <= 1e-6 * own_mean)) return own_mean;
   }
   return w0 > 0 ? w0 : own_mean;
@@ -288,10 +392,10 @@ FaceMesh build_face(const CubeLattice& lat, int f) {
       const bool border = ci == 0 || cj == 0 || ci == n || cj == n;
       if (border) {
         lat.gather(d, c.pixels);
+        analyse_corner(lat, c);
       } else {
-        c.pixels = {{f, ci - 1, cj - 1}, {f, ci, cj - 1}, {f, ci - 1, cj}, {f, ci, cj}};
+        analyse_interior_corner(lat, f, ci, cj, c);
       }
-      analyse_corner(lat, c);
       const int count = int(c.pixels.size());
       // Per-pixel records at cube-edge points that are not fully connected.
       bool split_per_pixel = false;
@@ -346,13 +450,7 @@ std::size_t count_skin_edges(const CubeLattice& lat) {
   std::size_t skins = 0;
   for (int f = 0; f < kCubeFaces; ++f)
     for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const PixelRef p{f, i, j};
-        if (i + 1 < n) skins += lat.skin(p, {f, i + 1, j});
-        if (j + 1 < n) skins += lat.skin(p, {f, i, j + 1});
-        if (i + 1 < n && j + 1 < n) skins += lat.skin(p, {f, i + 1, j + 1});
-        if (i > 0 && j + 1 < n) skins += lat.skin(p, {f, i - 1, j + 1});
-      }
+      for (int i = 0; i < n; ++i) skins += std::popcount(unsigned(lat.skin_flags(f, i, j)));
   std::vector<std::pair<PixelRef, PixelRef>> cross_pairs;
   std::vector<PixelRef> pixels;
   for (int f = 0; f < kCubeFaces; ++f)
@@ -377,9 +475,12 @@ std::size_t count_skin_edges(const CubeLattice& lat) {
 std::array<FaceMesh, kCubeFaces> build_depth_meshes(const CubeSample& sample, const DepthMeshParams& params,
                                                     DepthMeshStats* stats) {
   validate(sample);
-  const CubeLattice lat(sample, params);
+  CubeLattice lat(sample, params);
   std::array<FaceMesh, kCubeFaces> meshes;
-  for (int f = 0; f < kCubeFaces; ++f) meshes[f] = build_face(lat, f);
+  for (int f = 0; f < kCubeFaces; ++f) {
+    lat.cache_face(f);
+    meshes[f] = build_face(lat, f);
+  }
   if (stats) {
     *stats = {};
     for (int f = 0; f < kCubeFaces; ++f) {

@@ -22,9 +22,12 @@ bool SceneBuilder::reserve(PrimitiveSize size) {
   return true;
 }
 
-void SceneBuilder::check_appended(PrimitiveSize size, std::size_t triangles_before, std::size_t vertices_before) const {
-  if (part_.triangle_count() - triangles_before != size.triangles || part_.positions.size() - vertices_before != size.vertices)
-    throw std::logic_error("scene builder: a primitive emitted " + std::to_string(part_.triangle_count() - triangles_before) +
+void SceneBuilder::check_appended(PrimitiveSize size, std::size_t triangles_before,
+                                  std::size_t vertices_before) const {
+  if (part_.triangle_count() - triangles_before != size.triangles ||
+      part_.positions.size() - vertices_before != size.vertices)
+    throw std::logic_error("scene builder: a primitive emitted " +
+                           std::to_string(part_.triangle_count() - triangles_before) +
                            " triangles but its planned count was " + std::to_string(size.triangles));
 }
 
@@ -42,7 +45,8 @@ void SceneBuilder::oriented_box(Vec3d center, Vec3d half_u, Vec3d half_v, Vec3d 
   check_appended(box_size(), t, v);
 }
 
-void SceneBuilder::lathe(Vec3d base, Vec3d axis, std::span<const LatheSample> profile, int segments, Rgba8 color) {
+void SceneBuilder::lathe(Vec3d base, Vec3d axis, std::span<const LatheSample> profile, int segments,
+                         Rgba8 color) {
   const PrimitiveSize size = lathe_size(profile, segments);
   if (!reserve(size)) return;
   const std::size_t t = part_.triangle_count(), v = part_.positions.size();

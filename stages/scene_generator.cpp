@@ -21,9 +21,15 @@ constexpr std::uint64_t kPartTriangles = 100'000;
 
 void build_scene(SceneKind kind, const SceneDensity& density, std::uint64_t seed, SceneBuilder& out) {
   switch (kind) {
-    case SceneKind::plant: build_plant_scene(density, seed, out); return;
-    case SceneKind::house: build_house_scene(density, seed, out); return;
-    case SceneKind::city: build_city_scene(density, seed, out); return;
+    case SceneKind::plant:
+      build_plant_scene(density, seed, out);
+      return;
+    case SceneKind::house:
+      build_house_scene(density, seed, out);
+      return;
+    case SceneKind::city:
+      build_city_scene(density, seed, out);
+      return;
   }
   throw std::invalid_argument("generate_scene: unknown scene kind");
 }
@@ -43,7 +49,8 @@ struct Bracket {
 // where count(at(lo)) <= target < count(at(hi)); stops when the two counts are
 // within 0.2 % of the target of each other.
 template <typename DensityAt>
-Bracket bisect(const SceneParams& params, DensityAt at, double lo, double hi, std::uint64_t count_lo, std::uint64_t count_hi) {
+Bracket bisect(const SceneParams& params, DensityAt at, double lo, double hi, std::uint64_t count_lo,
+               std::uint64_t count_hi) {
   const std::uint64_t target = params.target_triangles;
   for (int iteration = 0; iteration < 60 && hi > lo * (1 + 1e-12); ++iteration) {
     if (static_cast<double>(count_hi - count_lo) <= 0.002 * static_cast<double>(target)) break;

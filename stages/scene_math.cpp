@@ -33,10 +33,14 @@ SinCos sin_cos_turns(double turns) {
     in_quarter = {mirrored.c, mirrored.s};
   }
   switch (static_cast<long long>(q) & 3) {
-    case 0: return in_quarter;
-    case 1: return {in_quarter.c, -in_quarter.s};
-    case 2: return {-in_quarter.s, -in_quarter.c};
-    default: return {-in_quarter.c, in_quarter.s};
+    case 0:
+      return in_quarter;
+    case 1:
+      return {in_quarter.c, -in_quarter.s};
+    case 2:
+      return {-in_quarter.s, -in_quarter.c};
+    default:
+      return {-in_quarter.c, in_quarter.s};
   }
 }
 

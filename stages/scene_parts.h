@@ -32,13 +32,15 @@ void add_i_beam(SceneBuilder& out, Vec3d a, Vec3d b, double depth, double width,
 void add_grating(SceneBuilder& out, const Box3d& area, double pitch, Rgba8 color);
 
 // A railing of height `height` from `a` to `b` (same z, differing in x or y):
-// posts about every 1.5 m and two round rails.
-void add_railing(SceneBuilder& out, Vec3d a, Vec3d b, double height, SceneTessellation& tess, Rgba8 color);
+// posts about every 1.5 m (at the ends too when `end_posts`; leave them out
+// where another railing already has a post) and two round rails.
+void add_railing(SceneBuilder& out, Vec3d a, Vec3d b, double height, bool end_posts, SceneTessellation& tess,
+                 Rgba8 color);
 
 // A straight stair flight rising `rise` metres from `foot` (centre of the bottom
 // edge of the first step) along the unit axis direction `run_direction` (±x or
 // ±y), `width` wide, with treads, two slanted stringers and two handrails.
-void add_stairs(SceneBuilder& out, Vec3d foot, Vec3d run_direction, double width, double rise, SceneTessellation& tess,
-                Rgba8 color);
+void add_stairs(SceneBuilder& out, Vec3d foot, Vec3d run_direction, double width, double rise,
+                SceneTessellation& tess, Rgba8 color);
 
 }  // namespace cellbake

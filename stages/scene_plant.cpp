@@ -20,10 +20,13 @@ const Box3d kFurnace{{22, 14, 0.5}, {38, 26, 27.5}};
 
 struct Palette {
   Rgba8 wall{196, 186, 166, 255}, roof{120, 120, 125, 255}, slab{150, 148, 140, 255}, frame{70, 90, 140, 255};
-  Rgba8 window{90, 90, 95, 255}, grating{110, 110, 105, 255}, railing{230, 190, 30, 255}, stairs{200, 170, 40, 255};
-  Rgba8 waterwall{150, 70, 45, 255}, header{90, 90, 95, 255}, buckstay{40, 40, 45, 255}, platen{180, 100, 50, 255};
-  Rgba8 economizer{160, 120, 70, 255}, tank{215, 215, 205, 255}, machine{60, 120, 90, 255}, motor{40, 60, 140, 255};
-  Rgba8 services[6] = {{60, 140, 70, 255}, {50, 90, 170, 255}, {170, 50, 40, 255},
+  Rgba8 window{90, 90, 95, 255}, grating{110, 110, 105, 255}, railing{230, 190, 30, 255},
+      stairs{200, 170, 40, 255};
+  Rgba8 waterwall{150, 70, 45, 255}, header{90, 90, 95, 255}, buckstay{40, 40, 45, 255},
+      platen{180, 100, 50, 255};
+  Rgba8 economizer{160, 120, 70, 255}, tank{215, 215, 205, 255}, machine{60, 120, 90, 255},
+      motor{40, 60, 140, 255};
+  Rgba8 services[6] = {{60, 140, 70, 255},   {50, 90, 170, 255},  {170, 50, 40, 255},
                        {220, 220, 215, 255}, {220, 120, 30, 255}, {130, 130, 130, 255}};
 };
 
@@ -73,18 +76,17 @@ void hall_shell(SceneBuilder& out, SceneRng& rng, const Palette& c) {
   for (int side = 0; side < 2; ++side) {  // end walls along y at x = 0 and x = 60 - wall
     std::vector<WallOpening> openings;
     for (int b = 0; b < 3; ++b)
-      for (int k = 0; k < 6; ++k) openings.push_back({2.5 + 6.5 * k, 5.0 + 6.5 * k, bands[b][0], bands[b][1]});
+      for (int k = 0; k < 6; ++k)
+        openings.push_back({2.5 + 6.5 * k, 5.0 + 6.5 * k, bands[b][0], bands[b][1]});
     openings.push_back({18.5, 21.5, 0, 3.5});
     const double x = side == 0 ? 0 : kHallX - kWall;
-    add_wall(out, {x, kWall, 0}, false, kHallY - 2 * kWall, kHallZ, kWall, [&] {
-      std::vector<WallOpening> shifted = openings;  // the end walls start after the long walls
-      for (WallOpening& o : shifted) {
-        o.from -= kWall;
-        o.to -= kWall;
-      }
-      return shifted;
-    }(), rng.vary(c.wall, 6));
-    for (WallOpening o : openings)
+    std::vector<WallOpening> local = openings;  // the end walls start after the long walls, at y = kWall
+    for (WallOpening& o : local) {
+      o.from -= kWall;
+      o.to -= kWall;
+    }
+    add_wall(out, {x, kWall, 0}, false, kHallY - 2 * kWall, kHallZ, kWall, local, rng.vary(c.wall, 6));
+    for (const WallOpening& o : openings)
       if (o.bottom > 0) window_frames(false, x + 0.14, o);
   }
 }
@@ -97,15 +99,18 @@ void steel_frame(SceneBuilder& out, SceneRng& rng, const Palette& c) {
     add_i_beam(out, {x, 0.75, 29.5}, {x, kHallY - 0.75, 29.5}, 0.9, 0.3, steel);  // roof girders
   }
   for (double level : {8.0, 16.0, 24.0, 29.0})
-    for (double y : {0.75, kHallY - 0.75}) add_i_beam(out, {0.4, y, level - 0.45}, {kHallX - 0.4, y, level - 0.45}, 0.5, 0.25, steel);
+    for (double y : {0.75, kHallY - 0.75})
+      add_i_beam(out, {0.4, y, level - 0.45}, {kHallX - 0.4, y, level - 0.45}, 0.5, 0.25, steel);
   // Mezzanine supports: the west bay (x < 16.5) at levels 8 and 16, the east bay (x > 43.5) at 8.
   for (double y : {8.0, 16.0, 24.0, 32.0}) {
     add_i_beam(out, {16.3, y, 0}, {16.3, y, 16}, 0.35, 0.3, steel);
     add_i_beam(out, {43.7, y, 0}, {43.7, y, 8}, 0.35, 0.3, steel);
   }
   for (double x : {3.0, 9.0, 15.0})
-    for (double level : {8.0, 16.0}) add_i_beam(out, {x, 0.75, level - 0.5}, {x, kHallY - 0.75, level - 0.5}, 0.5, 0.25, steel);
-  for (double x : {45.0, 51.0, 57.0}) add_i_beam(out, {x, 0.75, 7.5}, {x, kHallY - 0.75, 7.5}, 0.5, 0.25, steel);
+    for (double level : {8.0, 16.0})
+      add_i_beam(out, {x, 0.75, level - 0.5}, {x, kHallY - 0.75, level - 0.5}, 0.5, 0.25, steel);
+  for (double x : {45.0, 51.0, 57.0})
+    add_i_beam(out, {x, 0.75, 7.5}, {x, kHallY - 0.75, 7.5}, 0.5, 0.25, steel);
   // Columns at the corners of the walkway ring around the furnace.
   for (double x : {20.2, 39.8})
     for (double y : {12.2, 27.8}) add_i_beam(out, {x, y, 0}, {x, y, 24}, 0.3, 0.3, steel);
@@ -113,7 +118,8 @@ void steel_frame(SceneBuilder& out, SceneRng& rng, const Palette& c) {
 
 void floors_and_walkways(SceneBuilder& out, SceneRng& rng, const Palette& c, const PlantDensity& density,
                          SceneTessellation& tess) {
-  for (double level : {8.0, 16.0}) out.box({{kWall, kWall, level - 0.25}, {16.5, kHallY - kWall, level}}, rng.vary(c.slab, 5));
+  for (double level : {8.0, 16.0})
+    out.box({{kWall, kWall, level - 0.25}, {16.5, kHallY - kWall, level}}, rng.vary(c.slab, 5));
   out.box({{43.5, kWall, 7.75}, {kHallX - kWall, kHallY - kWall, 8}}, rng.vary(c.slab, 5));
   for (double level : kLevels) {
     const Box3d strips[4] = {{{20, 12, level}, {40, 13.5, level}},
@@ -127,12 +133,13 @@ void floors_and_walkways(SceneBuilder& out, SceneRng& rng, const Palette& c, con
       add_grating(out, area, density.grating_pitch, rng.vary(c.grating, 6));
     }
     const Rgba8 rail = rng.vary(c.railing, 8);
-    add_railing(out, {20, 12, level}, {40, 12, level}, 1.1, tess, rail);
-    add_railing(out, {20, 28, level}, {40, 28, level}, 1.1, tess, rail);
-    add_railing(out, {20, 12, level}, {20, 28, level}, 1.1, tess, rail);
-    add_railing(out, {40, 12, level}, {40, 28, level}, 1.1, tess, rail);
+    add_railing(out, {20, 12, level}, {40, 12, level}, 1.1, true, tess, rail);
+    add_railing(out, {20, 28, level}, {40, 28, level}, 1.1, true, tess, rail);
+    add_railing(out, {20, 12, level}, {20, 28, level}, 1.1, false, tess, rail);
+    add_railing(out, {40, 12, level}, {40, 28, level}, 1.1, false, tess, rail);
   }
-  add_grating(out, {{40, 19, 8}, {43.5, 21, 8.01}}, density.grating_pitch, rng.vary(c.grating, 6));  // bridge east
+  add_grating(out, {{40, 19, 8}, {43.5, 21, 8.01}}, density.grating_pitch,
+              rng.vary(c.grating, 6));  // bridge east
 }
 
 void stair_tower(SceneBuilder& out, SceneRng& rng, const Palette& c, SceneTessellation& tess) {
@@ -148,7 +155,8 @@ void stair_tower(SceneBuilder& out, SceneRng& rng, const Palette& c, SceneTessel
 // Waterwalls (vertical tubes on the furnace faces), their headers, buckstays,
 // platens (serpentine tubes in x-z planes, upper furnace) and economizer banks
 // (serpentines in y-z planes, lower furnace): the dense arrays of long thin pipes.
-void furnace(SceneBuilder& out, SceneRng& rng, const Palette& c, const PlantDensity& density, SceneTessellation& tess) {
+void furnace(SceneBuilder& out, SceneRng& rng, const Palette& c, const PlantDensity& density,
+             SceneTessellation& tess) {
   const double pitch = 0.1;
   auto wall_tube = [&](double x, double y) {
     PipeStyle tube;
@@ -175,7 +183,8 @@ void furnace(SceneBuilder& out, SceneRng& rng, const Palette& c, const PlantDens
   header.radius = 0.2;
   header.segments = tess.circle_segments(header.radius, 8);
   for (double z : {1.1, 26.9}) {
-    const double x0 = kFurnace.lo.x - 0.3, x1 = kFurnace.hi.x + 0.3, y0 = kFurnace.lo.y - 0.3, y1 = kFurnace.hi.y + 0.3;
+    const double x0 = kFurnace.lo.x - 0.3, x1 = kFurnace.hi.x + 0.3, y0 = kFurnace.lo.y - 0.3,
+                 y1 = kFurnace.hi.y + 0.3;
     const Vec3d headers[4][2] = {{{x0, kFurnace.lo.y, z}, {x1, kFurnace.lo.y, z}},
                                  {{x0, kFurnace.hi.y, z}, {x1, kFurnace.hi.y, z}},
                                  {{kFurnace.lo.x, y0, z}, {kFurnace.lo.x, y1, z}},
@@ -183,7 +192,8 @@ void furnace(SceneBuilder& out, SceneRng& rng, const Palette& c, const PlantDens
     for (const auto& h : headers) out.pipe(h, header, rng.vary(c.header, 6));
   }
   for (double z = 3; z < 26; z += 3) {
-    const double lo_x = kFurnace.lo.x - 0.3, hi_x = kFurnace.hi.x + 0.3, lo_y = kFurnace.lo.y - 0.3, hi_y = kFurnace.hi.y + 0.3;
+    const double lo_x = kFurnace.lo.x - 0.3, hi_x = kFurnace.hi.x + 0.3, lo_y = kFurnace.lo.y - 0.3,
+                 hi_y = kFurnace.hi.y + 0.3;
     add_i_beam(out, {lo_x, lo_y, z}, {hi_x, lo_y, z}, 0.3, 0.12, c.buckstay);
     add_i_beam(out, {lo_x, hi_y, z}, {hi_x, hi_y, z}, 0.3, 0.12, c.buckstay);
     add_i_beam(out, {lo_x, lo_y + 0.1, z}, {lo_x, hi_y - 0.1, z}, 0.3, 0.12, c.buckstay);
@@ -192,8 +202,8 @@ void furnace(SceneBuilder& out, SceneRng& rng, const Palette& c, const PlantDens
 
   // A serpentine: `runs` parallel legs along `run_axis` between a and b, stepping
   // down by `step` in z, with inlet and outlet risers to z_top.
-  auto serpentine = [&](Vec3d run_axis, double a, double b, Vec3d plane_point, double z_first, int runs, double step,
-                        double z_top, Rgba8 color) {
+  auto serpentine = [&](Vec3d run_axis, double a, double b, Vec3d plane_point, double z_first, int runs,
+                        double step, double z_top, Rgba8 color) {
     std::vector<Vec3d> path;
     double last = a;
     auto at = [&](double s, double z) {
@@ -246,7 +256,8 @@ struct Nozzle {
   Vec3d top;  // where a pipe run starts, straight up from here
 };
 
-void tanks(SceneBuilder& out, SceneRng& rng, const Palette& c, SceneTessellation& tess, std::vector<Nozzle>& nozzles) {
+void tanks(SceneBuilder& out, SceneRng& rng, const Palette& c, SceneTessellation& tess,
+           std::vector<Nozzle>& nozzles) {
   for (double y : {26.5, 33.5})
     for (double x : {4.5, 9.0, 13.5}) {
       const double r = rng.uniform(1.3, 1.9), h = rng.uniform(3.5, 4.8), legs = 0.5;
@@ -264,7 +275,9 @@ void tanks(SceneBuilder& out, SceneRng& rng, const Palette& c, SceneTessellation
       out.lathe({x, y, legs}, {0, 0, 1}, profile, segments, color);
       for (double sx : {-0.6, 0.6})
         for (double sy : {-0.6, 0.6})
-          out.box({{x + sx * r - 0.1, y + sy * r - 0.1, 0}, {x + sx * r + 0.1, y + sy * r + 0.1, legs + 0.05}}, c.frame);
+          out.box(
+              {{x + sx * r - 0.1, y + sy * r - 0.1, 0}, {x + sx * r + 0.1, y + sy * r + 0.1, legs + 0.05}},
+              c.frame);
       const double nozzle_r = 0.15;
       const LatheSample neck[4] = {{0, 0}, {nozzle_r, 0}, {nozzle_r, 0.35}, {0, 0.35}};
       const Vec3d nozzle_base{x + 0.5 * r, y, legs + h + 0.2 * r};
@@ -273,8 +286,8 @@ void tanks(SceneBuilder& out, SceneRng& rng, const Palette& c, SceneTessellation
     }
 }
 
-void machinery(SceneBuilder& out, SceneRng& rng, const Palette& c, const PlantDensity& density, SceneTessellation& tess,
-               std::vector<Nozzle>& nozzles) {
+void machinery(SceneBuilder& out, SceneRng& rng, const Palette& c, const PlantDensity& density,
+               SceneTessellation& tess, std::vector<Nozzle>& nozzles) {
   std::vector<Vec3d> slots;
   for (int row = 0; row < 6; ++row)
     for (int col = 0; col < 4; ++col) slots.push_back({45.5 + 3.8 * col, 8.5 + 4.2 * row, 0});
@@ -288,22 +301,30 @@ void machinery(SceneBuilder& out, SceneRng& rng, const Palette& c, const PlantDe
     // Motor: a horizontal cylinder with end bells, along x.
     const double mr = rng.uniform(0.3, 0.45), ml = len * 0.45;
     const LatheSample motor[6] = {{0, 0}, {mr * 0.8, 0}, {mr, 0.1}, {mr, ml - 0.1}, {mr * 0.8, ml}, {0, ml}};
-    out.lathe({p.x - len / 2 + 0.1, p.y, 0.3 + mr + 0.05}, {1, 0, 0}, motor, tess.circle_segments(mr, 8), rng.vary(c.motor, 12));
+    out.lathe({p.x - len / 2 + 0.1, p.y, 0.3 + mr + 0.05}, {1, 0, 0}, motor, tess.circle_segments(mr, 8),
+              rng.vary(c.motor, 12));
     // Pump casing: a vertical drum with a flange and the outlet nozzle on top.
     const double pr = rng.uniform(0.3, 0.4), ph = rng.uniform(0.9, 1.4);
-    const LatheSample pump[8] = {{0, 0},           {pr, 0},          {pr, ph},         {pr * 1.2, ph},
-                                 {pr * 1.2, ph + 0.08}, {pr * 0.4, ph + 0.08}, {pr * 0.4, ph + 0.4}, {0, ph + 0.4}};
+    const LatheSample pump[8] = {{0, 0},
+                                 {pr, 0},
+                                 {pr, ph},
+                                 {pr * 1.2, ph},
+                                 {pr * 1.2, ph + 0.08},
+                                 {pr * 0.4, ph + 0.08},
+                                 {pr * 0.4, ph + 0.4},
+                                 {0, ph + 0.4}};
     const Vec3d pump_base{p.x + len / 2 - pr - 0.1, p.y, 0.3};
     out.lathe(pump_base, {0, 0, 1}, pump, tess.circle_segments(pr, 8), rng.vary(c.machine, 12));
-    out.box({{p.x - 0.2, p.y + wid / 2 - 0.3, 0.3}, {p.x + 0.3, p.y + wid / 2, 1.3}}, rng.vary(c.machine, 20));  // control box
+    out.box({{p.x - 0.2, p.y + wid / 2 - 0.3, 0.3}, {p.x + 0.3, p.y + wid / 2, 1.3}},
+            rng.vary(c.machine, 20));  // control box
     nozzles.push_back({pump_base + Vec3d{0, 0, ph + 0.4}});
   }
 }
 
 // Pipe racks along both long walls and the runs between nozzles that use them,
 // plus long header lines lying in the racks.
-void pipe_racks(SceneBuilder& out, SceneRng& rng, const Palette& c, const PlantDensity& density, SceneTessellation& tess,
-                const std::vector<Nozzle>& nozzles) {
+void pipe_racks(SceneBuilder& out, SceneRng& rng, const Palette& c, const PlantDensity& density,
+                SceneTessellation& tess, const std::vector<Nozzle>& nozzles) {
   const double rack_y[2] = {3.0, 37.0};
   for (double y0 : rack_y) {
     for (int k = 0; k < 10; ++k) {
@@ -338,8 +359,9 @@ void pipe_racks(SceneBuilder& out, SceneRng& rng, const Palette& c, const PlantD
     if (std::fabs(xb - a.top.x) < 0.8) xb = a.top.x + (a.top.x < 30 ? 1.2 : -1.2);
     const double yb = std::fabs(b.top.y - y_run) < 0.8 ? b.top.y + 1.0 : b.top.y;
     const double zb = std::min(b.top.z, z_run - 0.8);
-    const Vec3d path[6] = {a.top, {a.top.x, a.top.y, z_run}, {a.top.x, y_run, z_run},
-                           {xb, y_run, z_run}, {xb, yb, z_run}, {xb, yb, zb}};
+    const Vec3d path[6] = {
+        a.top,       {a.top.x, a.top.y, z_run}, {a.top.x, y_run, z_run}, {xb, y_run, z_run}, {xb, yb, z_run},
+        {xb, yb, zb}};
     out.pipe(path, style, rng.vary(c.services[rng.below(6)], 10));
   }
 }

@@ -9,7 +9,9 @@
 namespace cellbake {
 namespace {
 
-std::uint32_t next_index(const TriangleMesh& mesh) { return static_cast<std::uint32_t>(mesh.positions.size()); }
+std::uint32_t next_index(const TriangleMesh& mesh) {
+  return static_cast<std::uint32_t>(mesh.positions.size());
+}
 
 void push_vertex(TriangleMesh& mesh, Vec3d p, Rgba8 color) {
   mesh.positions.push_back(p);
@@ -25,13 +27,15 @@ void push_triangle(TriangleMesh& mesh, std::uint32_t a, std::uint32_t b, std::ui
 // Cosine/sine of j/segments turns for j in [0, segments).
 std::vector<SinCos> circle_table(int segments) {
   std::vector<SinCos> table(static_cast<std::size_t>(segments));
-  for (int j = 0; j < segments; ++j) table[static_cast<std::size_t>(j)] = sin_cos_turns(static_cast<double>(j) / segments);
+  for (int j = 0; j < segments; ++j)
+    table[static_cast<std::size_t>(j)] = sin_cos_turns(static_cast<double>(j) / segments);
   return table;
 }
 
-void push_ring(TriangleMesh& mesh, Vec3d center, Vec3d u, Vec3d v, double radius, const std::vector<SinCos>& circle,
-               Rgba8 color) {
-  for (const SinCos& cs : circle) push_vertex(mesh, center + u * (radius * cs.c) + v * (radius * cs.s), color);
+void push_ring(TriangleMesh& mesh, Vec3d center, Vec3d u, Vec3d v, double radius,
+               const std::vector<SinCos>& circle, Rgba8 color) {
+  for (const SinCos& cs : circle)
+    push_vertex(mesh, center + u * (radius * cs.c) + v * (radius * cs.s), color);
 }
 
 // Joins ring `a` (first vertex index) to the next ring `b` along the tangent direction.
@@ -45,7 +49,9 @@ void join_rings(TriangleMesh& mesh, std::uint32_t a, std::uint32_t b, int segmen
 }
 
 void check_segments(int segments, const char* what) {
-  if (segments < 3) throw std::invalid_argument(std::string(what) + ": needs at least 3 segments around, got " + std::to_string(segments));
+  if (segments < 3)
+    throw std::invalid_argument(std::string(what) + ": needs at least 3 segments around, got " +
+                                std::to_string(segments));
 }
 
 // ---- pipe planning, shared by pipe_size and append_pipe ----
@@ -73,15 +79,18 @@ void plan_pipe(std::span<const Vec3d> path, const PipeStyle& style, RingVisitor&
     if (k == 0 || k + 1 >= n) return 0.0;
     const double r = std::min({style.bend_radius, 0.45 * leg_length(k - 1), 0.45 * leg_length(k)});
     if (r < 1.2 * style.radius)
-      throw std::invalid_argument("pipe: leg next to point " + std::to_string(k) + " is too short for a bend of a pipe of radius " +
+      throw std::invalid_argument("pipe: leg next to point " + std::to_string(k) +
+                                  " is too short for a bend of a pipe of radius " +
                                   std::to_string(style.radius));
     return r;
   };
 
   for (std::size_t i = 0; i + 1 < n; ++i) {
-    if (!(leg_length(i) > 0)) throw std::invalid_argument("pipe: zero-length leg at point " + std::to_string(i));
+    if (!(leg_length(i) > 0))
+      throw std::invalid_argument("pipe: zero-length leg at point " + std::to_string(i));
     if (i + 2 < n && std::fabs(dot(leg_dir(i), leg_dir(i + 1))) > 1e-9)
-      throw std::invalid_argument("pipe: legs at point " + std::to_string(i + 1) + " are not at a right angle");
+      throw std::invalid_argument("pipe: legs at point " + std::to_string(i + 1) +
+                                  " are not at a right angle");
   }
 
   Vec3d u = any_perpendicular(leg_dir(0));
@@ -94,7 +103,8 @@ void plan_pipe(std::span<const Vec3d> path, const PipeStyle& style, RingVisitor&
     const double straight = leg_length(i) - bend_in - bend_out;
     std::uint64_t pieces = 1;
     if (style.max_piece_length > 0)
-      pieces = static_cast<std::uint64_t>(std::min(std::ceil(straight / style.max_piece_length), static_cast<double>(kMaxPiecesPerLeg)));
+      pieces = static_cast<std::uint64_t>(
+          std::min(std::ceil(straight / style.max_piece_length), static_cast<double>(kMaxPiecesPerLeg)));
     pieces = std::max<std::uint64_t>(pieces, 1);
     for (std::uint64_t k = 1; k <= pieces; ++k)
       ring(PipeRing{start + d0 * (straight * static_cast<double>(k) / static_cast<double>(pieces)), d0, u});
@@ -116,7 +126,8 @@ void plan_pipe(std::span<const Vec3d> path, const PipeStyle& style, RingVisitor&
 
 }  // namespace
 
-void append_oriented_box(TriangleMesh& mesh, Vec3d center, Vec3d half_u, Vec3d half_v, Vec3d half_w, Rgba8 color) {
+void append_oriented_box(TriangleMesh& mesh, Vec3d center, Vec3d half_u, Vec3d half_v, Vec3d half_w,
+                         Rgba8 color) {
   if (dot(cross(half_u, half_v), half_w) < 0) half_w = half_w * -1.0;
   const std::uint32_t base = next_index(mesh);
   for (int corner = 0; corner < 8; ++corner) {
@@ -148,13 +159,15 @@ PrimitiveSize lathe_size(std::span<const LatheSample> profile, int segments) {
     const bool pole = profile[k].radius == 0;
     const bool end = k == 0 || k + 1 == profile.size();
     if (!(profile[k].radius >= 0) || (pole && !end))
-      throw std::invalid_argument("lathe: sample " + std::to_string(k) + " has radius " + std::to_string(profile[k].radius) +
+      throw std::invalid_argument("lathe: sample " + std::to_string(k) + " has radius " +
+                                  std::to_string(profile[k].radius) +
                                   " (only the first and last may be 0, none negative)");
     size.vertices += pole ? 1 : seg;
     if (k + 1 < profile.size()) {
       const LatheSample& next = profile[k + 1];
       if (next.radius == profile[k].radius && next.height == profile[k].height)
-        throw std::invalid_argument("lathe: samples " + std::to_string(k) + " and " + std::to_string(k + 1) + " coincide");
+        throw std::invalid_argument("lathe: samples " + std::to_string(k) + " and " + std::to_string(k + 1) +
+                                    " coincide");
       if (pole && next.radius == 0) throw std::invalid_argument("lathe: two consecutive poles");
       size.triangles += (pole || next.radius == 0) ? seg : 2 * seg;
     }
@@ -162,8 +175,8 @@ PrimitiveSize lathe_size(std::span<const LatheSample> profile, int segments) {
   return size;
 }
 
-void append_lathe(TriangleMesh& mesh, Vec3d base, Vec3d axis, std::span<const LatheSample> profile, int segments,
-                  Rgba8 color) {
+void append_lathe(TriangleMesh& mesh, Vec3d base, Vec3d axis, std::span<const LatheSample> profile,
+                  int segments, Rgba8 color) {
   lathe_size(profile, segments);  // validates
   const Vec3d u = any_perpendicular(axis);
   const Vec3d v = cross(axis, u);
@@ -180,9 +193,11 @@ void append_lathe(TriangleMesh& mesh, Vec3d base, Vec3d axis, std::span<const La
     }
     if (k > 0) {
       if (profile[k - 1].radius == 0) {  // fan from the bottom pole
-        for (std::uint32_t j = 0; j < seg; ++j) push_triangle(mesh, previous, first + (j + 1) % seg, first + j);
+        for (std::uint32_t j = 0; j < seg; ++j)
+          push_triangle(mesh, previous, first + (j + 1) % seg, first + j);
       } else if (profile[k].radius == 0) {  // fan to the top pole
-        for (std::uint32_t j = 0; j < seg; ++j) push_triangle(mesh, previous + j, previous + (j + 1) % seg, first);
+        for (std::uint32_t j = 0; j < seg; ++j)
+          push_triangle(mesh, previous + j, previous + (j + 1) % seg, first);
       } else {
         join_rings(mesh, previous, first, segments);
       }
@@ -222,10 +237,12 @@ void append_pipe(TriangleMesh& mesh, std::span<const Vec3d> path, const PipeStyl
   if (style.caps) {
     const std::uint32_t start_center = next_index(mesh);
     push_vertex(mesh, first.center, color);
-    for (std::uint32_t j = 0; j < seg; ++j) push_triangle(mesh, start_center, first_ring + (j + 1) % seg, first_ring + j);
+    for (std::uint32_t j = 0; j < seg; ++j)
+      push_triangle(mesh, start_center, first_ring + (j + 1) % seg, first_ring + j);
     const std::uint32_t end_center = next_index(mesh);
     push_vertex(mesh, last.center, color);
-    for (std::uint32_t j = 0; j < seg; ++j) push_triangle(mesh, end_center, previous + j, previous + (j + 1) % seg);
+    for (std::uint32_t j = 0; j < seg; ++j)
+      push_triangle(mesh, end_center, previous + j, previous + (j + 1) % seg);
   }
 }
 

@@ -41,17 +41,17 @@ struct LatheSample {
 PrimitiveSize lathe_size(std::span<const LatheSample> profile, int segments);
 // Revolves `profile` about the axis through `base` along unit vector `axis`.
 // Throws std::invalid_argument for a profile that breaks the rules above.
-void append_lathe(TriangleMesh& mesh, Vec3d base, Vec3d axis, std::span<const LatheSample> profile, int segments,
-                  Rgba8 color);
+void append_lathe(TriangleMesh& mesh, Vec3d base, Vec3d axis, std::span<const LatheSample> profile,
+                  int segments, Rgba8 color);
 
 // ---- Pipe along a polyline -------------------------------------------------
 struct PipeStyle {
-  double radius = 0.05;          // metres
-  double bend_radius = 0.15;     // centre-line radius of the torus bends (clamped to fit short legs)
-  int segments = 8;              // around the pipe, >= 3
-  int bend_segments = 4;         // along each 90-degree bend, >= 1
-  double max_piece_length = 0;   // straight legs are cut into pieces no longer than this; 0 = one piece
-  bool caps = true;              // close both ends with a fan around a centre vertex
+  double radius = 0.05;         // metres
+  double bend_radius = 0.15;    // centre-line radius of the torus bends (clamped to fit short legs)
+  int segments = 8;             // around the pipe, >= 3
+  int bend_segments = 4;        // along each 90-degree bend, >= 1
+  double max_piece_length = 0;  // straight legs are cut into pieces no longer than this; 0 = one piece
+  bool caps = true;             // close both ends with a fan around a centre vertex
 };
 // The path has >= 2 points; consecutive legs are non-zero and perpendicular
 // (pipes are routed at right angles). Throws std::invalid_argument otherwise,

@@ -5,6 +5,7 @@
 // (std::uniform_*_distribution is not portable across libraries).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 
 #include "stages/geometry.h"

@@ -24,8 +24,10 @@ struct SimplifyParams {
   // so the screen-space error from the sample point is zero by construction).
   double depth_error_relative = 0.01;
   // Per-face triangle cap (VWALK used 10,000). When the result is larger, the
-  // interior depth bound is doubled, up to `max_relaxations` times; face borders
-  // always use `depth_error_relative` so neighbouring faces still agree.
+  // interior depth bound is doubled, up to `max_relaxations` times and only
+  // while each doubling removes >= 5 % of the triangles (silhouettes are never
+  // simplified, so a silhouette-dominated face may stay above the cap); face
+  // borders always use `depth_error_relative` so neighbouring faces still agree.
   std::size_t max_triangles = 10000;
   int max_relaxations = 8;
 };

@@ -40,6 +40,7 @@ CellCopyCounts copy_cells(CellDb& target, const CellDb& source) {
   // attached; both are the same schema version, so SELECT * matches column
   // for column.
   SqliteDb db(target.path(), SqliteDb::Mode::read_write_create);
+  db.exec("PRAGMA synchronous=NORMAL");  // as CellDb: WAL stays consistent, a crash loses at most the last cells
   {
     SqliteStatement attach(db, "ATTACH DATABASE ? AS source");
     attach.bind(1, source.path().string()).run();

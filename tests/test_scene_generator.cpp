@@ -121,7 +121,9 @@ TEST(ScenePrimitives, BentCappedPipeIsClosedWithTubeVolume) {
   const double centre_line = 2 + 3 + 1.5 - 2 * (2 - kPi / 2) * 0.4;
   EXPECT_NEAR(signed_volume(m), kPi * 0.01 * centre_line, 0.01 * kPi * 0.01 * centre_line);
   for (std::size_t i = 0; i < m.indices.size(); i += 3)
-    ASSERT_GT(triangle_area(m.positions[m.indices[i]], m.positions[m.indices[i + 1]], m.positions[m.indices[i + 2]]), 1e-8);
+    ASSERT_GT(triangle_area(m.positions[m.indices[i]], m.positions[m.indices[i + 1]],
+                            m.positions[m.indices[i + 2]]),
+              1e-8);
 }
 
 TEST(ScenePrimitives, PipeRejectsPathsItCannotSweep) {
@@ -130,7 +132,8 @@ TEST(ScenePrimitives, PipeRejectsPathsItCannotSweep) {
   EXPECT_THROW(pipe_size(slanted, style), std::invalid_argument);
   const Vec3d repeated[3] = {{0, 0, 0}, {0, 0, 0}, {1, 0, 0}};
   EXPECT_THROW(pipe_size(repeated, style), std::invalid_argument);
-  const Vec3d cramped[3] = {{0, 0, 0}, {0.05, 0, 0}, {0.05, 1, 0}};  // leg too short for a bend of a 5 cm pipe
+  const Vec3d cramped[3] = {
+      {0, 0, 0}, {0.05, 0, 0}, {0.05, 1, 0}};  // leg too short for a bend of a 5 cm pipe
   EXPECT_THROW(pipe_size(cramped, style), std::invalid_argument);
 }
 
@@ -167,7 +170,8 @@ SceneStats generate_and_check(SceneKind kind, std::uint64_t target, bool check_a
       return Vec3d{static_cast<float>(p.x), static_cast<float>(p.y), static_cast<float>(p.z)};
     };
     for (std::size_t i = 0; i < part.indices.size(); i += 3) {
-      const Vec3d a = part.positions[part.indices[i]], b = part.positions[part.indices[i + 1]], c = part.positions[part.indices[i + 2]];
+      const Vec3d a = part.positions[part.indices[i]], b = part.positions[part.indices[i + 1]],
+                  c = part.positions[part.indices[i + 2]];
       s.min_area = std::min({s.min_area, triangle_area(a, b, c), triangle_area(f(a), f(b), f(c))});
     }
   });
@@ -201,9 +205,12 @@ TEST_P(SceneKinds, MillionIsOnTargetInBoundedParts) {
   EXPECT_LE(s.max_part, 400'000u);
 }
 
-INSTANTIATE_TEST_SUITE_P(All, SceneKinds, ::testing::Values(SceneKind::plant, SceneKind::house, SceneKind::city),
+INSTANTIATE_TEST_SUITE_P(All, SceneKinds,
+                         ::testing::Values(SceneKind::plant, SceneKind::house, SceneKind::city),
                          [](const auto& info) {
-                           return std::string(info.param == SceneKind::plant ? "plant" : info.param == SceneKind::house ? "house" : "city");
+                           return std::string(info.param == SceneKind::plant   ? "plant"
+                                              : info.param == SceneKind::house ? "house"
+                                                                               : "city");
                          });
 
 TEST(SceneGenerator, PlantHasTheHallsFixedSizeAtAnyDensity) {

@@ -72,7 +72,7 @@ TEST(SlurmScripts, SubmitDryRunPrintsBothScriptsAndSubmitsNothing) {
   EXPECT_NE(r.output.find("#SBATCH --mem=2G"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("'--set' 'sample.face_size=32'"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("'output.database=elsewhere.db'"), std::string::npos) << r.output;  // only for the merge
-  EXPECT_NE(r.output.find("'merge' '" + (dir / "elsewhere.db").string() + "'"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("' merge '" + (dir / "elsewhere.db").string() + "'"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find((dir / "elsewhere_shards/shard_2.db").string()), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("nothing submitted"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "elsewhere_shards"));

@@ -62,10 +62,10 @@ ViewResult ViewSession::render(const ViewRequest& r, ViewMode mode, std::FILE* w
   const SceneDrawOptions options;
   const bool want_impostor = mode != ViewMode::truth, want_truth = mode != ViewMode::impostor;
 
+  if (entry) result.cell_id = entry->id;
   if (want_impostor) {
     const DecodedCell* cell = nullptr;
     if (entry) {
-      result.cell_id = entry->id;
       cell = load_cell(entry->id, result.fallback_reason, warn);
     } else {
       result.fallback_reason = "the database has no cells";

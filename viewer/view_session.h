@@ -34,7 +34,7 @@ struct ViewRequest {
 };
 
 struct ViewResult {
-  std::int64_t cell_id = 0;  // 0 when the database has no cells
+  std::int64_t cell_id = 0;  // the eye's (or the forced) cell; 0 when the database has no cells
   bool fallback = false;     // the impostor was replaced by ground truth
   std::string fallback_reason;
   std::optional<ViewFrame> impostor, truth;  // as the mode asks

@@ -1,0 +1,162 @@
+#include "viewer/cell_cache.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include "storage/cell_db.h"
+
+namespace cellbake {
+
+CellCache::CellCache(const std::filesystem::path& database, CellCacheParams params)
+    : database_(database), params_(params) {
+  {
+    CellDb db(database_, CellDb::Mode::read_only);
+    index_ = std::make_shared<const CellIndex>(db);
+  }
+  worker_ = std::thread([this] { run(); });
+}
+
+CellCache::~CellCache() {
+  {
+    std::lock_guard lock(mutex_);
+    stop_ = true;
+  }
+  wake_.notify_all();
+  loaded_.notify_all();
+  worker_.join();
+}
+
+std::shared_ptr<const DecodedCell> CellCache::get(std::int64_t id) {
+  std::lock_guard lock(mutex_);
+  if (auto it = cells_.find(id); it != cells_.end()) {
+    ++stats_.hits;
+    lru_.splice(lru_.begin(), lru_, recency_.at(id));
+    return it->second;
+  }
+  ++stats_.misses;
+  if (!failures_.contains(id)) {
+    std::erase(queue_, id);
+    queue_.push_front(id);
+    wake_.notify_all();
+  }
+  return nullptr;
+}
+
+std::shared_ptr<const DecodedCell> CellCache::get_blocking(std::int64_t id) {
+  if (auto cell = get(id)) return cell;
+  std::unique_lock lock(mutex_);
+  loaded_.wait(lock, [&] { return cells_.contains(id) || failures_.contains(id) || stop_; });
+  auto it = cells_.find(id);
+  return it == cells_.end() ? nullptr : it->second;
+}
+
+void CellCache::prefetch(const std::vector<std::int64_t>& ids) {
+  std::lock_guard lock(mutex_);
+  for (std::int64_t id : ids)
+    if (!cells_.contains(id) && !failures_.contains(id) && std::find(queue_.begin(), queue_.end(), id) == queue_.end())
+      queue_.push_back(id);
+  wake_.notify_all();
+}
+
+std::string CellCache::failure(std::int64_t id) const {
+  std::lock_guard lock(mutex_);
+  auto it = failures_.find(id);
+  return it == failures_.end() ? std::string() : it->second;
+}
+
+std::shared_ptr<const CellIndex> CellCache::index() const {
+  std::lock_guard lock(mutex_);
+  return index_;
+}
+
+CellCacheStats CellCache::stats() const {
+  std::lock_guard lock(mutex_);
+  CellCacheStats s = stats_;
+  s.cells = cells_.size();
+  return s;
+}
+
+void CellCache::store(std::int64_t id, std::shared_ptr<const DecodedCell> cell) {
+  // Called with mutex_ held.
+  const std::size_t bytes = cell->bytes();
+  cells_[id] = std::move(cell);
+  lru_.push_front(id);
+  recency_[id] = lru_.begin();
+  stats_.bytes += bytes;
+  ++stats_.loads;
+  while (stats_.bytes > params_.max_bytes && lru_.size() > 1) {
+    const std::int64_t victim = lru_.back();
+    lru_.pop_back();
+    recency_.erase(victim);
+    stats_.bytes -= cells_.at(victim)->bytes();
+    cells_.erase(victim);
+    ++stats_.evictions;
+  }
+}
+
+void CellCache::run() {
+  using Clock = std::chrono::steady_clock;
+  auto last_refresh = Clock::now();
+  std::unique_ptr<CellDb> db;
+  const auto refresh_interval = std::chrono::duration<double>(params_.index_refresh_seconds);
+  while (true) {
+    std::int64_t id = 0;
+    {
+      std::unique_lock lock(mutex_);
+      wake_.wait_for(lock, refresh_interval, [&] { return stop_ || !queue_.empty(); });
+      if (stop_) return;
+      if (!queue_.empty()) {
+        id = queue_.front();
+        queue_.pop_front();
+        if (cells_.contains(id)) id = 0;
+      }
+    }
+    try {
+      if (!db) db = std::make_unique<CellDb>(database_, CellDb::Mode::read_only);
+      if (Clock::now() - last_refresh >= refresh_interval) {
+        auto fresh = std::make_shared<const CellIndex>(*db);
+        last_refresh = Clock::now();
+        std::lock_guard lock(mutex_);
+        index_ = std::move(fresh);
+        // Cells that were missing (still baking) may exist now.
+        for (auto it = missing_.begin(); it != missing_.end();) {
+          const CellEntry* entry = index_->find(*it);
+          if (entry && entry->done) {
+            failures_.erase(*it);
+            it = missing_.erase(it);
+          } else {
+            ++it;
+          }
+        }
+      }
+    } catch (const std::exception&) {
+      db.reset();  // retried on the next round
+    }
+    if (id == 0) continue;
+    std::shared_ptr<const DecodedCell> cell;
+    std::string error;
+    bool missing = false;
+    try {
+      if (!db) throw std::runtime_error("cell database " + database_.string() + " cannot be opened");
+      const auto row = db->get_cell(id, true);
+      missing = !row;
+      if (!row) throw std::runtime_error("cell " + std::to_string(id) + " is not in the database (yet)");
+      cell = std::make_shared<const DecodedCell>(decode_cell(*row));
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    {
+      std::lock_guard lock(mutex_);
+      if (cell) {
+        store(id, std::move(cell));
+      } else {
+        failures_[id] = error;
+        if (missing) missing_.insert(id);
+        ++stats_.failures;
+      }
+    }
+    loaded_.notify_all();
+  }
+}
+
+}  // namespace cellbake

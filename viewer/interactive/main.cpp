@@ -1,0 +1,372 @@
+// `cellbake-view DB`: the interactive viewer (GLFW window + OpenGL 3.3 core +
+// Dear ImGui panel). Per frame it finds the eye's view cell and draws its near
+// field plus far-field textured depth meshes with the same SceneDrawer as
+// `cellbake render`; a background thread prefetches neighbouring cells. Cells
+// not (yet) in the database, failed or corrupt are drawn as ground truth and
+// flagged. `--frames N --screenshot FILE` renders N frames, saves the window
+// and exits (used under Xvfb by the tests). Guide: docs/viewer.md.
+#include <CLI/CLI.hpp>
+#define GLFW_INCLUDE_NONE  // GL types come from GL/glcorearb.h (stages/render/gl_functions.h)
+#include <GLFW/glfw3.h>
+#include <imgui.h>
+#include <imgui_impl_glfw.h>
+#include <imgui_impl_opengl3.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "stages/render/gl_functions.h"
+#include "storage/cell_db.h"
+#include "storage/geometry_store.h"
+#include "viewer/camera_path.h"
+#include "viewer/cell_cache.h"
+#include "viewer/fly_camera.h"
+#include "viewer/image_metrics.h"
+#include "viewer/interactive/glfw_window_context.h"
+#include "viewer/png_file.h"
+#include "viewer/scene_drawer.h"
+#include "viewer/view_camera.h"
+
+namespace cellbake {
+namespace {
+
+struct Options {
+  std::string database, store, size = "1280x720", eye, look, screenshot;
+  int frames = 0;
+  double fov = 60, near = 0.05, cache_mb = 1024;
+};
+
+enum class DrawMode : int { both, near_only, far_only, truth };
+
+struct ViewerState {
+  DrawMode mode = DrawMode::both;
+  bool wireframe = false, tint_by_cell = false, show_holes = false, freeze = false;
+  std::int64_t frozen_cell = 0;
+  int jump_cell = 1;
+  float fov = 60;
+  bool mouse_look = false;
+  double last_x = 0, last_y = 0;
+};
+
+struct FrameInfo {
+  std::int64_t cell_id = 0;
+  std::string flag;  // why ground truth is shown instead of the impostor ("" = impostor)
+  double cull_half_size = 0;
+  SceneFrameStats stats;
+  std::uint64_t near_triangles = 0;
+  double frame_ms = 0;
+  std::optional<ImageMetrics> holes;
+};
+
+void read_window(const GlFunctions& gl, int w, int h, std::vector<Rgba8>& out) {
+  std::vector<Rgba8> raw(static_cast<std::size_t>(w) * h);
+  gl.BindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+  gl.ReadBuffer(GL_BACK);
+  gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
+  gl.ReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, raw.data());
+  out.resize(raw.size());
+  for (int row = 0; row < h; ++row)
+    std::copy_n(raw.data() + static_cast<std::size_t>(h - 1 - row) * w, w, out.data() + static_cast<std::size_t>(row) * w);
+  for (Rgba8& p : out) p.a = 255;
+}
+
+// Horizontal map axes (a, b with a x b = up) for the mini-map.
+void map_axes(const Vec3d& up, int& a, int& b) {
+  if (std::abs(up.y) > 0.5) a = 2, b = 0;
+  else a = 0, b = 1;
+}
+
+void draw_minimap(const CellIndex& index, const FlyCamera& fly, std::int64_t current, ViewerState& state) {
+  const Box3d all = index.bounds();
+  if (all.empty()) {
+    ImGui::TextUnformatted("(no cells yet)");
+    return;
+  }
+  int a = 0, b = 1;
+  map_axes(fly.up, a, b);
+  const ImVec2 size(260, 200);
+  const ImVec2 origin = ImGui::GetCursorScreenPos();
+  ImGui::InvisibleButton("minimap", size);
+  const bool clicked = ImGui::IsItemClicked();
+  ImDrawList* draw = ImGui::GetWindowDrawList();
+  draw->AddRectFilled(origin, ImVec2(origin.x + size.x, origin.y + size.y), IM_COL32(25, 25, 30, 255));
+  const double span = std::max(all.hi[a] - all.lo[a], all.hi[b] - all.lo[b]) * 1.05;
+  const double scale = std::min(size.x, size.y) / span;
+  const auto to_screen = [&](double u, double v) {
+    return ImVec2(origin.x + 4 + static_cast<float>((u - all.lo[a]) * scale),
+                  origin.y + size.y - 4 - static_cast<float>((v - all.lo[b]) * scale));
+  };
+  const ImVec2 mouse = ImGui::GetMousePos();
+  for (const CellEntry& c : index.cells()) {
+    const ImVec2 p0 = to_screen(c.bounds.lo[a], c.bounds.hi[b]), p1 = to_screen(c.bounds.hi[a], c.bounds.lo[b]);
+    const ImU32 fill = c.done ? IM_COL32(40, 120, 60, 255) : IM_COL32(150, 40, 40, 255);
+    draw->AddRectFilled(p0, p1, fill);
+    draw->AddRect(p0, p1, c.id == current ? IM_COL32(255, 230, 0, 255) : IM_COL32(0, 0, 0, 255));
+    if (clicked && mouse.x >= p0.x && mouse.x <= p1.x && mouse.y >= p0.y && mouse.y <= p1.y) state.jump_cell = static_cast<int>(c.id);
+  }
+  draw->AddCircleFilled(to_screen(fly.position[a], fly.position[b]), 3.5f, IM_COL32(255, 255, 255, 255));
+  const Vec3d f = fly.forward();
+  const ImVec2 p = to_screen(fly.position[a], fly.position[b]);
+  draw->AddLine(p, ImVec2(p.x + 12 * static_cast<float>(f[a]), p.y - 12 * static_cast<float>(f[b])), IM_COL32(255, 255, 255, 255));
+}
+
+int run(const Options& opt) {
+  CellDb meta_db(opt.database, CellDb::Mode::read_only);
+  const std::string store_path = opt.store.empty() ? meta_db.meta("store").value_or("") : opt.store;
+  if (store_path.empty()) throw std::runtime_error(opt.database + " has no meta 'store'; pass --store");
+  const Vec3d up = up_axis(meta_db.meta("up").value_or("z"));
+  GeometryStore store(store_path);
+  CellCacheParams cache_params;
+  cache_params.max_bytes = static_cast<std::size_t>(opt.cache_mb * 1048576.0);
+  CellCache cache(opt.database, cache_params);
+  const auto [width, height] = parse_image_size(opt.size);
+
+  glfwSetErrorCallback([](int code, const char* text) { std::fprintf(stderr, "glfw error %d: %s\n", code, text); });
+  if (!glfwInit()) throw std::runtime_error("cannot initialise GLFW (no display? run under xvfb-run)");
+  struct GlfwGuard {
+    ~GlfwGuard() { glfwTerminate(); }
+  } glfw_guard;
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  GLFWwindow* window = glfwCreateWindow(width, height, ("cellbake view " + opt.database).c_str(), nullptr, nullptr);
+  if (!window) throw std::runtime_error("cannot create an OpenGL 3.3 core window");
+  glfwMakeContextCurrent(window);
+  glfwSwapInterval(opt.frames > 0 ? 0 : 1);
+
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;
+  ImGui_ImplGlfw_InitForOpenGL(window, true);
+  ImGui_ImplOpenGL3_Init("#version 330");
+
+  int exit_code = 0;
+  {
+    auto context = std::make_shared<GlfwWindowContext>(window);
+    SceneDrawerParams drawer_params;
+    SceneDrawer drawer(context, store, drawer_params);
+    const GlFunctions gl = load_gl_functions(*context);
+    GLuint display = 0;
+    gl.GenTextures(1, &display);
+    gl.BindTexture(GL_TEXTURE_2D, display);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+
+    FlyCamera fly;
+    fly.up = up;
+    const Box3d model = store.model_bounds();
+    fly.floor = model.empty() ? 0 : dot(model.lo, up);
+    const auto index0 = cache.index();
+    const Vec3d start = !opt.eye.empty() ? parse_point(opt.eye, "--eye")
+                        : !index0->cells().empty() ? index0->cells().front().bounds.center()
+                                                   : model.center();
+    fly.position = start;
+    if (!opt.look.empty()) {
+      const Vec3d d = parse_point(opt.look, "--look") - start;
+      int a = 0, b = 1;
+      map_axes(up, a, b);
+      fly.yaw_deg = std::atan2(d[b], d[a]) * 180 / 3.14159265358979323846;
+      fly.pitch_deg = std::atan2(dot(d, up), std::hypot(d[a], d[b])) * 180 / 3.14159265358979323846;
+    }
+    fly.eye_height = dot(start, up) - fly.floor;
+    fly.speed = std::max(0.5, 0.02 * length(model.extent()));
+    ViewerState state;
+    state.fov = static_cast<float>(opt.fov);
+    FrameInfo info;
+    ViewFrame frame, truth;
+    std::vector<Rgba8> shown;
+    auto last = std::chrono::steady_clock::now();
+
+    for (int frame_number = 0; !glfwWindowShouldClose(window); ++frame_number) {
+      glfwPollEvents();
+      const auto now = std::chrono::steady_clock::now();
+      const double dt = std::min(0.1, std::chrono::duration<double>(now - last).count());
+      last = now;
+      ImGuiIO& io = ImGui::GetIO();
+      if (!io.WantCaptureKeyboard) {
+        const auto key = [&](int k) { return glfwGetKey(window, k) == GLFW_PRESS ? 1.0 : 0.0; };
+        const double boost = key(GLFW_KEY_LEFT_SHIFT) ? 4.0 : 1.0;
+        fly.move((key(GLFW_KEY_W) - key(GLFW_KEY_S)) * boost, (key(GLFW_KEY_D) - key(GLFW_KEY_A)) * boost,
+                 (key(GLFW_KEY_E) - key(GLFW_KEY_Q)) * boost, dt);
+      }
+      double mx = 0, my = 0;
+      glfwGetCursorPos(window, &mx, &my);
+      const bool look_button = glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
+                               (glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS && !io.WantCaptureMouse);
+      if (look_button && state.mouse_look) fly.turn(-(mx - state.last_x) * 0.2, -(my - state.last_y) * 0.2);
+      state.mouse_look = look_button;
+      state.last_x = mx, state.last_y = my;
+
+      // The eye's cell, its decoded far field, and prefetching of the neighbours.
+      const auto index = cache.index();
+      const CellEntry* entry = state.freeze ? index->find(state.frozen_cell) : index->containing(fly.position);
+      if (!state.freeze && entry) state.frozen_cell = entry->id;
+      std::shared_ptr<const DecodedCell> cell;
+      info = {};
+      if (entry) {
+        info.cell_id = entry->id;
+        info.cull_half_size = entry->cull_half_size;
+        cell = opt.frames > 0 ? cache.get_blocking(entry->id) : cache.get(entry->id);
+        if (!cell) {
+          const std::string failure = cache.failure(entry->id);
+          info.flag = failure.empty() ? "loading" : failure;
+        }
+        std::vector<std::int64_t> neighbours;
+        const double reach = 1.01 * (entry->bounds.hi.x - entry->bounds.lo.x);
+        for (const CellEntry& c : index->cells())
+          if (c.id != entry->id && distance_to_box(entry->bounds.center(), c.bounds) <= reach) neighbours.push_back(c.id);
+        cache.prefetch(neighbours);
+      } else {
+        info.flag = "eye outside every baked cell";
+      }
+
+      int fw = 0, fh = 0;
+      glfwGetFramebufferSize(window, &fw, &fh);
+      fw = std::max(fw, 1), fh = std::max(fh, 1);
+      const RenderCamera camera = fly.camera(state.fov, fw, fh, opt.near);
+      SceneDrawOptions options;
+      options.wireframe = state.wireframe;
+      options.tint_by_cell = state.tint_by_cell;
+      options.near_field = state.mode != DrawMode::far_only;
+      options.far_field = state.mode != DrawMode::near_only;
+      const auto t0 = std::chrono::steady_clock::now();
+      try {
+        if (state.mode == DrawMode::truth || !cell) {
+          info.stats = drawer.draw_truth(camera, fw, fh, options, frame);
+        } else {
+          info.stats = drawer.draw_impostor(camera, fw, fh, *cell, options, frame);
+          info.near_triangles = options.near_field ? cell->near_triangles : 0;
+        }
+      } catch (const std::exception& e) {
+        info.flag = std::string("drawing failed: ") + e.what();
+        std::fprintf(stderr, "warning: cell %lld: %s; drawing ground truth\n", (long long)info.cell_id, e.what());
+        info.stats = drawer.draw_truth(camera, fw, fh, options, frame);
+      }
+      const std::vector<Rgba8>* image = &frame.color;
+      if (state.show_holes && cell && state.mode != DrawMode::truth) {
+        drawer.draw_truth(camera, fw, fh, SceneDrawOptions{}, truth);
+        info.holes = compare_frames(frame, truth);
+        shown = error_image(frame, truth);
+        image = &shown;
+      }
+      info.frame_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+
+      context->make_current();
+      gl.BindTexture(GL_TEXTURE_2D, display);
+      gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+      gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, fw, fh, 0, GL_RGBA, GL_UNSIGNED_BYTE, image->data());
+      gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+      gl.Viewport(0, 0, fw, fh);
+      const float black[4] = {0, 0, 0, 1};
+      gl.ClearBufferfv(GL_COLOR, 0, black);
+
+      ImGui_ImplOpenGL3_NewFrame();
+      ImGui_ImplGlfw_NewFrame();
+      ImGui::NewFrame();
+      ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(display)),
+                                               ImVec2(0, 0), io.DisplaySize);
+      ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
+      ImGui::Begin("cellbake");
+      ImGui::Text("cell %lld   cull box half-size %.2f", (long long)info.cell_id, info.cull_half_size);
+      if (!info.flag.empty()) ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "ground truth: %s", info.flag.c_str());
+      ImGui::Text("near %llu tris   far %llu tris   chunks %llu (%llu tris)", (unsigned long long)info.near_triangles,
+                  (unsigned long long)info.stats.far_triangles, (unsigned long long)info.stats.chunks_drawn,
+                  (unsigned long long)info.stats.chunk_triangles);
+      ImGui::Text("frame %.1f ms   draw %.1f ms", info.frame_ms, info.stats.milliseconds);
+      const CellCacheStats cs = cache.stats();
+      ImGui::Text("cache: %zu cells, %.1f MB, hits %llu, misses %llu, failed %llu", cs.cells, cs.bytes / 1048576.0,
+                  (unsigned long long)cs.hits, (unsigned long long)cs.misses, (unsigned long long)cs.failures);
+      ImGui::Text("GPU: far field %.1f MB, chunks %.1f MB", drawer.tdm_gpu_bytes() / 1048576.0,
+                  drawer.chunk_stats().cached_bytes / 1048576.0);
+      if (info.holes)
+        ImGui::Text("holes %.4f  skins %.4f  PSNR %.1f dB", info.holes->hole_fraction, info.holes->skin_fraction,
+                    info.holes->psnr_db);
+      ImGui::Separator();
+      int mode = static_cast<int>(state.mode);
+      ImGui::RadioButton("both", &mode, 0);
+      ImGui::SameLine();
+      ImGui::RadioButton("near only", &mode, 1);
+      ImGui::SameLine();
+      ImGui::RadioButton("far only", &mode, 2);
+      ImGui::SameLine();
+      ImGui::RadioButton("ground truth", &mode, 3);
+      state.mode = static_cast<DrawMode>(mode);
+      ImGui::Checkbox("wireframe", &state.wireframe);
+      ImGui::SameLine();
+      ImGui::Checkbox("colour by cell", &state.tint_by_cell);
+      ImGui::Checkbox("show holes", &state.show_holes);
+      ImGui::SameLine();
+      ImGui::Checkbox("freeze cell", &state.freeze);
+      ImGui::Checkbox("walk", &fly.walk);
+      float speed = static_cast<float>(fly.speed), eye_height = static_cast<float>(fly.eye_height);
+      ImGui::SliderFloat("speed", &speed, 0.1f, 200.0f, "%.1f", ImGuiSliderFlags_Logarithmic);
+      ImGui::SliderFloat("eye height", &eye_height, 0.1f, 10.0f);
+      ImGui::SliderFloat("fov", &state.fov, 20.0f, 120.0f);
+      fly.speed = speed, fly.eye_height = eye_height;
+      ImGui::Text("eye %.2f %.2f %.2f", fly.position.x, fly.position.y, fly.position.z);
+      ImGui::InputInt("cell", &state.jump_cell);
+      ImGui::SameLine();
+      const int before_jump = state.jump_cell;
+      draw_minimap(*index, fly, info.cell_id, state);
+      if (ImGui::Button("jump to cell") || state.jump_cell != before_jump) {
+        if (const CellEntry* target = index->find(state.jump_cell)) {
+          fly.position = target->bounds.center();
+          fly.eye_height = dot(fly.position, up) - fly.floor;
+        }
+      }
+      ImGui::TextUnformatted("WASD move, Q/E down/up, shift faster, right mouse look");
+      ImGui::End();
+      ImGui::Render();
+      ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+
+      if (opt.frames > 0 && frame_number + 1 >= opt.frames) {
+        if (!opt.screenshot.empty()) {
+          std::vector<Rgba8> pixels;
+          read_window(gl, fw, fh, pixels);
+          write_png(opt.screenshot, fw, fh, pixels);
+          std::printf("screenshot %s (%dx%d) after %d frames, cell %lld%s\n", opt.screenshot.c_str(), fw, fh,
+                      opt.frames, (long long)info.cell_id, info.flag.empty() ? "" : " (ground truth)");
+        }
+        break;
+      }
+      glfwSwapBuffers(window);
+    }
+    context->make_current();
+    gl.DeleteTextures(1, &display);
+  }
+  ImGui_ImplOpenGL3_Shutdown();
+  ImGui_ImplGlfw_Shutdown();
+  ImGui::DestroyContext();
+  glfwDestroyWindow(window);
+  return exit_code;
+}
+
+}  // namespace
+}  // namespace cellbake
+
+int main(int argc, char** argv) {
+  cellbake::Options opt;
+  CLI::App app{"cellbake-view: interactive viewer of a cell database (also `cellbake view`)"};
+  app.add_option("database", opt.database, "Cell database")->required();
+  app.add_option("--store", opt.store, "Geometry store (default: the one the database names)");
+  app.add_option("--size", opt.size, "Window size WxH");
+  app.add_option("--eye", opt.eye, "Start position X,Y,Z (default: the first cell's centre)");
+  app.add_option("--look", opt.look, "Start looking at X,Y,Z");
+  app.add_option("--fov", opt.fov, "Vertical field of view, degrees")->check(CLI::Range(20.0, 120.0));
+  app.add_option("--near", opt.near, "Near plane, model units")->check(CLI::PositiveNumber);
+  app.add_option("--cache-mb", opt.cache_mb, "Memory cap of decoded cells, MiB")->check(CLI::PositiveNumber);
+  app.add_option("--frames", opt.frames, "Render this many frames, then exit")->check(CLI::NonNegativeNumber);
+  app.add_option("--screenshot", opt.screenshot, "With --frames: save the last frame as this PNG");
+  CLI11_PARSE(app, argc, argv);
+  try {
+    return cellbake::run(opt);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "cellbake view: error: %s\n", e.what());
+    return 1;
+  }
+}
