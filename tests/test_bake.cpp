@@ -11,45 +11,15 @@
 #include "runner/bake_runner.h"
 #include "runner/parallel.h"
 #include "storage/cell_db.h"
+#include "fixture_room_obj.h"
 #include "test_support.h"
 
 namespace cellbake {
 namespace {
 
-// Appends an axis-aligned box (12 triangles, each face split into n x n quads) to an OBJ stream.
-void obj_box(std::ostringstream& o, int& next_vertex, Vec3d lo, Vec3d hi, int n = 2) {
-  auto quad_grid = [&](Vec3d origin, Vec3d du, Vec3d dv) {
-    const int base = next_vertex;
-    for (int j = 0; j <= n; ++j)
-      for (int i = 0; i <= n; ++i) {
-        const Vec3d p = origin + du * (double(i) / n) + dv * (double(j) / n);
-        o << "v " << p.x << " " << p.y << " " << p.z << " " << (0.3 + 0.1 * (i % 3)) << " 0.5 " << (0.2 + 0.2 * (j % 2))
-          << "\n";
-        ++next_vertex;
-      }
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const int a = base + j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
-        o << "f " << a << " " << b << " " << d << "\nf " << a << " " << d << " " << c << "\n";
-      }
-  };
-  const Vec3d e = hi - lo;
-  quad_grid(lo, {e.x, 0, 0}, {0, e.y, 0});
-  quad_grid({lo.x, lo.y, hi.z}, {e.x, 0, 0}, {0, e.y, 0});
-  quad_grid(lo, {e.x, 0, 0}, {0, 0, e.z});
-  quad_grid({lo.x, hi.y, lo.z}, {e.x, 0, 0}, {0, 0, e.z});
-  quad_grid(lo, {0, e.y, 0}, {0, 0, e.z});
-  quad_grid({hi.x, lo.y, lo.z}, {0, e.y, 0}, {0, 0, e.z});
-}
-
-// A 12 x 12 x 4 m room with a grid of pillars: a few thousand triangles.
+// The room of fixture_room_obj.h, ingested in 128-triangle chunks.
 std::filesystem::path make_room_store(const test::TempDir& dir) {
-  std::ostringstream o;
-  int next = 1;
-  obj_box(o, next, {0, 0, 0}, {12, 12, 4}, 8);
-  for (int y = 0; y < 4; ++y)
-    for (int x = 0; x < 4; ++x) obj_box(o, next, {1.5 + 3 * x, 1.5 + 3 * y, 0}, {1.8 + 3 * x, 1.8 + 3 * y, 4}, 3);
-  test::write_text(dir / "room.obj", o.str());
+  test::write_text(dir / "room.obj", test::room_obj());
   IngestParams p;
   p.max_chunk_triangles = 128;
   ingest_models({dir / "room.obj"}, dir / "room.store.db", p, tbb_parallel_for());
@@ -153,7 +123,7 @@ TEST(Bake, AFailingCellIsRecordedAndTheOthersFinish) {
   // Compact clusters 10 m apart along x, one chunk each; cells sit on clusters.
   std::ostringstream o;
   int next = 1;
-  for (int k = 0; k < 6; ++k) obj_box(o, next, {10.0 * k - 0.4, -0.4, -0.4}, {10.0 * k + 0.4, 0.4, 0.4}, 3);
+  for (int k = 0; k < 6; ++k) test::obj_box(o, next, {10.0 * k - 0.4, -0.4, -0.4}, {10.0 * k + 0.4, 0.4, 0.4}, 3);
   test::write_text(dir / "clusters.obj", o.str());
   IngestParams p;
   p.max_chunk_triangles = 128;
@@ -164,7 +134,6 @@ TEST(Bake, AFailingCellIsRecordedAndTheOthersFinish) {
 
   BakeConfig c;
   c.store = dir / "s.db";
-  c.regions = {Box3d{{0, 0, 0}, {50, 0, 0}}};  // six 1 m cells... spaced by cell size 10
   c.cell_size = 10;
   c.near_budget = 120;
   c.face_size = 16;

@@ -20,37 +20,12 @@
 #include "stages/render/chunk_renderer.h"
 #include "stages/render/gl_context.h"
 #include "storage/cell_db.h"
+#include "fixture_room_obj.h"
 #include "test_support.h"
 #include "viewer/view_session.h"
 
 namespace cellbake {
 namespace {
-
-// Appends an axis-aligned box (each face an n x n grid of quads) to an OBJ stream.
-void obj_box(std::ostringstream& o, int& next_vertex, Vec3d lo, Vec3d hi, int n) {
-  auto quad_grid = [&](Vec3d origin, Vec3d du, Vec3d dv) {
-    const int base = next_vertex;
-    for (int j = 0; j <= n; ++j)
-      for (int i = 0; i <= n; ++i) {
-        const Vec3d p = origin + du * (double(i) / n) + dv * (double(j) / n);
-        o << "v " << p.x << " " << p.y << " " << p.z << " " << (0.3 + 0.2 * (i % 3)) << " " << (0.3 + 0.1 * (j % 4))
-          << " " << (0.2 + 0.3 * ((i + j) % 2)) << "\n";
-        ++next_vertex;
-      }
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const int a = base + j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
-        o << "f " << a << " " << b << " " << d << "\nf " << a << " " << d << " " << c << "\n";
-      }
-  };
-  const Vec3d e = hi - lo;
-  quad_grid(lo, {e.x, 0, 0}, {0, e.y, 0});
-  quad_grid({lo.x, lo.y, hi.z}, {e.x, 0, 0}, {0, e.y, 0});
-  quad_grid(lo, {e.x, 0, 0}, {0, 0, e.z});
-  quad_grid({lo.x, hi.y, lo.z}, {e.x, 0, 0}, {0, 0, e.z});
-  quad_grid(lo, {0, e.y, 0}, {0, 0, e.z});
-  quad_grid({hi.x, lo.y, lo.z}, {0, e.y, 0}, {0, 0, e.z});
-}
 
 // A 12 x 12 x 4 m room with one pillar (x 7..8, y 5..7) and two 2 m view
 // cells centred at (2, 6, 1.6) and (4, 6, 1.6), baked with 64-pixel PNG faces.
@@ -60,8 +35,8 @@ struct BakedRoom {
   BakedRoom() {
     std::ostringstream o;
     int next = 1;
-    obj_box(o, next, {0, 0, 0}, {12, 12, 4}, 8);
-    obj_box(o, next, {7, 5, 0}, {8, 7, 4}, 4);
+    test::obj_box(o, next, {0, 0, 0}, {12, 12, 4}, 8);
+    test::obj_box(o, next, {7, 5, 0}, {8, 7, 4}, 4);
     test::write_text(dir / "room.obj", o.str());
     IngestParams ip;
     ip.max_chunk_triangles = 128;

@@ -9,6 +9,8 @@
 namespace cellbake {
 namespace {
 
+constexpr std::size_t kDecodedCellsKept = 16;
+
 std::filesystem::path store_of(const CellDb& db, const std::filesystem::path& override_path) {
   if (!override_path.empty()) return override_path;
   const auto store = db.meta("store");
@@ -45,6 +47,7 @@ const DecodedCell* ViewSession::load_cell(std::int64_t id, std::string& reason, 
     const auto row = db_.get_cell(id, true);
     if (!row) throw std::runtime_error("cell " + std::to_string(id) + " is not in the database");
     auto cell = std::make_shared<const DecodedCell>(decode_cell(*row));
+    if (decoded_.size() >= kDecodedCellsKept) decoded_.clear();  // a path walks on; the next cells reload
     return (decoded_[id] = std::move(cell)).get();
   } catch (const std::exception& e) {
     reason = e.what();
@@ -78,9 +81,10 @@ ViewResult ViewSession::render(const ViewRequest& r, ViewMode mode, std::FILE* w
         result.impostor = std::move(frame);
         result.triangles_impostor = cell->near_triangles + result.impostor_stats.far_triangles;
       } catch (const std::exception& e) {
-        result.fallback_reason = "cell " + std::to_string(cell->id) + ": " + e.what();
-        failures_[cell->id] = result.fallback_reason;
-        decoded_.erase(cell->id);
+        const std::int64_t id = cell->id;
+        result.fallback_reason = "cell " + std::to_string(id) + ": " + e.what();
+        failures_[id] = result.fallback_reason;
+        decoded_.erase(id);
         if (warn) std::fprintf(warn, "warning: %s; drawing ground truth there\n", result.fallback_reason.c_str());
       }
     }

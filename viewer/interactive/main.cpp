@@ -309,11 +309,14 @@ int run(const Options& opt) {
       ImGui::SliderFloat("fov", &state.fov, 20.0f, 120.0f);
       fly.speed = speed, fly.eye_height = eye_height;
       ImGui::Text("eye %.2f %.2f %.2f", fly.position.x, fly.position.y, fly.position.z);
-      ImGui::InputInt("cell", &state.jump_cell);
+      ImGui::SetNextItemWidth(120);
+      ImGui::InputInt("##cell", &state.jump_cell);
       ImGui::SameLine();
-      const int before_jump = state.jump_cell;
-      draw_minimap(*index, fly, info.cell_id, state);
-      if (ImGui::Button("jump to cell") || state.jump_cell != before_jump) {
+      bool jump = ImGui::Button("jump to cell");
+      const int before_click = state.jump_cell;
+      draw_minimap(*index, fly, info.cell_id, state);  // a click on a cell sets jump_cell
+      jump = jump || state.jump_cell != before_click;
+      if (jump) {
         if (const CellEntry* target = index->find(state.jump_cell)) {
           fly.position = target->bounds.center();
           fly.eye_height = dot(fly.position, up) - fly.floor;
