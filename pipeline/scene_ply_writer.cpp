@@ -121,8 +121,8 @@ SceneSummary generate_scene_to_ply(const SceneParams& params, const std::filesys
 
   BinaryFile ply(tmp, "wb");
   BinaryFile faces(faces_path, "w+b");
-  const std::string placeholder = ply_header(0, 0, params);
-  ply.write(placeholder.data(), placeholder.size());
+  const std::string blank_header = ply_header(0, 0, params);
+  ply.write(blank_header.data(), blank_header.size());
 
   std::uint64_t vertex_base = 0, face_count = 0;
   const SceneSummary summary = generate_scene(params, [&](const TriangleMesh& part) {
@@ -165,7 +165,7 @@ SceneSummary generate_scene_to_ply(const SceneParams& params, const std::filesys
   }
   faces.close();
   const std::string header = ply_header(vertex_base, face_count, params);
-  if (header.size() != placeholder.size()) throw std::logic_error("scene ply writer: header length changed");
+  if (header.size() != blank_header.size()) throw std::logic_error("scene ply writer: header length changed");
   ply.seek(0);
   ply.write(header.data(), header.size());
   ply.close();

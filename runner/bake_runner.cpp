@@ -48,7 +48,7 @@ BakeSummary run_bake(const BakeConfig& config, const BakeOptions& options) {
   BakeSummary summary;
   summary.cells_selected = cells.size();
   const auto stamps = db.stamps();
-  std::vector<std::shared_ptr<CellWork>> todo;
+  std::vector<std::shared_ptr<CellWork>> queued;
   for (const auto& c : cells) {
     auto work = std::make_shared<CellWork>();
     work->cell = c;
@@ -68,11 +68,11 @@ BakeSummary run_bake(const BakeConfig& config, const BakeOptions& options) {
         ++summary.cull_reused;
       }
     }
-    todo.push_back(std::move(work));
+    queued.push_back(std::move(work));
   }
 
   using WorkPtr = std::shared_ptr<CellWork>;
-  ProgressBar progress("bake", todo.size(), "cells");
+  ProgressBar progress("bake", queued.size(), "cells");
   std::atomic<std::size_t> next{0};
   std::uint64_t done = 0;
 
@@ -82,11 +82,11 @@ BakeSummary run_bake(const BakeConfig& config, const BakeOptions& options) {
     tbb::flow::graph g;
     tbb::flow::input_node<WorkPtr> source(g, [&](tbb::flow_control& fc) -> WorkPtr {
       const std::size_t i = next++;
-      if (i >= todo.size()) {
+      if (i >= queued.size()) {
         fc.stop();
         return {};
       }
-      return todo[i];
+      return queued[i];
     });
     // Bound the cells in flight (each holds a cube map and dense meshes).
     tbb::flow::limiter_node<WorkPtr> limiter(g, std::size_t(2 * threads));
