@@ -108,6 +108,9 @@ const std::map<std::string, Setter>& setters() {
       {"simplify.depth_error_relative", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.depth_error_relative = number(n, w, "simplify.depth_error_relative", 0, 1);
        }},
+      {"simplify.boundary_error_px", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.boundary_error_px = number(n, w, "simplify.boundary_error_px", 0, 8);
+       }},
       {"simplify.max_triangles", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.max_face_triangles = int(integer(n, w, "simplify.max_triangles", 2, 1 << 24));
        }},
@@ -240,7 +243,7 @@ std::string describe_bake_config(const BakeConfig& c) {
     << "\nsample.near_plane=" << c.near_plane << "\ndepth_mesh.skin_angle_deg=" << c.skin_angle_deg
     << "\ndepth_mesh.depth_jump=" << c.depth_jump
     << "\nsimplify.depth_error_relative=" << c.depth_error_relative
-    << "\nsimplify.max_triangles=" << c.max_face_triangles << "\nencode.image_format=" << c.image_format
+    << "\nsimplify.boundary_error_px=" << c.boundary_error_px << "\nsimplify.max_triangles=" << c.max_face_triangles << "\nencode.image_format=" << c.image_format
     << "\nencode.quality=" << c.image_quality << "\nencode.position_bits=" << c.position_bits << "\n";
   for (const auto& r : c.regions)
     o << "region=" << r.lo.x << "," << r.lo.y << "," << r.lo.z << "," << r.hi.x << "," << r.hi.y << "," << r.hi.z

@@ -40,9 +40,11 @@ struct BakeConfig {
   double depth_jump = 0.1;       // relative depth jump beyond which an edge is a skin
 
   // [simplify]
-  // Silhouettes, borders and skins never move (coverage is kept exactly);
-  // interior vertices move only along their eye ray, by at most this much.
+  // Interior vertices move only along their eye ray, by at most this much.
   double depth_error_relative = 0.01;  // relative to the depth
+  // Outlines (silhouettes, skin edges, coverage edges) move at most this far
+  // on screen; 0 keeps them pixel-exact (staircases, many more triangles).
+  double boundary_error_px = 0.5;
   int max_face_triangles = 10000;      // per cube face (thesis VWALK cap)
 
   // [encode]

@@ -41,7 +41,7 @@ CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::str
   in.text(h.cull);
   in.text("sample").u64(StageVersions::sample).u64(c.face_size).u64(c.supersample).f64(c.near_plane);
   in.text("depth_mesh").u64(StageVersions::depth_mesh).f64(c.skin_angle_deg).f64(c.depth_jump);
-  in.text("simplify").u64(StageVersions::simplify).f64(c.depth_error_relative).u64(c.max_face_triangles);
+  in.text("simplify").u64(StageVersions::simplify).f64(c.depth_error_relative).f64(c.boundary_error_px).u64(c.max_face_triangles);
   in.text("encode").u64(StageVersions::encode).text(c.image_format).u64(c.image_quality).u64(c.position_bits);
   h.input = in.hex();
   return h;
@@ -78,13 +78,12 @@ void run_simplify(CellWork& work, const BakeConfig& config) {
   StageTimer timer(work, "simplify");
   SimplifyParams p;
   p.depth_error_relative = config.depth_error_relative;
+  p.boundary_error_px = config.boundary_error_px;
   p.max_triangles = static_cast<std::size_t>(config.max_face_triangles);
   for (int f = 0; f < kCubeFaces; ++f) {
     SimplifyResult r = simplify_face_mesh(work.dense[f], config.face_size, p);
     work.simplified[f] = std::move(r.mesh);
-    // Coverage error: fraction of sub-pixel samples whose covered/uncovered state changed.
-    const double samples = 4.0 * config.face_size * config.face_size;
-    work.coverage_error[f] = double(r.achieved.uncovered_samples + r.achieved.spurious_samples) / samples;
+    work.boundary_error_px[f] = r.achieved.max_boundary_error_px;
     work.depth_error[f] = r.achieved.max_depth_error_relative;
     work.dense[f] = FaceMesh{};  // release the dense mesh early
   }
@@ -110,11 +109,11 @@ void run_encode(CellWork& work, const BakeConfig& config) {
     fr.image = encode_image(face.color, face.size, face.size, ip);
     fr.mesh = encode_face_mesh(work.simplified[f], mp);
     fr.triangles = static_cast<std::uint32_t>(work.simplified[f].triangle_count());
-    fr.coverage_error = work.coverage_error[f];
+    fr.boundary_error_px = work.boundary_error_px[f];
     fr.depth_error = work.depth_error[f];
     row.far_triangles += fr.triangles;
     row.bytes += fr.image.size() + fr.mesh.size();
-    row.max_coverage_error = std::max(row.max_coverage_error, fr.coverage_error);
+    row.max_boundary_error_px = std::max(row.max_boundary_error_px, fr.boundary_error_px);
     row.max_depth_error = std::max(row.max_depth_error, fr.depth_error);
     sample.faces.push_back(std::move(fr));
   }

@@ -30,7 +30,7 @@ struct StageVersions {
   static constexpr int cull_box = 1;
   static constexpr int sample = 1;
   static constexpr int depth_mesh = 1;
-  static constexpr int simplify = 1;
+  static constexpr int simplify = 2;
   static constexpr int encode = 1;
 };
 
@@ -53,7 +53,7 @@ struct CellWork {
   std::optional<CubeSample> sample;           // set by run_sample
   std::array<FaceMesh, kCubeFaces> dense;     // set by run_depth_mesh
   std::array<FaceMesh, kCubeFaces> simplified;
-  std::array<double, kCubeFaces> coverage_error{};
+  std::array<double, kCubeFaces> boundary_error_px{};
   std::array<double, kCubeFaces> depth_error{};
   std::map<std::string, double> seconds;
   std::string failed_stage, error;  // set when a stage threw

@@ -13,6 +13,7 @@
 #include "runner/commands.h"
 #include "runner/ingest_summary.h"
 #include "runner/parallel.h"
+#include "runner/verify_runner.h"
 #include "storage/geometry_store.h"
 
 namespace cellbake {
@@ -67,6 +68,19 @@ void add_demo_command(CLI::App& app) {
     const BakeSummary s = run_bake(config, bo);
     print_bake_summary(s, config);
     if (s.cells_failed > 0) throw std::runtime_error(std::to_string(s.cells_failed) + " cell(s) failed");
+
+    // Last step: the verify report (impostor vs ground truth) of the demo bake.
+    VerifyOptions vo;
+    vo.views_per_cell = 2;
+    vo.width = 256;
+    vo.height = 192;
+    vo.threads = opt->threads;
+    const std::filesystem::path report = out / "report";
+    std::printf("[demo] verifying %s -> %s\n", config.database.c_str(), report.c_str());
+    const VerifySummary v = run_verify(config.database, report, vo);
+    std::printf("[demo] %llu views, median PSNR %.2f dB, %.1f s\n[demo] report: %s\n",
+                (unsigned long long)v.views_rendered, v.psnr_median_db, v.seconds,
+                std::filesystem::absolute(v.report_html).c_str());
   });
 }
 

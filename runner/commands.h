@@ -18,5 +18,6 @@ void add_submit_command(CLI::App& app);
 void add_merge_command(CLI::App& app);
 void add_render_command(CLI::App& app);
 void add_view_command(CLI::App& app);
+void add_verify_command(CLI::App& app);
 
 }  // namespace cellbake

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   cellbake::add_merge_command(app);
   cellbake::add_render_command(app);
   cellbake::add_view_command(app);
+  cellbake::add_verify_command(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -83,6 +83,21 @@ class CubeLattice {
     return compute_point(p);
   }
 
+  // A pixel's surface point in the screen frame of face `frame`: s = right / z,
+  // t = up / z, w = 1 / z with z = forward component (cached for the cached face).
+  struct Screen {
+    double s, t, w;
+  };
+  Screen screen(const PixelRef& p, int frame) const {
+    if (p.face == cached_face_ && frame == cached_face_) return screens_[std::size_t(p.j) * n_ + p.i];
+    return compute_screen(point(p), frame);
+  }
+  Screen compute_screen(const Vec3d& p, int frame) const {
+    const FaceBasis& b = basis_[frame];
+    const double z = cellbake::dot(p, b.forward);
+    return {cellbake::dot(p, b.right) / z, cellbake::dot(p, b.up) / z, 1.0 / z};
+  }
+
   // Caches the surface points of face f (replacing the previous face's) and
   // computes face f's skin flags (see skin_flags).
   void cache_face(int f) {
@@ -90,11 +105,13 @@ class CubeLattice {
     const std::size_t count = std::size_t(n_) * n_;
     points_.resize(count);
     distances_.resize(count);
+    screens_.resize(count);
     for (int j = 0; j < n_; ++j)
       for (int i = 0; i < n_; ++i) {
         const std::size_t k = std::size_t(j) * n_ + i;
         points_[k] = compute_point({f, i, j});
         distances_[k] = length(points_[k]);
+        screens_[k] = compute_screen(points_[k], f);
       }
     cached_face_ = f;
     std::vector<std::uint8_t>& flags = flags_[f];
@@ -192,6 +209,7 @@ class CubeLattice {
   int cached_face_ = -1;
   std::vector<Vec3d> points_;
   std::vector<double> distances_;
+  std::vector<Screen> screens_;
   std::array<std::vector<std::uint8_t>, kCubeFaces> flags_;
 };
 
@@ -202,6 +220,7 @@ struct Corner {
   std::array<int, 4> label{};
   std::array<bool, 6> pair_connected{};  // pairs in order (0,1) (0,2) (0,3) (1,2) (1,3) (2,3)
   int components = 0;
+  std::array<PixelRef, 20> fit;  // scratch for corner_inverse_depth: at most 4 pixels and 4 neighbours of each
 };
 
 int pair_index(int a, int b) {
@@ -275,9 +294,8 @@ bool edge_point_fully_connected(const Corner& c) {
 // otherwise (a crease along the edge, a curved surface) the corner takes the
 // mean of each pixel's inverse depth in its own face's frame. Deterministic: the same sorted pixels and
 // frame give the same bits for every face sharing the corner.
-double corner_inverse_depth(const CubeLattice& lat, const Corner& c, int l, const Lattice& d) {
-  // At most 4 pixels and 4 neighbours of each.
-  std::array<PixelRef, 20> fit;
+double corner_inverse_depth(const CubeLattice& lat, Corner& c, int l, const Lattice& d) {
+  std::array<PixelRef, 20>& fit = c.fit;
   int fit_count = 0;
   int frame = kCubeFaces;
   bool one_face = true;
@@ -319,9 +337,8 @@ double corner_inverse_depth(const CubeLattice& lat, const Corner& c, int l, cons
   int sample_count = 0;
   double m00 = 0, m01 = 0, m02 = 0, m11 = 0, m12 = 0, m22 = 0, r0 = 0, r1 = 0, r2 = 0;
   for (int a = 0; a < fit_count; ++a) {
-    const Vec3d p = lat.point(fit[a]);
-    const double z = dot(p, b.forward);
-    const Sample x{dot(p, b.right) / z - s0, dot(p, b.up) / z - t0, 1.0 / z};
+    const CubeLattice::Screen& q = lat.screen(fit[a], frame);
+    const Sample x{q.s - s0, q.t - t0, q.w};
     samples[sample_count++] = x;
     m00 += 1, m01 += x.s, m02 += x.t, m11 += x.s * x.s, m12 += x.s * x.t, m22 += x.t * x.t;
     r0 += x.w, r1 += x.s * x.w, r2 += x.t * x.w;

@@ -1,387 +1,414 @@
-// Grid-aware simplification of dense face meshes (see simplify.h for the
-// contract; Wilson 2002 ch. 5 §5.2.3 for the error model).
+// Simplification of dense face meshes (see simplify.h for the contract;
+// Wilson 2002 ch. 5 §5.2.3 for the error model).
 //
-// Layout of one N x N face:
-//  * Border rule. Each of the four border lines (lattice 0..N) is cut into
-//    intervals by a fixed, reversal-symmetric recursive bisection. An interval
-//    is one straight output edge when every lattice point on it is "clean"
-//    (the two border pixels there share one vertex; build_depth_meshes makes
-//    this true on both neighbouring faces or on neither) and the interior
-//    vertices lie within depth_error_relative of the segment along their rays.
-//    The test reads only positions both faces hold bit for bit and is symmetric
-//    under swapping the ends, so both faces keep the same border vertices.
-//  * Ring. The outermost ring of pixels is cut into four trapezoids (corner
-//    pixels split along a diagonal); each border interval's share of the ring
-//    is triangulated by zipping the interval's two border vertices to the kept
-//    vertices on the lattice line one pixel inside.
-//  * Inner region. A region quadtree over the remaining pixels merges a block
-//    when its four children merged, all its pixels share one vertex per lattice
-//    point (no skin inside), and all its vertices fit one least-squares plane in
-//    (x, y, 1/z) within half the depth tolerance (so any triangle spanned by
-//    block vertices stays within the tolerance). Leaves are triangulated as
-//    convex polygons through every kept lattice point on their sides (T-junction
-//    fans), so the output has no cracks and no flips.
-//  * Whole face: when the entire face is clean and flat, it is one polygon
-//    whose side vertices are the border rule's.
+// 1. Border rule (simplify_border): which face-border vertices survive, decided
+//    from data both neighbouring faces hold bit for bit.
+// 2. Outlines (simplify_outline): the staircase outlines of the surface regions
+//    (silhouettes, skins, coverage edges) are cut into chains, each straightened
+//    once by Douglas-Peucker within boundary_error_px, so both sides of a
+//    silhouette get the same line, and repaired until no segments cross.
+// 3. Interior: a constrained Delaunay triangulation (CGAL, exact predicates on
+//    integer lattice points) of the kept outline and border points, refined by
+//    greedy insertion (Garland & Heckbert 1995, "Fast polygonal approximation
+//    of terrains and height fields"): every triangle whose plane in (x, y, 1/z)
+//    screen space misses one of its region's dense vertices by more than the
+//    relative depth bound gets its worst vertex inserted, until none does. A
+//    world-space plane is an exact plane in (x, y, 1/z), so flat surfaces end
+//    as a few large triangles. A violation on a straightened outline segment
+//    re-inserts that segment's farthest staircase point instead.
+// Each triangle belongs to the region that holds most of its triangulation
+// component (the cells bounded by constraints) and takes, at every corner, the
+// dense vertex of that region there (the pixel in the triangle's direction
+// where the region meets itself across a skin), so the two sides of a
+// silhouette use their own depths on one shared screen-space line.
 #include "stages/simplify.h"
+
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_face_base_with_info_2.h>
 
 #include <algorithm>
 #include <array>
+#include <climits>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <tuple>
+#include <unordered_map>
 #include <vector>
 
+#include "stages/simplify_border.h"
 #include "stages/simplify_grid.h"
+#include "stages/simplify_outline.h"
 
 namespace cellbake {
 namespace {
 
-struct Rect {
-  int x0, y0, x1, y1;  // pixels [x0, x1) x [y0, y1)
-  int width() const { return x1 - x0; }
-  int height() const { return y1 - y0; }
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+struct FaceInfo {
+  int label = INT_MIN;
+};
+using FaceBaseWithInfo = CGAL::Triangulation_face_base_with_info_2<FaceInfo, Kernel>;
+using FaceBase = CGAL::Constrained_triangulation_face_base_2<Kernel, FaceBaseWithInfo>;
+using Tds = CGAL::Triangulation_data_structure_2<CGAL::Triangulation_vertex_base_2<Kernel>, FaceBase>;
+using Cdt = CGAL::Constrained_Delaunay_triangulation_2<Kernel, Tds, CGAL::No_constraint_intersection_requiring_constructions_tag>;
+using CdtPoint = Cdt::Point;
+
+// Owner of a constraint: a chain segment [i, j], or the face border (chain -1).
+struct ConstraintOwner {
+  int chain = -1, i = 0, j = 0;
 };
 
-struct Piece {
-  int side, a, b;  // border interval [a, b] of `side`
-};
-
-struct ChainPoint {
-  int t;            // coordinate along the chain's line
-  std::uint32_t v;  // input vertex
-};
-
-Vec3d to_d(Vec3f p) { return {p.x, p.y, p.z}; }
-
-class FaceSimplifier {
+class TinSimplifier {
  public:
-  FaceSimplifier(const FaceMesh& in, const FaceGrid& g, double border_eps, double eps)
-      : in_(in), g_(g), n_(g.size), border_eps_(border_eps), eps_(eps), kept_(std::size_t(n_ + 1) * (n_ + 1), 0) {}
+  TinSimplifier(const FaceGrid& g, const FaceRegions& regions, FaceOutlines outlines,
+                const std::vector<FixedSegment>& fixed, double eps)
+      : g_(g), regions_(regions), outlines_(std::move(outlines)), fixed_(fixed), n_(g.size), eps_(eps),
+        steiner_flag_(std::size_t(n_ + 1) * (n_ + 1), 0) {}
 
   std::vector<std::uint32_t> run() {
-    if (n_ < 4) {
-      for (int j = 0; j < n_; ++j)
-        for (int i = 0; i < n_; ++i) emit_pixel(i, j);
-      return std::move(out_);
-    }
-    for (int side = 0; side < 4; ++side) split_border(side, 0, n_);
-    const Rect face{0, 0, n_, n_};
-    if (clean_and_flat(face)) {
-      for (const Piece& p : pieces_) {
-        keep(lattice(p.side, p.a, 0));
-        keep(lattice(p.side, p.b, 0));
+    for (;;) {
+      build();
+      bool rebuild = false;
+      for (;;) {
+        std::vector<LatticePoint> inserts;
+        std::vector<ConstraintOwner> refines;
+        evaluate(inserts, refines);
+        if (!refines.empty()) {
+          std::vector<ChainSegment> segments;
+          for (const ConstraintOwner& o : refines) segments.push_back({o.chain, o.i, o.j});
+          if (refine_outline_segments(outlines_, segments, fixed_, n_)) {
+            for (const LatticePoint& p : inserts) add_steiner(p);
+            rebuild = true;
+            break;
+          }
+        }
+        if (inserts.empty()) break;
+        // Only faces around the new vertices change (Delaunay flips stay
+        // around the inserted point); they inherit the region of the face
+        // the point fell in.
+        std::vector<Cdt::Vertex_handle> added;
+        for (const LatticePoint& p : inserts) {
+          add_steiner(p);
+          if (const Cdt::Vertex_handle v = insert_steiner(p); v != Cdt::Vertex_handle()) added.push_back(v);
+        }
+        pending_.clear();
+        for (const Cdt::Vertex_handle& v : added) {
+          auto f = cdt_.incident_faces(v), end = f;
+          do {
+            if (!cdt_.is_infinite(f)) pending_.push_back(f);
+          } while (++f != end);
+        }
+        std::sort(pending_.begin(), pending_.end());
+        pending_.erase(std::unique(pending_.begin(), pending_.end()), pending_.end());
       }
-      emit_leaf(face);
-      return std::move(out_);
+      if (!rebuild) break;
     }
-    for (const Piece& p : pieces_) force_inner_points(p);
-    const Rect inner{1, 1, n_ - 1, n_ - 1};
-    if (build(inner)) leaves_.push_back(inner);
-    for (const Rect& r : leaves_) {
-      keep({r.x0, r.y0});
-      keep({r.x1, r.y0});
-      keep({r.x0, r.y1});
-      keep({r.x1, r.y1});
-    }
-    for (const Piece& p : pieces_) emit_piece(p);
-    for (const Rect& r : leaves_) emit_leaf(r);
-    return std::move(out_);
+    return emit();
   }
 
  private:
-  using Point = std::array<int, 2>;
-
-  // --- sides: lattice point at coordinate t along side `side`, d pixels inside.
-  Point lattice(int side, int t, int d) const {
-    switch (side) {
-      case 0: return {t, d};
-      case 1: return {t, n_ - d};
-      case 2: return {d, t};
-      default: return {n_ - d, t};
-    }
+  std::size_t lattice_index(int x, int y) const { return std::size_t(y) * (n_ + 1) + x; }
+  static std::uint64_t key(std::size_t a, std::size_t b) {
+    return a < b ? (std::uint64_t(a) << 32) | b : (std::uint64_t(b) << 32) | a;
   }
-  // Pixel between t = a and a + 1, d pixel rows inside the border.
-  Point side_pixel(int side, int a, int d) const {
-    switch (side) {
-      case 0: return {a, d};
-      case 1: return {a, n_ - 1 - d};
-      case 2: return {d, a};
-      default: return {n_ - 1 - d, a};
-    }
-  }
-  bool covered(Point p) const { return g_.covered(p[0], p[1]); }
-  std::uint32_t vertex(Point pixel, Point corner) const { return g_.vertex(pixel[0], pixel[1], corner[0], corner[1]); }
-  void keep(Point c) { kept_[std::size_t(c[1]) * (n_ + 1) + c[0]] = 1; }
-  bool is_kept(Point c) const { return kept_[std::size_t(c[1]) * (n_ + 1) + c[0]] != 0; }
+  static LatticePoint lattice_of(const CdtPoint& p) { return {int(std::lround(p.x())), int(std::lround(p.y()))}; }
+  int label(int i, int j) const { return regions_.label[std::size_t(j) * n_ + i]; }
 
-  // Border point t (1 <= t <= N-1) is clean: both border pixels there are
-  // covered and share their vertices on the border and one pixel inside.
-  bool clean(int side, int t) const {
-    const Point p = side_pixel(side, t - 1, 0), q = side_pixel(side, t, 0);
-    if (!covered(p) || !covered(q)) return false;
-    const Point b = lattice(side, t, 0), i = lattice(side, t, 1);
-    return vertex(p, b) == vertex(q, b) && vertex(p, i) == vertex(q, i);
-  }
-
-  // Vertex of the interval [a, b] at border coordinate t (a <= t <= b).
-  std::uint32_t border_vertex(int side, int a, int b, int t) const {
-    return vertex(side_pixel(side, std::clamp(t, a, b - 1), 0), lattice(side, t, 0));
-  }
-
-  bool border_mergeable(int side, int a, int b) const {
-    for (int t = std::max(a, 1); t <= std::min(b, n_ - 1); ++t)
-      if (!clean(side, t)) return false;
-    // Straightness along the rays: the removed vertex P_t moves to lambda P_t on
-    // the segment; symmetric in (a, b) bit for bit (negations are exact).
-    const Vec3d pa = to_d(in_.positions[border_vertex(side, a, b, a)]);
-    const Vec3d pb = to_d(in_.positions[border_vertex(side, a, b, b)]);
-    const Vec3d c1 = cross(pa, pb), d = pb - pa;
-    for (int t = a + 1; t < b; ++t) {
-      const Vec3d c2 = cross(to_d(in_.positions[border_vertex(side, a, b, t)]), d);
-      const double den = dot(c2, c2);
-      if (!(den > 0)) return false;
-      const double lambda = dot(c1, c2) / den;
-      if (!(std::abs(lambda - 1.0) <= border_eps_)) return false;
-    }
-    return true;
-  }
-
-  // Reversal-symmetric bisection: even lengths in halves, odd lengths as
-  // (L-1)/2, 1, (L-1)/2.
-  void split_border(int side, int a, int b) {
-    const int len = b - a;
-    if (len == 1 || border_mergeable(side, a, b)) {
-      pieces_.push_back({side, a, b});
-      return;
-    }
-    if (len % 2 == 0) {
-      split_border(side, a, a + len / 2);
-      split_border(side, a + len / 2, b);
-    } else {
-      const int h = (len - 1) / 2;
-      split_border(side, a, a + h);
-      split_border(side, a + h, a + h + 1);
-      split_border(side, a + h + 1, b);
+  void add_steiner(LatticePoint p) {
+    std::uint8_t& f = steiner_flag_[lattice_index(p.x, p.y)];
+    if (!f) {
+      f = 1;
+      steiner_.push_back(p);
     }
   }
 
-  bool piece_covered(const Piece& p) const { return p.b - p.a > 1 || covered(side_pixel(p.side, p.a, 0)); }
+  // Inserts a Steiner point unless it is already a vertex or lies on a
+  // constraint (then returns a null handle); the new faces around it take the
+  // region label of the face it fell in.
+  Cdt::Vertex_handle insert_steiner(LatticePoint p) {
+    Cdt::Locate_type lt;
+    int li = 0;
+    const CdtPoint q(p.x, p.y);
+    const Cdt::Face_handle f = cdt_.locate(q, lt, li);
+    if (lt == Cdt::VERTEX || lt == Cdt::OUTSIDE_CONVEX_HULL || lt == Cdt::OUTSIDE_AFFINE_HULL) return {};
+    if (lt == Cdt::EDGE && cdt_.is_constrained({f, li})) return {};
+    const int l = f->info().label;
+    const Cdt::Vertex_handle v = cdt_.insert(q, f);
+    auto g = cdt_.incident_faces(v), end = g;
+    do {
+      g->info().label = l;
+    } while (++g != end);
+    return v;
+  }
 
-  // Top chain of a piece: kept points on the lattice line one pixel inside.
-  std::vector<ChainPoint> top_chain(const Piece& p) const {
-    const int ta = std::max(p.a, 1), tb = std::min(p.b, n_ - 1);
-    std::vector<ChainPoint> chain;
-    for (int t = ta; t <= tb; ++t) {
-      const Point c = lattice(p.side, t, 1);
-      if (t == ta || t == tb || is_kept(c))
-        chain.push_back({t, vertex(side_pixel(p.side, std::clamp(t, p.a, p.b - 1), 0), c)});
+  void build() {
+    cdt_.clear();
+    owners_.clear();
+    for (const FixedSegment& s : fixed_) {
+      cdt_.insert_constraint(CdtPoint(s.a.x, s.a.y), CdtPoint(s.b.x, s.b.y));
+      owners_[key(lattice_index(s.a.x, s.a.y), lattice_index(s.b.x, s.b.y))] = {};
     }
-    return chain;
-  }
-
-  void force_inner_points(const Piece& p) {
-    if (!piece_covered(p)) return;
-    const int ta = std::max(p.a, 1), tb = std::min(p.b, n_ - 1);
-    keep(lattice(p.side, ta, 1));
-    keep(lattice(p.side, tb, 1));
-    bool shared = true;
-    for (int t = ta + 1; t < tb && shared; ++t) {
-      const Point c = lattice(p.side, t, 1);
-      const std::uint32_t v = vertex(side_pixel(p.side, t, 0), c);
-      const Point r0 = side_pixel(p.side, t - 1, 1), r1 = side_pixel(p.side, t, 1);
-      shared = covered(r0) && covered(r1) && vertex(r0, c) == v && vertex(r1, c) == v;
-    }
-    if (!shared)
-      for (int t = ta; t <= tb; ++t) keep(lattice(p.side, t, 1));
-  }
-
-  // --- inner region quadtree.
-  std::uint32_t rect_vertex(const Rect& r, int x, int y) const {
-    const int px = std::min(x, r.x1 - 1), py = std::min(y, r.y1 - 1);
-    return g_.vertex(px, py, x, y);
-  }
-
-  // All pixels touching lattice point (x, y) inside r use one vertex.
-  bool lattice_point_clean(const Rect& r, int x, int y) const {
-    std::uint32_t v = kNoVertex;
-    for (int py = y - 1; py <= y; ++py)
-      for (int px = x - 1; px <= x; ++px) {
-        if (px < r.x0 || py < r.y0 || px >= r.x1 || py >= r.y1) continue;
-        const std::uint32_t u = g_.vertex(px, py, x, y);
-        if (v != kNoVertex && u != v) return false;
-        v = u;
-      }
-    return true;
-  }
-
-  // Vertices of r fit one plane in (x, y, 1/z) within half the tolerance.
-  bool flat(const Rect& r) const {
-    double s1 = 0, sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0, sw = 0, sxw = 0, syw = 0, w_min = 1e300;
-    for (int y = r.y0; y <= r.y1; ++y)
-      for (int x = r.x0; x <= r.x1; ++x) {
-        const double w = g_.w[rect_vertex(r, x, y)];
-        const double lx = x - r.x0, ly = y - r.y0;
-        s1 += 1, sx += lx, sy += ly, sxx += lx * lx, sxy += lx * ly, syy += ly * ly;
-        sw += w, sxw += lx * w, syw += ly * w;
-        w_min = std::min(w_min, w);
-      }
-    // Normal equations [sxx sxy sx; sxy syy sy; sx sy s1] (a b c) = (sxw syw sw), Cramer's rule.
-    const double det = sxx * (syy * s1 - sy * sy) - sxy * (sxy * s1 - sy * sx) + sx * (sxy * sy - syy * sx);
-    if (!(std::abs(det) > 0)) return false;
-    const double a = (sxw * (syy * s1 - sy * sy) - sxy * (syw * s1 - sy * sw) + sx * (syw * sy - syy * sw)) / det;
-    const double b = (sxx * (syw * s1 - sw * sy) - sxw * (sxy * s1 - sy * sx) + sx * (sxy * sw - syw * sx)) / det;
-    const double c = (sxx * (syy * sw - sy * syw) - sxy * (sxy * sw - syw * sx) + sxw * (sxy * sy - syy * sx)) / det;
-    const double tol = 0.5 * eps_ * w_min / (1.0 + eps_);
-    for (int y = r.y0; y <= r.y1; ++y)
-      for (int x = r.x0; x <= r.x1; ++x) {
-        const double w = g_.w[rect_vertex(r, x, y)];
-        if (!(std::abs(a * (x - r.x0) + b * (y - r.y0) + c - w) <= tol)) return false;
-      }
-    return true;
-  }
-
-  bool clean_and_flat(const Rect& r) const {
-    for (int y = r.y0; y < r.y1; ++y)
-      for (int x = r.x0; x < r.x1; ++x)
-        if (!g_.covered(x, y)) return false;
-    for (int y = r.y0; y <= r.y1; ++y)
-      for (int x = r.x0; x <= r.x1; ++x)
-        if (!lattice_point_clean(r, x, y)) return false;
-    return flat(r);
-  }
-
-  // Returns whether r merges into one block; when it does not, its merged
-  // children (and recursively their descendants) are recorded as leaves.
-  bool build(const Rect& r) {
-    if (r.width() <= 0 || r.height() <= 0) return false;
-    if (r.width() == 1 && r.height() == 1) return g_.covered(r.x0, r.y0);
-    const int xm = r.width() >= 2 ? r.x0 + r.width() / 2 : r.x1;
-    const int ym = r.height() >= 2 ? r.y0 + r.height() / 2 : r.y1;
-    std::array<Rect, 4> child{Rect{r.x0, r.y0, xm, ym}, Rect{xm, r.y0, r.x1, ym}, Rect{r.x0, ym, xm, r.y1},
-                              Rect{xm, ym, r.x1, r.y1}};
-    std::array<bool, 4> merged{};
-    bool all = true;
-    for (int k = 0; k < 4; ++k) {
-      if (child[k].width() <= 0 || child[k].height() <= 0) {
-        merged[k] = false;
-        continue;  // empty child (a 1-wide rect split in one direction only)
-      }
-      merged[k] = build(child[k]);
-      all = all && merged[k];
-    }
-    if (all) {
-      bool seams = true;
-      if (xm < r.x1)
-        for (int y = r.y0; y <= r.y1 && seams; ++y) seams = lattice_point_clean(r, xm, y);
-      if (ym < r.y1)
-        for (int x = r.x0; x <= r.x1 && seams; ++x) seams = lattice_point_clean(r, x, ym);
-      if (seams && flat(r)) return true;
-    }
-    for (int k = 0; k < 4; ++k)
-      if (merged[k]) leaves_.push_back(child[k]);
-    return false;
-  }
-
-  // --- emission.
-  void emit(std::uint32_t a, std::uint32_t b, std::uint32_t c) {
-    const long orient = long(g_.x[b] - g_.x[a]) * (g_.y[c] - g_.y[a]) - long(g_.y[b] - g_.y[a]) * (g_.x[c] - g_.x[a]);
-    if (orient == 0) throw std::logic_error("simplify_face_mesh: produced a degenerate triangle");
-    if ((orient > 0 ? 1 : -1) != g_.orientation) std::swap(b, c);
-    out_.insert(out_.end(), {a, b, c});
-  }
-
-  void emit_pixel(int i, int j) {
-    if (!g_.covered(i, j)) return;
-    for (std::uint32_t t : g_.pixel_triangles[std::size_t(j) * n_ + i])
-      out_.insert(out_.end(), {in_.indices[3 * t], in_.indices[3 * t + 1], in_.indices[3 * t + 2]});
-  }
-
-  // Triangulates the region between two chains on parallel lines, both ordered
-  // by increasing t (any monotone merge is a valid triangulation).
-  void zip(const std::vector<ChainPoint>& a, const std::vector<ChainPoint>& b) {
-    std::size_t i = 0, j = 0;
-    while (i + 1 < a.size() || j + 1 < b.size()) {
-      const bool advance_a =
-          j + 1 >= b.size() || (i + 1 < a.size() && a[i].t + a[i + 1].t <= b[j].t + b[j + 1].t);
-      if (advance_a) {
-        emit(a[i].v, b[j].v, a[i + 1].v);
-        ++i;
-      } else {
-        emit(a[i].v, b[j].v, b[j + 1].v);
-        ++j;
-      }
-    }
-  }
-
-  void emit_piece(const Piece& p) {
-    if (!piece_covered(p)) return;
-    const std::vector<ChainPoint> bottom{{p.a, border_vertex(p.side, p.a, p.b, p.a)},
-                                         {p.b, border_vertex(p.side, p.a, p.b, p.b)}};
-    zip(bottom, top_chain(p));
-  }
-
-  void emit_leaf(const Rect& r) {
-    if (r.width() == 1 && r.height() == 1) {
-      emit_pixel(r.x0, r.y0);
-      return;
-    }
-    auto side_points = [&](int x0, int y0, int x1, int y1) {  // from (x0,y0) towards (x1,y1), end excluded
-      std::vector<ChainPoint> pts;
-      const int steps = std::max(std::abs(x1 - x0), std::abs(y1 - y0));
-      const int dx = (x1 > x0) - (x1 < x0), dy = (y1 > y0) - (y1 < y0);
-      for (int k = 0; k < steps; ++k) {
-        const int x = x0 + k * dx, y = y0 + k * dy;
-        if (k == 0 || is_kept({x, y})) pts.push_back({k, rect_vertex(r, x, y)});
-      }
-      return pts;
-    };
-    if (r.width() == 1 || r.height() == 1) {
-      // Two long sides (both ends always included), zipped.
-      auto line = [&](int x0, int y0, int dx, int dy, int steps) {
-        std::vector<ChainPoint> pts;
-        for (int k = 0; k <= steps; ++k) {
-          const int x = x0 + k * dx, y = y0 + k * dy;
-          if (k == 0 || k == steps || is_kept({x, y})) pts.push_back({k, rect_vertex(r, x, y)});
+    for (std::size_t c = 0; c < outlines_.chains.size(); ++c) {
+      const OutlineChain& ch = outlines_.chains[c];
+      std::size_t prev = 0;
+      for (std::size_t k = 1; k < ch.points.size(); ++k)
+        if (ch.kept[k]) {
+          const LatticePoint a = ch.points[prev], b = ch.points[k];
+          if (!(a == b)) {
+            cdt_.insert_constraint(CdtPoint(a.x, a.y), CdtPoint(b.x, b.y));
+            owners_[key(lattice_index(a.x, a.y), lattice_index(b.x, b.y))] = {int(c), int(prev), int(k)};
+          }
+          prev = k;
         }
-        return pts;
-      };
-      if (r.width() == 1)
-        zip(line(r.x0, r.y0, 0, 1, r.height()), line(r.x1, r.y0, 0, 1, r.height()));
-      else
-        zip(line(r.x0, r.y0, 1, 0, r.width()), line(r.x0, r.y1, 1, 0, r.width()));
-      return;
     }
-    const std::array<std::vector<ChainPoint>, 4> sides{side_points(r.x0, r.y0, r.x1, r.y0), side_points(r.x1, r.y0, r.x1, r.y1),
-                                                       side_points(r.x1, r.y1, r.x0, r.y1), side_points(r.x0, r.y1, r.x0, r.y0)};
-    std::vector<std::uint32_t> ring;
-    std::array<std::size_t, 4> corner_at{};
-    for (int s = 0; s < 4; ++s) {
-      corner_at[s] = ring.size();
-      for (const ChainPoint& p : sides[s]) ring.push_back(p.v);
-    }
-    const std::size_t m = ring.size();
-    // Corner s sits between side s-1 (ending there) and side s (starting there).
-    for (int s = 0; s < 4; ++s) {
-      if (sides[s].size() == 1 && sides[(s + 3) % 4].size() == 1) {
-        for (std::size_t k = 1; k + 1 < m; ++k)
-          emit(ring[corner_at[s]], ring[(corner_at[s] + k) % m], ring[(corner_at[s] + k + 1) % m]);
-        return;
-      }
-    }
-    const std::uint32_t centre = rect_vertex(r, r.x0 + r.width() / 2, r.y0 + r.height() / 2);
-    for (std::size_t k = 0; k < m; ++k) emit(centre, ring[k], ring[(k + 1) % m]);
+    for (const LatticePoint& p : steiner_) insert_steiner(p);
+    label_components();
+    pending_.clear();
+    for (auto f = cdt_.finite_faces_begin(); f != cdt_.finite_faces_end(); ++f) pending_.push_back(f);
   }
 
-  const FaceMesh& in_;
+  // Components of finite faces joined across unconstrained edges; each takes
+  // the region label holding most of its area (by the pixel under each
+  // triangle's centroid), -1 for background.
+  void label_components() {
+    for (auto f = cdt_.all_faces_begin(); f != cdt_.all_faces_end(); ++f) f->info().label = INT_MIN;
+    std::vector<Cdt::Face_handle> stack, members;
+    std::vector<std::pair<int, double>> votes;
+    for (auto start = cdt_.finite_faces_begin(); start != cdt_.finite_faces_end(); ++start) {
+      if (start->info().label != INT_MIN) continue;
+      members.clear();
+      votes.clear();
+      start->info().label = INT_MIN + 1;  // visiting
+      stack.push_back(start);
+      while (!stack.empty()) {
+        const Cdt::Face_handle f = stack.back();
+        stack.pop_back();
+        members.push_back(f);
+        const LatticePoint a = lattice_of(f->vertex(0)->point()), b = lattice_of(f->vertex(1)->point()),
+                           c = lattice_of(f->vertex(2)->point());
+        const double area = std::abs(double(b.x - a.x) * (c.y - a.y) - double(b.y - a.y) * (c.x - a.x));
+        const int px = std::clamp(int(std::floor((a.x + b.x + c.x) / 3.0)), 0, n_ - 1);
+        const int py = std::clamp(int(std::floor((a.y + b.y + c.y) / 3.0)), 0, n_ - 1);
+        const int l = label(px, py);
+        auto it = std::find_if(votes.begin(), votes.end(), [&](const auto& v) { return v.first == l; });
+        if (it == votes.end()) votes.push_back({l, area});
+        else it->second += area;
+        for (int e = 0; e < 3; ++e) {
+          const Cdt::Face_handle nb = f->neighbor(e);
+          if (cdt_.is_infinite(nb) || cdt_.is_constrained({f, e}) || nb->info().label != INT_MIN) continue;
+          nb->info().label = INT_MIN + 1;
+          stack.push_back(nb);
+        }
+      }
+      int best = -1;
+      double best_area = -1;
+      for (const auto& [l, area] : votes)
+        if (area > best_area) best = l, best_area = area;
+      for (const Cdt::Face_handle& f : members) f->info().label = best;
+    }
+  }
+
+  // Dense vertex of region l at lattice point p for a triangle whose centroid is (cx, cy).
+  std::uint32_t pick_vertex(int l, LatticePoint p, double cx, double cy) const {
+    std::uint32_t first = kNoVertex;
+    bool unique = true;
+    for (int j = p.y - 1; j <= p.y; ++j)
+      for (int i = p.x - 1; i <= p.x; ++i) {
+        if (i < 0 || j < 0 || i >= n_ || j >= n_ || label(i, j) != l) continue;
+        const std::uint32_t v = g_.vertex(i, j, p.x, p.y);
+        if (first == kNoVertex) first = v;
+        else if (v != first) unique = false;
+      }
+    if (unique) return first;
+    const int i = p.x + (cx < p.x ? -1 : 0), j = p.y + (cy < p.y ? -1 : 0);
+    if (i >= 0 && j >= 0 && i < n_ && j < n_ && label(i, j) == l) return g_.vertex(i, j, p.x, p.y);
+    return first;
+  }
+
+  // Dense vertex of corner k of face f where the region meets itself at that
+  // point with several vertices (the end of a skin, a pinch): the constraint
+  // met first turning counter-clockwise about the corner starts with an
+  // outline step d; the face lies on its clockwise side, in the pixel there.
+  std::uint32_t pick_corner_vertex(Cdt::Face_handle f, int k, double cx, double cy) const {
+    const int l = f->info().label;
+    const Cdt::Vertex_handle v = f->vertex(k);
+    const LatticePoint p = lattice_of(v->point());
+    const std::uint32_t simple = pick_vertex(l, p, cx, cy);
+    if (simple == kNoVertex || unique_vertex(l, p)) return simple;
+    Cdt::Face_handle g = f;
+    int gk = k;
+    for (int guard = 0; guard < 64; ++guard) {
+      const int e = Cdt::ccw(gk);
+      if (cdt_.is_constrained({g, e})) {
+        const LatticePoint q = lattice_of(g->vertex(Cdt::cw(gk))->point());
+        LatticePoint step{(q.x > p.x) - (q.x < p.x), (q.y > p.y) - (q.y < p.y)};
+        const auto it = owners_.find(key(lattice_index(p.x, p.y), lattice_index(q.x, q.y)));
+        if (it != owners_.end() && it->second.chain >= 0) {
+          const OutlineChain& c = outlines_.chains[it->second.chain];
+          const LatticePoint next = c.points[it->second.i] == p ? c.points[it->second.i + 1] : c.points[it->second.j - 1];
+          step = {next.x - p.x, next.y - p.y};
+        }
+        // Pixel clockwise of the step (math orientation of the lattice coordinates).
+        int i = p.x, j = p.y;
+        if (step.x > 0) {
+          j -= 1;
+        } else if (step.y > 0) {
+        } else if (step.x < 0) {
+          i -= 1;
+        } else {
+          i -= 1, j -= 1;
+        }
+        if (i >= 0 && j >= 0 && i < n_ && j < n_ && label(i, j) == l) return g_.vertex(i, j, p.x, p.y);
+        return simple;
+      }
+      const Cdt::Face_handle next = g->neighbor(Cdt::ccw(gk));
+      if (cdt_.is_infinite(next) || next == f) break;
+      gk = next->index(v);
+      g = next;
+    }
+    return simple;
+  }
+
+  bool unique_vertex(int l, LatticePoint p) const {
+    std::uint32_t first = kNoVertex;
+    for (int j = p.y - 1; j <= p.y; ++j)
+      for (int i = p.x - 1; i <= p.x; ++i) {
+        if (i < 0 || j < 0 || i >= n_ || j >= n_ || label(i, j) != l) continue;
+        const std::uint32_t v = g_.vertex(i, j, p.x, p.y);
+        if (first != kNoVertex && v != first) return false;
+        first = v;
+      }
+    return true;
+  }
+
+  bool corners(const Cdt::Face_handle& f, std::array<LatticePoint, 3>& p, std::array<std::uint32_t, 3>& v) const {
+    for (int k = 0; k < 3; ++k) p[k] = lattice_of(f->vertex(k)->point());
+    const double cx = (p[0].x + p[1].x + p[2].x) / 3.0, cy = (p[0].y + p[1].y + p[2].y) / 3.0;
+    for (int k = 0; k < 3; ++k) {
+      v[k] = pick_corner_vertex(f, k, cx, cy);
+      if (v[k] == kNoVertex) return false;
+    }
+    return true;
+  }
+
+  void evaluate(std::vector<LatticePoint>& inserts, std::vector<ConstraintOwner>& refines) {
+    std::array<LatticePoint, 3> p;
+    std::array<std::uint32_t, 3> v;
+    for (const Cdt::Face_handle& f : pending_) {
+      const int l = f->info().label;
+      if (l < 0 || !corners(f, p, v)) continue;
+      const double w0 = g_.w[v[0]], w1 = g_.w[v[1]], w2 = g_.w[v[2]];
+      const double x0 = p[0].x, y0 = p[0].y;
+      const double orient = double(p[1].x - p[0].x) * (p[2].y - p[0].y) - double(p[1].y - p[0].y) * (p[2].x - p[0].x);
+      if (orient == 0) continue;
+      const double alpha = ((w1 - w0) * (p[2].y - y0) - (w2 - w0) * (p[1].y - y0)) / orient;
+      const double beta = ((w2 - w0) * (p[1].x - x0) - (w1 - w0) * (p[2].x - x0)) / orient;
+      const double gamma = w0 - alpha * x0 - beta * y0;
+      const double cx = (p[0].x + p[1].x + p[2].x) / 3.0, cy = (p[0].y + p[1].y + p[2].y) / 3.0;
+      double worst_free = eps_, worst_bound = eps_;
+      LatticePoint free_at{-1, -1};
+      ConstraintOwner bound_owner;
+      bool bound_found = false;
+      const int ymin = std::min({p[0].y, p[1].y, p[2].y}), ymax = std::max({p[0].y, p[1].y, p[2].y});
+      for (int y = ymin; y <= ymax; ++y) {
+        double xl = 1e300, xr = -1e300;
+        for (int e = 0; e < 3; ++e) {
+          const LatticePoint a = p[e], b = p[(e + 1) % 3];
+          if (a.y == b.y) {
+            if (a.y == y) xl = std::min({xl, double(a.x), double(b.x)}), xr = std::max({xr, double(a.x), double(b.x)});
+            continue;
+          }
+          if ((a.y - y) * (b.y - y) > 0) continue;
+          const double x = a.x + double(y - a.y) * (b.x - a.x) / (b.y - a.y);
+          xl = std::min(xl, x), xr = std::max(xr, x);
+        }
+        if (!(xl <= xr)) continue;
+        for (int x = int(std::ceil(xl - 1e-9)); x <= int(std::floor(xr + 1e-9)); ++x) {
+          const LatticePoint q{x, y};
+          if (q == p[0] || q == p[1] || q == p[2]) continue;
+          // Outline points too: a straightened outline must not bridge a skin
+          // (where the region meets itself there, the side the triangle is on).
+          const bool outline = outlines_.on_outline[lattice_index(x, y)] != 0;
+          const std::uint32_t dv = outline ? pick_vertex(l, q, cx, cy) : pick_vertex(l, q, x, y);
+          if (dv == kNoVertex) continue;
+          const double wp = alpha * x + beta * y + gamma;
+          const double err = wp > 0 ? std::abs(g_.w[dv] - wp) / wp : 1e300;
+          if (err <= eps_) continue;
+          // On a constrained edge of this triangle?
+          int edge = -1;
+          for (int e = 0; e < 3 && edge < 0; ++e) {
+            const LatticePoint a = p[(e + 1) % 3], b = p[(e + 2) % 3];
+            const long o = long(b.x - a.x) * (q.y - a.y) - long(b.y - a.y) * (q.x - a.x);
+            if (o == 0 && cdt_.is_constrained({f, e})) edge = e;
+          }
+          if (edge < 0) {
+            if (err > worst_free && (!outline || unique_vertex(l, q))) worst_free = err, free_at = q;
+          } else if (err > worst_bound) {
+            const LatticePoint a = p[(edge + 1) % 3], b = p[(edge + 2) % 3];
+            const auto it = owners_.find(key(lattice_index(a.x, a.y), lattice_index(b.x, b.y)));
+            if (it != owners_.end() && it->second.chain >= 0) {
+              worst_bound = err;
+              bound_owner = it->second;
+              bound_found = true;
+            }
+          }
+        }
+      }
+      if (free_at.x >= 0) inserts.push_back(free_at);
+      if (bound_found) refines.push_back(bound_owner);
+    }
+    std::sort(inserts.begin(), inserts.end(), [](const LatticePoint& a, const LatticePoint& b) {
+      return a.y != b.y ? a.y < b.y : a.x < b.x;
+    });
+    inserts.erase(std::unique(inserts.begin(), inserts.end()), inserts.end());
+    std::sort(refines.begin(), refines.end(), [](const ConstraintOwner& a, const ConstraintOwner& b) {
+      return std::tie(a.chain, a.i, a.j) < std::tie(b.chain, b.i, b.j);
+    });
+    refines.erase(std::unique(refines.begin(), refines.end(),
+                              [](const ConstraintOwner& a, const ConstraintOwner& b) {
+                                return a.chain == b.chain && a.i == b.i && a.j == b.j;
+                              }),
+                  refines.end());
+  }
+
+  std::vector<std::uint32_t> emit() const {
+    std::vector<std::uint32_t> out;
+    std::array<LatticePoint, 3> p;
+    std::array<std::uint32_t, 3> v;
+    // Faces in a fixed order (by lattice corners) so the output does not depend on CGAL's storage order.
+    std::vector<std::array<std::uint32_t, 6>> tris;
+    for (auto f = cdt_.finite_faces_begin(); f != cdt_.finite_faces_end(); ++f) {
+      if (f->info().label < 0 || !corners(f, p, v)) continue;
+      const long orient = long(p[1].x - p[0].x) * (p[2].y - p[0].y) - long(p[1].y - p[0].y) * (p[2].x - p[0].x);
+      if ((orient > 0 ? 1 : -1) != g_.orientation) std::swap(v[1], v[2]), std::swap(p[1], p[2]);
+      // Rotate so the smallest lattice index comes first.
+      std::array<std::size_t, 3> idx{lattice_index(p[0].x, p[0].y), lattice_index(p[1].x, p[1].y),
+                                     lattice_index(p[2].x, p[2].y)};
+      const int r = int(std::min_element(idx.begin(), idx.end()) - idx.begin());
+      tris.push_back({std::uint32_t(idx[r]), std::uint32_t(idx[(r + 1) % 3]), std::uint32_t(idx[(r + 2) % 3]), v[r],
+                      v[(r + 1) % 3], v[(r + 2) % 3]});
+    }
+    std::sort(tris.begin(), tris.end());
+    out.reserve(tris.size() * 3);
+    for (const auto& t : tris) out.insert(out.end(), {t[3], t[4], t[5]});
+    return out;
+  }
+
   const FaceGrid& g_;
+  const FaceRegions& regions_;
+  FaceOutlines outlines_;
+  const std::vector<FixedSegment>& fixed_;
   int n_;
-  double border_eps_, eps_;
-  std::vector<std::uint8_t> kept_;
-  std::vector<Piece> pieces_;
-  std::vector<Rect> leaves_;
-  std::vector<std::uint32_t> out_;
+  double eps_;
+  std::vector<std::uint8_t> steiner_flag_;
+  std::vector<LatticePoint> steiner_;
+  Cdt cdt_;
+  std::vector<Cdt::Face_handle> pending_;  // faces to evaluate next
+  std::unordered_map<std::uint64_t, ConstraintOwner> owners_;
 };
+
+std::vector<std::uint32_t> dense_triangles(const FaceMesh& in) { return in.indices; }
 
 FaceMesh compact(const FaceMesh& in, const std::vector<std::uint32_t>& tris) {
   FaceMesh out;
@@ -403,19 +430,38 @@ FaceMesh compact(const FaceMesh& in, const std::vector<std::uint32_t>& tris) {
 SimplifyResult simplify_face_mesh(const FaceMesh& in, int face_size, const SimplifyParams& params) {
   if (!(params.depth_error_relative >= 0))
     throw std::invalid_argument("simplify_face_mesh: depth_error_relative must be >= 0");
+  if (!(params.boundary_error_px >= 0))
+    throw std::invalid_argument("simplify_face_mesh: boundary_error_px must be >= 0");
   const FaceGrid grid = read_face_grid(in, face_size);
   SimplifyResult result;
   result.triangles_in = in.triangle_count();
   double eps = params.depth_error_relative;
-  std::vector<std::uint32_t> tris = FaceSimplifier(in, grid, params.depth_error_relative, eps).run();
-  for (int attempt = 0; tris.size() / 3 > params.max_triangles && attempt < params.max_relaxations; ++attempt) {
-    const double looser = eps > 0 ? eps * 2 : 1e-3;
-    std::vector<std::uint32_t> next = FaceSimplifier(in, grid, params.depth_error_relative, looser).run();
-    // Silhouettes and skins are never simplified: when relaxing the depth bound
-    // no longer pays (< 5 % fewer triangles), keep the tighter mesh.
-    if (next.size() * 20 > tris.size() * 19) break;
-    tris = std::move(next);
-    eps = looser;
+  std::vector<std::uint32_t> tris;
+  if (face_size < 4) {
+    tris = dense_triangles(in);  // too small to simplify
+  } else {
+    const FaceRegions regions = label_face_regions(grid);
+    std::vector<FixedSegment> fixed;
+    for (const BorderPiece& p : split_face_border(in, grid, params.depth_error_relative)) {
+      if (!p.covered) continue;
+      const auto a = border_point(p.side, p.a, face_size), b = border_point(p.side, p.b, face_size);
+      fixed.push_back({{a[0], a[1]}, {b[0], b[1]}});
+    }
+    const FaceOutlines traced = trace_face_outlines(grid, regions);
+    auto simplify_with = [&](double depth_error) {
+      FaceOutlines outlines = traced;
+      straighten_face_outlines(outlines, fixed, params.boundary_error_px, depth_error, face_size);
+      return TinSimplifier(grid, regions, std::move(outlines), fixed, depth_error).run();
+    };
+    tris = simplify_with(eps);
+    for (int attempt = 0; tris.size() / 3 > params.max_triangles && attempt < params.max_relaxations; ++attempt) {
+      const double looser = eps > 0 ? eps * 2 : 1e-3;
+      std::vector<std::uint32_t> next = simplify_with(looser);
+      // When relaxing the depth bound no longer pays (< 5 % fewer triangles), keep the tighter mesh.
+      if (next.size() * 20 > tris.size() * 19) break;
+      tris = std::move(next);
+      eps = looser;
+    }
   }
   result.mesh = compact(in, tris);
   result.triangles_out = result.mesh.triangle_count();

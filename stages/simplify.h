@@ -2,13 +2,13 @@
 // geometry, with a guaranteed depth error and unchanged screen coverage.
 //
 // Wilson 2002, ch. 5 §5.2.3 (view-dependent error: boundaries and silhouettes
-// may not move in screen space, interior points have latitude along the view
-// direction; the faces of a cube must meet without cracks). Instead of the
-// thesis' GAPS / Garland-Heckbert edge collapses we exploit the grid: a
-// world-space plane is an exact plane in (x, y, 1/z) screen space, so a region
-// quadtree over the pixel grid (as in terrain simplification, e.g. Pajarola
-// 1998 "Large scale terrain visualization using the restricted quadtree
-// triangulation") merges blocks whose vertices fit one such plane.
+// may move at most half a pixel in screen space, interior points have latitude
+// along the view direction; the faces of a cube must meet without cracks).
+// Instead of the thesis' GAPS / Garland-Heckbert edge collapses we exploit the
+// grid: outlines are straightened as staircases in pixel space, and the
+// interior is a constrained Delaunay triangulation refined by greedy insertion
+// (Garland & Heckbert 1995) in (x, y, 1/z) screen space, where a world-space
+// plane is an exact plane. See simplify.cpp for the steps.
 #pragma once
 
 #include <cstddef>
@@ -19,15 +19,19 @@
 namespace cellbake {
 
 struct SimplifyParams {
-  // Max relative depth error |z_out - z_in| / z_in at the dense mesh's vertices,
-  // measured along the eye ray (vertices never move across the view direction,
-  // so the screen-space error from the sample point is zero by construction).
+  // Max relative depth error |z_out - z_in| / z_in at the dense mesh's vertices
+  // away from outlines, measured along the eye ray (output vertices are input
+  // vertices: they never move across the view direction).
   double depth_error_relative = 0.01;
+  // Max screen-space displacement, in pixels, of silhouettes, skins and
+  // coverage edges (the outlines of the dense mesh inside the face). 0 keeps
+  // them pixel-exact (staircases). Face borders never move.
+  double boundary_error_px = 0.5;
   // Per-face triangle cap (VWALK used 10,000). When the result is larger, the
   // interior depth bound is doubled, up to `max_relaxations` times and only
-  // while each doubling removes >= 5 % of the triangles (silhouettes are never
-  // simplified, so a silhouette-dominated face may stay above the cap); face
-  // borders always use `depth_error_relative` so neighbouring faces still agree.
+  // while each doubling removes >= 5 % of the triangles (outlines stay within
+  // boundary_error_px, so an outline-dominated face may stay above the cap);
+  // face borders always use `depth_error_relative` so neighbouring faces still agree.
   std::size_t max_triangles = 10000;
   int max_relaxations = 8;
 };
@@ -43,14 +47,16 @@ struct SimplifyResult {
 
 // Simplifies one dense face mesh from build_depth_meshes (a pixel grid with
 // face_size^2 pixels). Guarantees, by construction and checked by the measured
-// `achieved`: every covered pixel stays covered and nothing else is covered
-// (silhouettes, skins and borders do not move), no triangle flips in screen
-// space, depth error <= depth_error_bound_used at the input vertices. Face
+// `achieved`: outlines (silhouettes, skins, coverage edges) move at most
+// boundary_error_px in screen space and the two sides of one outline share the
+// same screen-space line (no gaps, no overlaps), face borders do not move, no
+// triangle flips in screen space, depth error <= depth_error_bound_used at the
+// input vertices not on an outline (those on one keep their exact depth). Face
 // borders are simplified by a rule that reads only border data that
 // neighbouring faces share bit for bit, so the six faces of a sample keep
 // identical border vertices (no cracks) when all are simplified with the same
 // params. Deterministic. The cap may be unreachable for faces dominated by
-// silhouettes (then triangles_out > max_triangles). Throws std::invalid_argument
+// outlines (then triangles_out > max_triangles). Throws std::invalid_argument
 // when `in` is not a pixel-grid mesh of that size.
 SimplifyResult simplify_face_mesh(const FaceMesh& in, int face_size, const SimplifyParams& params);
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "stages/simplify_grid.h"
+#include "stages/simplify_outline.h"
 
 namespace cellbake {
 namespace {
@@ -20,6 +21,112 @@ struct ScreenVertex {
   double x, y, w;
 };
 
+struct Segment2 {
+  double ax, ay, bx, by;
+};
+
+double distance_to_segment(double px, double py, const Segment2& s) {
+  const double dx = s.bx - s.ax, dy = s.by - s.ay, qx = px - s.ax, qy = py - s.ay;
+  const double len2 = dx * dx + dy * dy;
+  const double t = len2 > 0 ? std::clamp((qx * dx + qy * dy) / len2, 0.0, 1.0) : 0.0;
+  const double ex = qx - t * dx, ey = qy - t * dy;
+  return std::sqrt(ex * ex + ey * ey);
+}
+
+constexpr double kBoundarySaturationPx = 64;
+
+// Whether (x, y) lies in the closed triangle abc (signed area `orient`), to rounding.
+bool contains(const ScreenVertex& a, const ScreenVertex& b, const ScreenVertex& c, double orient, double x, double y) {
+  const double tol = 1e-9 * std::abs(orient);
+  auto side = [&](const ScreenVertex& p, const ScreenVertex& q) {
+    return ((q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x)) * (orient > 0 ? 1 : -1) >= -tol;
+  };
+  return side(a, b) && side(b, c) && side(c, a);
+}
+
+// Segments bucketed on a uniform grid for nearest-distance queries.
+class SegmentIndex {
+ public:
+  SegmentIndex(std::vector<Segment2> segments, int face_size)
+      : segments_(std::move(segments)), cells_(face_size / kCell + 2) {
+    bucket_.resize(std::size_t(cells_) * cells_);
+    for (std::size_t k = 0; k < segments_.size(); ++k) {
+      const Segment2& s = segments_[k];
+      const int x0 = cell(std::min(s.ax, s.bx)), x1 = cell(std::max(s.ax, s.bx));
+      const int y0 = cell(std::min(s.ay, s.by)), y1 = cell(std::max(s.ay, s.by));
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) bucket_[std::size_t(y) * cells_ + x].push_back(std::uint32_t(k));
+    }
+  }
+
+  // Distance from (px, py) to the nearest segment, at most kBoundarySaturationPx.
+  double distance(double px, double py) const {
+    const int cx = cell(px), cy = cell(py);
+    double best = kBoundarySaturationPx;
+    for (int ring = 0; ring * kCell <= kBoundarySaturationPx + kCell; ++ring) {
+      if ((ring - 1) * kCell >= best) break;
+      for (int y = cy - ring; y <= cy + ring; ++y)
+        for (int x = cx - ring; x <= cx + ring; ++x) {
+          if (std::max(std::abs(x - cx), std::abs(y - cy)) != ring || x < 0 || y < 0 || x >= cells_ || y >= cells_)
+            continue;
+          for (std::uint32_t k : bucket_[std::size_t(y) * cells_ + x])
+            best = std::min(best, distance_to_segment(px, py, segments_[k]));
+        }
+    }
+    return best;
+  }
+
+ private:
+  static constexpr int kCell = 2;
+  int cell(double v) const { return std::clamp(int(std::floor(v / kCell)), 0, cells_ - 1); }
+  std::vector<Segment2> segments_;
+  int cells_;
+  std::vector<std::vector<std::uint32_t>> bucket_;
+};
+
+// Max over points sampled every 1/8 px along `from` of the distance to `to`.
+double directed_distance(const std::vector<Segment2>& from, const SegmentIndex& to) {
+  double worst = 0;
+  for (const Segment2& s : from) {
+    const double len = std::hypot(s.bx - s.ax, s.by - s.ay);
+    const int steps = std::max(1, int(std::ceil(len * 8)));
+    for (int k = 0; k <= steps; ++k) {
+      const double t = double(k) / steps;
+      worst = std::max(worst, to.distance(s.ax + t * (s.bx - s.ax), s.ay + t * (s.by - s.ay)));
+    }
+  }
+  return worst;
+}
+
+// Boundary edges (used by exactly one triangle) of `mesh` in lattice
+// coordinates; `skip_face_sides` leaves out those on the face square's sides.
+std::vector<Segment2> boundary_edges(const FaceMesh& mesh, int n, bool skip_face_sides) {
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;  // (key, count)
+  edges.reserve(mesh.indices.size());
+  for (std::size_t t = 0; t + 2 < mesh.indices.size(); t += 3)
+    for (int e = 0; e < 3; ++e) {
+      std::uint32_t a = mesh.indices[t + e], b = mesh.indices[t + (e + 1) % 3];
+      if (a > b) std::swap(a, b);
+      edges.push_back({(std::uint64_t(a) << 32) | b, 1});
+    }
+  std::sort(edges.begin(), edges.end());
+  std::vector<Segment2> out;
+  for (std::size_t k = 0; k < edges.size();) {
+    std::size_t m = k;
+    while (m < edges.size() && edges[m].first == edges[k].first) ++m;
+    if (m - k == 1) {
+      const Uv a = mesh.uvs[edges[k].first >> 32], b = mesh.uvs[edges[k].first & 0xffffffffu];
+      const Segment2 s{double(a.u) * n, double(a.v) * n, double(b.u) * n, double(b.v) * n};
+      auto same_side = [&](double p, double q) {
+        return (std::abs(p) < 1e-4 && std::abs(q) < 1e-4) || (std::abs(p - n) < 1e-4 && std::abs(q - n) < 1e-4);
+      };
+      if (!(skip_face_sides && (same_side(s.ax, s.bx) || same_side(s.ay, s.by)))) out.push_back(s);
+    }
+    k = m;
+  }
+  return out;
+}
+
 }  // namespace
 
 SimplifyError measure_simplification_error(const FaceMesh& dense, const FaceMesh& simplified, int face_size) {
@@ -30,6 +137,7 @@ SimplifyError measure_simplification_error(const FaceMesh& dense, const FaceMesh
     const double x = double(simplified.uvs[v].u) * n, y = double(simplified.uvs[v].v) * n;
     sv[v] = {x, y, inverse_planar_depth(simplified.positions[v], x, y, n)};
   }
+  const FaceOutlines outlines = trace_face_outlines(grid, label_face_regions(grid));
   SimplifyError err;
   // Per sample: how many simplified triangles cover it; its depth error.
   std::vector<std::uint8_t> hits(std::size_t(n) * n * 4, 0);
@@ -71,6 +179,9 @@ SimplifyError measure_simplification_error(const FaceMesh& dense, const FaceMesh
             const std::size_t s = (std::size_t(j) * n + i) * 4 + dy * 2 + dx;
             if (hits[s] < 255) ++hits[s];
             if (!grid.covered(i, j)) continue;
+            if (outlines.on_outline[std::size_t(j + dy) * (n + 1) + i + dx]) continue;
+            // The surface on the vertex's own eye ray: only a triangle holding the vertex.
+            if (!contains(a, b, c, orient, i + dx, j + dy)) continue;
             const std::uint32_t v = grid.vertex(i, j, i + dx, j + dy);
             const double w_out = alpha * grid.x[v] + beta * grid.y[v] + gamma;
             const double e_rel = w_out > 0 ? std::abs(grid.w[v] - w_out) / w_out : std::numeric_limits<double>::infinity();
@@ -88,6 +199,29 @@ SimplifyError measure_simplification_error(const FaceMesh& dense, const FaceMesh
         if (hits[s] > 1) ++err.overlapping_samples;
         err.max_depth_error_relative = std::max(err.max_depth_error_relative, depth_error[s]);
       }
+  // Outlines: the simplified boundary off the face sides is compared with all
+  // of the dense boundary (its ends may meet the face sides) and vice versa.
+  // The dense outline edges are the traced chains' unit edges (the same as
+  // its boundary edges off the face sides, without sorting a million edges).
+  std::vector<Segment2> dense_outline;
+  for (const OutlineChain& c : outlines.chains)
+    for (std::size_t k = 0; k + 1 < c.points.size(); ++k)
+      dense_outline.push_back({double(c.points[k].x), double(c.points[k].y), double(c.points[k + 1].x),
+                               double(c.points[k + 1].y)});
+  const std::vector<Segment2> simplified_outline = boundary_edges(simplified, n, true);
+  if (!dense_outline.empty() || !simplified_outline.empty()) {
+    std::vector<Segment2> dense_boundary = dense_outline;  // plus the covered face-side edges
+    for (int t = 0; t < n; ++t) {
+      if (grid.covered(t, 0)) dense_boundary.push_back({double(t), 0, double(t + 1), 0});
+      if (grid.covered(t, n - 1)) dense_boundary.push_back({double(t), double(n), double(t + 1), double(n)});
+      if (grid.covered(0, t)) dense_boundary.push_back({0, double(t), 0, double(t + 1)});
+      if (grid.covered(n - 1, t)) dense_boundary.push_back({double(n), double(t), double(n), double(t + 1)});
+    }
+    const SegmentIndex dense_index(std::move(dense_boundary), n);
+    const SegmentIndex simplified_index(boundary_edges(simplified, n, false), n);
+    err.max_boundary_error_px =
+        std::max(directed_distance(simplified_outline, dense_index), directed_distance(dense_outline, simplified_index));
+  }
   return err;
 }
 

@@ -14,12 +14,23 @@ namespace cellbake {
 struct SimplifyError {
   // Max over the dense mesh's vertices of |z_out - z_in| / z_in, where z_out is
   // the planar depth of the simplified surface on the same eye ray (taken from
-  // the simplified triangle covering the pixel next to the vertex).
+  // the simplified triangles that hold the vertex and cover a coverage sample
+  // of a pixel next to it). Vertices on
+  // an outline (a silhouette, skin or coverage edge inside the face) are left
+  // out: an outline may move (max_boundary_error_px), so the surface on its
+  // other side may legitimately cover them.
   double max_depth_error_relative = 0;
+  // Screen-space Hausdorff distance, in pixels, between the dense mesh's
+  // outlines and the simplified mesh's boundary edges (edges of one triangle)
+  // off the face square's sides, both ways: how far silhouettes, skins and
+  // coverage edges moved. Sampled every 1/8 px along the edges, so it is at
+  // most 1/16 px below the exact distance; saturates at 64 px.
+  double max_boundary_error_px = 0;
   // Screen coverage, sampled at 4 points per pixel (0.0313 / 0.0711 px inside each
   // pixel corner): samples the dense mesh covers and the simplified one does not,
   // and samples the simplified mesh covers where the dense one has no surface.
-  // Both 0 means silhouettes and borders did not move by more than ~0.07 px.
+  // Both 0 means silhouettes and borders did not move by more than ~0.07 px;
+  // straightened outlines (up to max_boundary_error_px) make both non-zero.
   std::size_t uncovered_samples = 0;
   std::size_t spurious_samples = 0;
   // Simplified triangles that are degenerate or wound against the dense mesh in screen space.

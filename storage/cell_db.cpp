@@ -23,7 +23,7 @@ CREATE TABLE cells(
   status TEXT NOT NULL, error TEXT NOT NULL DEFAULT '',
   input_hash TEXT NOT NULL, cull_hash TEXT NOT NULL, content_hash TEXT NOT NULL,
   cull_half_size REAL, near_triangles INTEGER, near_chunks BLOB,
-  far_triangles INTEGER, bytes INTEGER, max_coverage_error REAL, max_depth_error REAL,
+  far_triangles INTEGER, bytes INTEGER, max_boundary_error_px REAL, max_depth_error REAL,
   stage_seconds TEXT NOT NULL DEFAULT '{}');
 CREATE TABLE samples(
   cell_id INTEGER NOT NULL REFERENCES cells(id) ON DELETE CASCADE, sample_index INTEGER NOT NULL,
@@ -32,7 +32,7 @@ CREATE TABLE samples(
 CREATE TABLE faces(
   cell_id INTEGER NOT NULL, sample_index INTEGER NOT NULL, face INTEGER NOT NULL,
   image_format TEXT NOT NULL, image BLOB NOT NULL, mesh BLOB NOT NULL,
-  triangles INTEGER NOT NULL, coverage_error REAL, depth_error REAL,
+  triangles INTEGER NOT NULL, boundary_error_px REAL, depth_error REAL,
   PRIMARY KEY(cell_id, sample_index, face),
   FOREIGN KEY(cell_id, sample_index) REFERENCES samples(cell_id, sample_index) ON DELETE CASCADE);
 )sql",
@@ -124,7 +124,7 @@ void CellDb::put_cell(const CellRow& c) {
     SqliteStatement s(*db_,
                       "INSERT INTO cells(id, region, gx, gy, gz, min_x, min_y, min_z, max_x, max_y, max_z, status, "
                       "error, input_hash, cull_hash, content_hash, cull_half_size, near_triangles, near_chunks, "
-                      "far_triangles, bytes, max_coverage_error, max_depth_error, stage_seconds) "
+                      "far_triangles, bytes, max_boundary_error_px, max_depth_error, stage_seconds) "
                       "VALUES(?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
     const auto near = pack_near_chunks(c.near_chunks);
     nlohmann::json secs(c.stage_seconds);
@@ -133,7 +133,7 @@ void CellDb::put_cell(const CellRow& c) {
     s.bind(9, c.bounds.hi.x).bind(10, c.bounds.hi.y).bind(11, c.bounds.hi.z).bind(12, c.status).bind(13, c.error);
     s.bind(14, c.input_hash).bind(15, c.cull_hash).bind(16, c.content_hash).bind(17, c.cull_half_size);
     s.bind(18, std::int64_t(c.near_triangles)).bind_blob(19, near.data(), near.size());
-    s.bind(20, std::int64_t(c.far_triangles)).bind(21, std::int64_t(c.bytes)).bind(22, c.max_coverage_error);
+    s.bind(20, std::int64_t(c.far_triangles)).bind(21, std::int64_t(c.bytes)).bind(22, c.max_boundary_error_px);
     s.bind(23, c.max_depth_error).bind(24, secs.dump());
     s.run();
   }
@@ -145,7 +145,7 @@ void CellDb::put_cell(const CellRow& c) {
     for (const auto& f : sm.faces) {
       ins_face.bind(1, c.id).bind(2, std::int64_t(sm.index)).bind(3, std::int64_t(f.face)).bind(4, f.image_format);
       ins_face.bind_blob(5, f.image.data(), f.image.size()).bind_blob(6, f.mesh.data(), f.mesh.size());
-      ins_face.bind(7, std::int64_t(f.triangles)).bind(8, f.coverage_error).bind(9, f.depth_error).run();
+      ins_face.bind(7, std::int64_t(f.triangles)).bind(8, f.boundary_error_px).bind(9, f.depth_error).run();
     }
   }
   tx.commit();
@@ -184,7 +184,7 @@ std::optional<CellRow> CellDb::get_cell(std::int64_t id, bool with_blobs) const 
   SqliteStatement s(*db_,
                     "SELECT region, gx, gy, gz, min_x, min_y, min_z, max_x, max_y, max_z, status, error, input_hash, "
                     "cull_hash, content_hash, cull_half_size, near_triangles, near_chunks, far_triangles, bytes, "
-                    "max_coverage_error, max_depth_error, stage_seconds FROM cells WHERE id=?");
+                    "max_boundary_error_px, max_depth_error, stage_seconds FROM cells WHERE id=?");
   s.bind(1, id);
   if (!s.step()) return std::nullopt;
   CellRow c;
@@ -207,7 +207,7 @@ std::optional<CellRow> CellDb::get_cell(std::int64_t id, bool with_blobs) const 
   if (p) c.near_chunks = unpack_near_chunks(p, n);
   c.far_triangles = std::uint64_t(s.column_int(18));
   c.bytes = std::uint64_t(s.column_int(19));
-  c.max_coverage_error = s.column_double(20);
+  c.max_boundary_error_px = s.column_double(20);
   c.max_depth_error = s.column_double(21);
   auto secs = nlohmann::json::parse(s.column_text(22), nullptr, false);
   if (secs.is_object())
@@ -222,7 +222,7 @@ std::optional<CellRow> CellDb::get_cell(std::int64_t id, bool with_blobs) const 
   SqliteStatement fs(*db_,
                      std::string("SELECT sample_index, face, image_format, ") +
                          (with_blobs ? "image, mesh" : "x'', x''") +
-                         ", triangles, coverage_error, depth_error FROM faces WHERE cell_id=? ORDER BY sample_index, face");
+                         ", triangles, boundary_error_px, depth_error FROM faces WHERE cell_id=? ORDER BY sample_index, face");
   fs.bind(1, id);
   while (fs.step()) {
     const int si = int(fs.column_int(0));
@@ -232,7 +232,7 @@ std::optional<CellRow> CellDb::get_cell(std::int64_t id, bool with_blobs) const 
     f.image = fs.column_blob(3);
     f.mesh = fs.column_blob(4);
     f.triangles = std::uint32_t(fs.column_int(5));
-    f.coverage_error = fs.column_double(6);
+    f.boundary_error_px = fs.column_double(6);
     f.depth_error = fs.column_double(7);
     for (auto& sm : c.samples)
       if (sm.index == si) sm.faces.push_back(std::move(f));

@@ -30,7 +30,7 @@ struct FaceRow {
   std::vector<std::uint8_t> image;   // encoded colour image
   std::vector<std::uint8_t> mesh;    // encoded FaceMesh (stages/encode.h)
   std::uint32_t triangles = 0;
-  double coverage_error = 0;         // fraction of sub-pixel samples whose coverage the simplifier changed
+  double boundary_error_px = 0;         // measured max screen-space movement of outlines (silhouettes, skins, borders)
   double depth_error = 0;            // achieved max relative depth error
 };
 
@@ -56,7 +56,7 @@ struct CellRow {
   std::vector<NearChunkRow> near_chunks;
   std::uint64_t far_triangles = 0;
   std::uint64_t bytes = 0;
-  double max_coverage_error = 0;
+  double max_boundary_error_px = 0;
   double max_depth_error = 0;
   std::map<std::string, double> stage_seconds;
   std::vector<SampleRow> samples;

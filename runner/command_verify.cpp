@@ -1,0 +1,84 @@
+// `cellbake verify DB [--views-per-cell N] [--cells SEL] [--size WxH]
+//  [--threads N] --report DIR`: renders each cell's impostor against the ground
+// truth from viewpoints inside the cell and writes DIR/report.html +
+// DIR/report.json (runner/verify_runner.h). Also registers its helper
+// `cellbake plot CSV --x COL --y COL [--series COL] --out FILE.svg` (the
+// report's SVG scatter plot over any CSV; scripts/sweep.sh uses it).
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <cstdio>
+
+#include <fstream>
+#include <sstream>
+
+#include "runner/commands.h"
+#include "runner/verify_runner.h"
+#include "viewer/camera_path.h"
+#include "viewer/svg_plot.h"
+#include "viewer/verify_report.h"
+
+namespace cellbake {
+
+void add_verify_command(CLI::App& app) {
+  struct Options {
+    std::string database, report, size = "320x240";
+    VerifyOptions verify;
+  };
+  auto opt = std::make_shared<Options>();
+  CLI::App* cmd = app.add_subcommand(
+      "verify", "Render every cell's impostor against the ground truth from views inside the cell; write an HTML/JSON report");
+  cmd->add_option("database", opt->database, "Cell database")->required();
+  cmd->add_option("--report", opt->report, "Report folder (report.html, report.json, plots, resume file)")->required();
+  cmd->add_option("--views-per-cell", opt->verify.views_per_cell,
+                  "Views per cell: centre, corners, then seeded interior points")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  cmd->add_option("--cells", opt->verify.cells, "Cell selection, e.g. 1-10,15 (default: all done cells)");
+  cmd->add_option("--size", opt->size, "Image size WxH")->capture_default_str();
+  cmd->add_option("--fov", opt->verify.fov_y_deg, "Vertical field of view, degrees")->check(CLI::Range(1.0, 179.0));
+  cmd->add_option("--near", opt->verify.near_plane, "Near plane distance, model units")->check(CLI::PositiveNumber);
+  cmd->add_option("--seed", opt->verify.seed, "Seed of the interior view points")->capture_default_str();
+  cmd->add_option("--threads", opt->verify.threads, "Worker threads (0 = all cores)");
+  cmd->add_option("--worst", opt->verify.worst_views, "Worst views shown as triptychs")->capture_default_str();
+  cmd->add_option("--store", opt->verify.store, "Geometry store (default: the one the database names)");
+  cmd->add_flag("--quiet", opt->verify.quiet, "No progress output");
+  cmd->callback([opt] {
+    std::tie(opt->verify.width, opt->verify.height) = parse_image_size(opt->size);
+    const VerifySummary s = run_verify(opt->database, opt->report, opt->verify);
+    std::printf("verified %llu cells (%llu rendered, %llu reused, %llu failed), %llu views in %.1f s; median PSNR %.2f dB\n",
+                (unsigned long long)s.cells_selected, (unsigned long long)s.cells_rendered,
+                (unsigned long long)s.cells_reused, (unsigned long long)s.cells_failed,
+                (unsigned long long)s.views_rendered, s.seconds, s.psnr_median_db);
+    std::printf("report: %s\n", s.report_html.c_str());
+    if (s.cells_failed > 0) throw std::runtime_error(std::to_string(s.cells_failed) + " cell(s) could not be verified");
+  });
+
+  struct PlotOptions {
+    std::string csv, x, y, series, label, title, out;
+    bool log_x = false;
+  };
+  auto plot = std::make_shared<PlotOptions>();
+  CLI::App* pc = app.add_subcommand("plot", "Scatter plot of two CSV columns as SVG (the verify report's plot writer)");
+  pc->add_option("csv", plot->csv, "CSV file with a header line")->required();
+  pc->add_option("--x", plot->x, "Column for x")->required();
+  pc->add_option("--y", plot->y, "Column for y")->required();
+  pc->add_option("--series", plot->series, "Column whose values split the points into coloured series");
+  pc->add_option("--label", plot->label, "Column used as each point's tooltip");
+  pc->add_option("--title", plot->title, "Plot title");
+  pc->add_flag("--log-x", plot->log_x, "Logarithmic x axis");
+  pc->add_option("--out", plot->out, "Output SVG file")->required();
+  pc->callback([plot] {
+    std::ifstream in(plot->csv);
+    if (!in) throw std::runtime_error("cannot read " + plot->csv);
+    std::stringstream text;
+    text << in.rdbuf();
+    ScatterPlot p = scatter_plot_from_csv(text.str(), plot->x, plot->y, plot->series, plot->label);
+    p.title = plot->title.empty() ? plot->y + " vs " + plot->x : plot->title;
+    p.log_x = plot->log_x;
+    write_text_file_atomically(plot->out, scatter_plot_svg(p));
+    std::printf("%s: %zu points\n", plot->out.c_str(), drawable_points(p));
+  });
+}
+
+}  // namespace cellbake

@@ -1,0 +1,264 @@
+#include "runner/verify_runner.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "pipeline/cell_grid.h"
+#include "runner/progress.h"
+#include "stages/render/gl_context.h"
+#include "storage/cell_db.h"
+#include "storage/geometry_store.h"
+#include "viewer/cell_index.h"
+#include "viewer/decoded_cell.h"
+#include "viewer/image_metrics.h"
+#include "viewer/png_file.h"
+#include "viewer/scene_drawer.h"
+#include "viewer/verify_report.h"
+#include "viewer/view_camera.h"
+
+namespace cellbake {
+namespace {
+
+constexpr int kCacheVersion = 1;
+
+struct CellTask {
+  std::int64_t id = 0;
+  std::string key;
+};
+
+// The resume file: results by cell id (empty when missing or unreadable).
+std::map<std::int64_t, VerifyCellResult> load_cache(const std::filesystem::path& file) {
+  std::map<std::int64_t, VerifyCellResult> cells;
+  std::ifstream in(file);
+  if (!in) return cells;
+  try {
+    const nlohmann::json j = nlohmann::json::parse(in);
+    if (j.value("version", 0) != kCacheVersion) return cells;
+    for (const auto& c : j.at("cells")) {
+      VerifyCellResult r = cell_from_json(c);
+      cells[r.id] = std::move(r);
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "note: ignoring %s (%s); every cell will be rendered\n", file.c_str(), e.what());
+    cells.clear();
+  }
+  return cells;
+}
+
+// Writes `fresh` and, for cells it lacks, `older` (results of cells not selected this time are kept).
+void save_cache(const std::filesystem::path& file, const std::map<std::int64_t, VerifyCellResult>& fresh,
+                const std::map<std::int64_t, VerifyCellResult>& older) {
+  std::map<std::int64_t, const VerifyCellResult*> all;
+  for (const auto& [id, c] : older) all[id] = &c;
+  for (const auto& [id, c] : fresh) all[id] = &c;
+  nlohmann::json j{{"version", kCacheVersion}, {"cells", nlohmann::json::array()}};
+  for (const auto& [id, c] : all) j["cells"].push_back(to_json(*c));
+  write_text_file_atomically(file, j.dump());
+}
+
+// Side by side: truth | impostor | error image.
+std::vector<Rgba8> triptych(const ViewFrame& truth, const ViewFrame& impostor, const std::vector<Rgba8>& diff) {
+  const int w = truth.width, h = truth.height;
+  std::vector<Rgba8> out(std::size_t(3) * w * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = std::size_t(y) * w + x, o = std::size_t(y) * 3 * w + x;
+      out[o] = truth.color[i];
+      out[o + w] = impostor.color[i];
+      out[o + 2 * w] = diff[i];
+    }
+  return out;
+}
+
+bool worse(const VerifyViewResult& a, const VerifyViewResult& b) {
+  return a.psnr_db < b.psnr_db || (a.psnr_db == b.psnr_db && a.hole_fraction > b.hole_fraction);
+}
+
+}  // namespace
+
+VerifySummary run_verify(const std::filesystem::path& database, const std::filesystem::path& report_dir,
+                         const VerifyOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (options.views_per_cell < 1) throw std::invalid_argument("verify: --views-per-cell must be at least 1");
+  if (options.width < 8 || options.height < 8) throw std::invalid_argument("verify: image size must be at least 8x8");
+  const int threads = options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+  if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", threads > 1 ? "1" : "2", 1);
+
+  CellDb db(database, CellDb::Mode::read_only);
+  const auto store_meta = db.meta("store");
+  if (options.store.empty() && !store_meta)
+    throw std::runtime_error("verify: " + database.string() + " has no meta 'store' (not a cell database?)");
+  GeometryStore store(options.store.empty() ? std::filesystem::path(*store_meta) : options.store);
+  const std::string up_name = db.meta("up").value_or("z");
+  const Vec3d up = up_axis(up_name);
+  const double cell_size = std::stod(db.meta("cell_size").value_or("0"));
+  const std::vector<Box3d> regions = regions_of_config_text(db.meta("config").value_or(""));
+
+  nlohmann::json params{{"views_per_cell", options.views_per_cell}, {"width", options.width},
+                        {"height", options.height},                 {"fov_y_deg", options.fov_y_deg},
+                        {"near_plane", options.near_plane},         {"seed", options.seed},
+                        {"up", up_name},                            {"store_hash", db.meta("store_hash").value_or("")}};
+  const std::string params_key = params.dump();
+
+  // Selected done cells, in id order.
+  const CellIndex index(db);
+  std::vector<CellSpec> specs;
+  for (const auto& e : index.cells())
+    if (e.done) specs.push_back({e.id, 0, e.gx, e.gy, e.gz, e.bounds});
+  specs = select_cells(specs, options.cells);
+  const auto stamps = db.stamps();
+
+  std::filesystem::create_directories(report_dir / "views");
+  const std::filesystem::path cache_file = report_dir / "verify-cells.json";
+  std::map<std::int64_t, VerifyCellResult> cached = load_cache(cache_file);
+  std::map<std::int64_t, VerifyCellResult> results;
+  std::vector<CellTask> todo;
+  VerifySummary summary;
+  summary.cells_selected = specs.size();
+  for (const auto& s : specs) {
+    const auto stamp = stamps.find(s.id);
+    const std::string key = (stamp != stamps.end() ? stamp->second.content_hash : std::string()) + "|" + params_key;
+    auto it = cached.find(s.id);
+    if (it != cached.end() && it->second.key == key && it->second.error.empty() &&
+        (it->second.triptych.empty() || std::filesystem::exists(report_dir / it->second.triptych))) {
+      results[s.id] = it->second;
+      ++summary.cells_reused;
+      continue;
+    }
+    todo.push_back({s.id, key});
+  }
+
+  std::mutex mutex;  // guards db, results, the cache file and the counters
+  ProgressBar progress("verify", todo.size(), "cells");
+  std::uint64_t done = 0;
+  auto last_save = std::chrono::steady_clock::now();
+
+  auto verify_cell = [&](const CellTask& task, std::unique_ptr<SceneDrawer>& drawer) {
+    VerifyCellResult result;
+    result.id = task.id;
+    result.key = task.key;
+    std::optional<CellRow> row;
+    {
+      std::lock_guard lock(mutex);
+      row = db.get_cell(task.id, true);
+    }
+    try {
+      if (!row) throw std::runtime_error("cell " + std::to_string(task.id) + " is not in the database");
+      result.bounds = row->bounds;
+      result.bake_seconds = row->stage_seconds;
+      result.bytes = row->bytes;
+      result.near_triangles = row->near_triangles;
+      result.far_triangles = row->far_triangles;
+      const DecodedCell cell = decode_cell(*row);
+      const bool flat = row->region >= 0 && row->region < int(regions.size()) &&
+                        region_is_flat(regions[row->region], up, cell_size);
+      const auto plans = plan_verify_views(row->bounds, flat, up, options.views_per_cell,
+                                           options.seed * 0x9E3779B97F4A7C15ull + std::uint64_t(task.id));
+      if (!drawer) {
+        SceneDrawerParams dp;
+        dp.tdm_cache_bytes = std::size_t{256} << 20;
+        drawer = std::make_unique<SceneDrawer>(std::shared_ptr<GlContext>(create_gl_context(GlBackend::osmesa, 1, 1)),
+                                               store, dp);
+      }
+      const SceneDrawOptions draw_options;
+      ViewFrame worst_truth, worst_impostor;
+      for (const auto& plan : plans) {
+        const RenderCamera camera = look_at_camera(plan.eye, plan.look, up, options.fov_y_deg, options.width,
+                                                   options.height, options.near_plane);
+        ViewFrame impostor, truth;
+        VerifyViewResult v;
+        try {
+          drawer->draw_impostor(camera, options.width, options.height, cell, draw_options, impostor);  // uploads
+          const SceneFrameStats is = drawer->draw_impostor(camera, options.width, options.height, cell, draw_options, impostor);
+          drawer->draw_truth(camera, options.width, options.height, draw_options, truth);  // uploads
+          const SceneFrameStats ts = drawer->draw_truth(camera, options.width, options.height, draw_options, truth);
+          drawer->release_context();
+          v.triangles_impostor = cell.near_triangles + is.far_triangles;
+          v.triangles_truth = ts.chunk_triangles;
+          v.ms_impostor = is.milliseconds;
+          v.ms_truth = ts.milliseconds;
+        } catch (...) {
+          drawer->release_context();
+          throw;
+        }
+        const ImageMetrics m = compare_frames(impostor, truth);
+        v.kind = plan.kind;
+        v.eye = plan.eye;
+        v.look = plan.look;
+        v.distance_from_sample = std::numeric_limits<double>::infinity();
+        for (const auto& s : row->samples) v.distance_from_sample = std::min(v.distance_from_sample, length(plan.eye - s.eye));
+        v.psnr_db = m.psnr_db;
+        v.ssim = m.ssim;
+        v.hole_fraction = m.hole_fraction;
+        v.skin_fraction = m.skin_fraction;
+        v.extra_fraction = m.extra_fraction;
+        v.depth_error_median = m.depth_error_median;
+        if (result.views.empty() || worse(v, result.views[result.worst_view])) {
+          result.worst_view = int(result.views.size());
+          worst_truth = std::move(truth);
+          worst_impostor = std::move(impostor);
+        }
+        result.views.push_back(v);
+      }
+      if (result.worst_view >= 0) {
+        result.triptych = "views/cell_" + std::to_string(task.id) + ".png";
+        write_png(report_dir / result.triptych, 3 * options.width, options.height,
+                  triptych(worst_truth, worst_impostor, error_image(worst_impostor, worst_truth)));
+      }
+    } catch (const std::exception& e) {
+      result.views.clear();
+      result.worst_view = -1;
+      result.triptych.clear();
+      result.error = std::string("cell ") + std::to_string(task.id) + ": " + e.what();
+    }
+    std::lock_guard lock(mutex);
+    if (!result.error.empty()) {
+      ++summary.cells_failed;
+      std::fprintf(stderr, "\nwarning: %s\n", result.error.c_str());
+    }
+    summary.views_rendered += result.views.size();
+    results[task.id] = std::move(result);
+    ++summary.cells_rendered;
+    if (std::chrono::steady_clock::now() - last_save > std::chrono::seconds(2)) {
+      save_cache(cache_file, results, cached);
+      last_save = std::chrono::steady_clock::now();
+    }
+    if (!options.quiet) progress.update(++done);
+  };
+
+  tbb::task_arena arena(threads);
+  arena.execute([&] {
+    tbb::enumerable_thread_specific<std::unique_ptr<SceneDrawer>> drawers;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, todo.size(), 1),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t i = range.begin(); i != range.end(); ++i) verify_cell(todo[i], drawers.local());
+                      });
+  });
+  if (!options.quiet && !todo.empty()) progress.finish();
+  save_cache(cache_file, results, cached);
+
+  VerifyReportInput input;
+  input.database = std::filesystem::absolute(database).string();
+  input.params = params;
+  input.worst_views = options.worst_views;
+  for (auto& [id, r] : results) input.cells.push_back(r);
+  const VerifyReportFiles files = write_verify_report(report_dir, input);
+  summary.report_html = files.html;
+  summary.report_json = files.json;
+  summary.psnr_median_db = metric_stats(input.cells, verify_metrics()[0]).median;
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return summary;
+}
+
+}  // namespace cellbake

@@ -1,0 +1,47 @@
+// `cellbake verify`: renders every selected (done) cell's impostor and the
+// ground truth from several viewpoints inside the cell (viewer/verify_views.h)
+// in parallel (oneTBB, one OSMesa context per worker thread, released after
+// each view), compares them (viewer/image_metrics.h) and writes the report
+// folder (viewer/verify_report.h). Resumable: per-cell results are kept in
+// DIR/verify-cells.json keyed by the cell's content hash and the verify
+// parameters, so a rerun renders only changed or missing cells.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+namespace cellbake {
+
+struct VerifyOptions {
+  int views_per_cell = 6;
+  std::string cells;               // selection like "1-10,15" ("" = all done cells)
+  int width = 320, height = 240;   // image size, pixels
+  double fov_y_deg = 60;
+  double near_plane = 0.05;        // model units
+  std::uint64_t seed = 1;          // interior view points
+  int threads = 0;                 // 0 = all cores
+  int worst_views = 8;             // triptychs shown in the report
+  std::filesystem::path store;     // geometry store override ("" = the database's meta `store`)
+  bool quiet = false;              // no progress output
+};
+
+struct VerifySummary {
+  std::uint64_t cells_selected = 0;  // done cells selected
+  std::uint64_t cells_rendered = 0;  // rendered in this run
+  std::uint64_t cells_reused = 0;    // taken from verify-cells.json
+  std::uint64_t cells_failed = 0;    // could not be decoded or drawn (listed in the report)
+  std::uint64_t views_rendered = 0;
+  double psnr_median_db = 0;         // over every view (+inf when all are identical; NaN without views)
+  std::filesystem::path report_html, report_json;
+  double seconds = 0;
+};
+
+// Verifies `database` into the folder `report_dir` (created). Throws for setup
+// errors (database or store cannot be opened, bad options); a cell that fails
+// to decode or draw is recorded in the report and does not stop the others.
+// The metrics do not depend on `threads`; the timings do.
+VerifySummary run_verify(const std::filesystem::path& database, const std::filesystem::path& report_dir,
+                         const VerifyOptions& options);
+
+}  // namespace cellbake

@@ -1,0 +1,288 @@
+// The verify report: statistics on analytic inputs, the SVG writers, view
+// planning, JSON round trips, and `run_verify` end to end on a tiny bake of
+// the room fixture (files written, numbers parse, rerun renders nothing new).
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include "fixture_room_obj.h"
+#include "pipeline/bake_config.h"
+#include "pipeline/ingest.h"
+#include "runner/bake_runner.h"
+#include "runner/parallel.h"
+#include "runner/verify_runner.h"
+#include "test_support.h"
+#include "viewer/svg_plot.h"
+#include "viewer/verify_report.h"
+#include "viewer/verify_views.h"
+
+namespace cellbake {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+std::size_t count_of(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto p = text.find(what); p != std::string::npos; p = text.find(what, p + 1)) ++n;
+  return n;
+}
+
+std::string read_text(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+VerifyViewResult view(VerifyViewKind kind, double psnr, double holes) {
+  VerifyViewResult v;
+  v.kind = kind;
+  v.psnr_db = psnr;
+  v.hole_fraction = holes;
+  v.ssim = 0.9;
+  return v;
+}
+
+TEST(VerifyStats, MedianOfOddEvenInfiniteAndEmpty) {
+  EXPECT_DOUBLE_EQ(median_of({3, 1, 2}), 2);
+  EXPECT_DOUBLE_EQ(median_of({4, 1, 3, 2}), 2.5);
+  EXPECT_DOUBLE_EQ(median_of({1, kInf, 2, std::nan("")}), 2);  // NaN ignored
+  EXPECT_EQ(median_of({kInf, kInf}), kInf);
+  EXPECT_TRUE(std::isnan(median_of({})));
+}
+
+TEST(VerifyStats, MediansWorstAndCentreVersusCorner) {
+  VerifyCellResult a, b;
+  a.id = 7;
+  a.views = {view(VerifyViewKind::centre, 30, 0.01), view(VerifyViewKind::corner, 20, 0.2)};
+  b.id = 9;
+  b.views = {view(VerifyViewKind::centre, kInf, 0), view(VerifyViewKind::corner, 40, 0.05),
+             view(VerifyViewKind::interior, 25, 0.1)};
+  const std::vector<VerifyCellResult> cells{a, b};
+  const MetricStats psnr = metric_stats(cells, verify_metrics()[0]);
+  EXPECT_EQ(psnr.count, 5u);
+  EXPECT_DOUBLE_EQ(psnr.median, 30);  // 20 25 30 40 inf
+  EXPECT_DOUBLE_EQ(psnr.worst, 20);
+  EXPECT_EQ(psnr.worst_cell, 7);
+  EXPECT_EQ(psnr.worst_view, 1);
+  EXPECT_EQ(psnr.median_centre, kInf);  // 30, inf
+  EXPECT_DOUBLE_EQ(psnr.median_corner, 30);  // 20, 40
+
+  const MetricInfo* holes = nullptr;
+  for (const auto& m : verify_metrics())
+    if (std::string(m.name) == "hole_fraction") holes = &m;
+  ASSERT_TRUE(holes);
+  const MetricStats h = metric_stats(cells, *holes);
+  EXPECT_DOUBLE_EQ(h.worst, 0.2);  // lower is better: the maximum
+  EXPECT_DOUBLE_EQ(h.median, 0.05);
+  EXPECT_EQ(worst_view_index(b.views), 2);
+  EXPECT_EQ(worst_view_index({}), -1);
+
+  const nlohmann::json s = summary_json(cells);
+  EXPECT_EQ(s["views"].get<int>(), 5);
+  EXPECT_DOUBLE_EQ(s["psnr_db"]["median_corner"].get<double>(), 30);
+  EXPECT_TRUE(s["psnr_db"]["median_centre"].is_null());  // infinite
+}
+
+TEST(VerifyStats, CellJsonRoundTripsIncludingInfinitePsnr) {
+  VerifyCellResult c;
+  c.id = 3;
+  c.bounds = {{0, 0, 0}, {2, 2, 2}};
+  c.key = "abc|{}";
+  c.bake_seconds = {{"sample", 1.5}, {"encode", 0.5}};
+  c.bytes = 1234;
+  c.views = {view(VerifyViewKind::corner, kInf, 0.25)};
+  c.views[0].eye = {1, 2, 3};
+  c.worst_view = 0;
+  c.triptych = "views/cell_3.png";
+  const VerifyCellResult r = cell_from_json(nlohmann::json::parse(to_json(c).dump()));
+  EXPECT_EQ(r.id, 3);
+  EXPECT_EQ(r.key, c.key);
+  EXPECT_DOUBLE_EQ(r.bake_seconds_total(), 2.0);
+  ASSERT_EQ(r.views.size(), 1u);
+  EXPECT_EQ(r.views[0].kind, VerifyViewKind::corner);
+  EXPECT_EQ(r.views[0].psnr_db, kInf);
+  EXPECT_DOUBLE_EQ(r.views[0].hole_fraction, 0.25);
+  EXPECT_EQ(r.views[0].eye, (Vec3d{1, 2, 3}));
+}
+
+TEST(SvgPlot, NiceTicks) {
+  EXPECT_EQ(nice_ticks(0, 10, 5), (std::vector<double>{0, 2, 4, 6, 8, 10}));
+  // (0.95 - 0.3) / 6 = 0.108: the next nice step is 0.2.
+  const std::vector<double> t = nice_ticks(0.3, 0.95, 6);
+  ASSERT_EQ(t.size(), 3u);
+  EXPECT_NEAR(t[0], 0.4, 1e-12);
+  EXPECT_NEAR(t[1], 0.6, 1e-12);
+  EXPECT_NEAR(t[2], 0.8, 1e-12);
+  EXPECT_EQ(nice_ticks(5, 5), (std::vector<double>{5}));
+  EXPECT_TRUE(nice_ticks(1, 0).empty());
+  EXPECT_EQ(format_tick(25000), "25k");
+  EXPECT_EQ(format_tick(2e6), "2M");
+}
+
+TEST(SvgPlot, ScatterHasOneCirclePerFinitePoint) {
+  ScatterPlot p{"title & more", "x", "y", false, 640, 420, {}};
+  PlotSeries a{"a", "#f00", {}}, b{"b", "#00f", {}};
+  for (int i = 0; i < 5; ++i) a.points.push_back({double(i), double(i * i), "p" + std::to_string(i)});
+  b.points = {{1, 2, ""}, {2, kInf, ""}, {std::nan(""), 1, ""}, {3, 1, ""}};
+  p.series = {a, b};
+  const std::string svg = scatter_plot_svg(p);
+  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+  EXPECT_NE(svg.find("</svg>"), std::string::npos);
+  EXPECT_EQ(count_of(svg, "<circle"), 7u);
+  EXPECT_EQ(drawable_points(p), 7u);
+  EXPECT_NE(svg.find("title &amp; more"), std::string::npos);
+  EXPECT_EQ(count_of(svg, "<rect x=\"") - 1, 2u);  // background + one legend swatch per series
+  p.log_x = true;  // x = 0 is not drawable on a log axis
+  EXPECT_EQ(count_of(scatter_plot_svg(p), "<circle"), 6u);
+  ScatterPlot nothing;
+  nothing.title = "t";
+  const std::string empty = scatter_plot_svg(nothing);
+  EXPECT_EQ(count_of(empty, "<circle"), 0u);
+  EXPECT_NE(empty.find("no data"), std::string::npos);
+}
+
+TEST(SvgPlot, CellMapColoursWorstRedAndNamesIt) {
+  CellMap map{"map", "PSNR", true, 400, {}};
+  map.cells = {{1, 0, 0, 4, 4, 30}, {2, 4, 0, 8, 4, 20}, {3, 8, 0, 12, 4, std::nan("")}};
+  const std::string svg = cell_map_svg(map);
+  EXPECT_EQ(count_of(svg, "class=\"cell\""), 3u);
+  EXPECT_NE(svg.find("worst: cell 2"), std::string::npos);
+  EXPECT_NE(svg.find(ramp_color(1.0)), std::string::npos);  // the worst is red
+  EXPECT_NE(svg.find(ramp_color(0.0)), std::string::npos);  // the best is green
+  EXPECT_EQ(ramp_color(1.0), "#dc2626");
+}
+
+TEST(VerifyViews, FlatCellCentreCornersInsideAndInteriorDeterministic) {
+  const Box3d cell{{0, 0, 0}, {4, 4, 4}};
+  const auto views = plan_verify_views(cell, true, {0, 0, 1}, 7, 42);
+  ASSERT_EQ(views.size(), 7u);
+  EXPECT_EQ(views[0].kind, VerifyViewKind::centre);
+  EXPECT_EQ(views[0].eye, (Vec3d{2, 2, 2}));
+  for (int i = 1; i <= 4; ++i) {
+    EXPECT_EQ(views[i].kind, VerifyViewKind::corner);
+    EXPECT_DOUBLE_EQ(views[i].eye.z, 2);  // at eye height
+    EXPECT_NEAR(std::abs(views[i].eye.x - 2), 1.96, 1e-12);
+    EXPECT_NEAR(std::abs(views[i].eye.y - 2), 1.96, 1e-12);
+  }
+  for (int i = 5; i < 7; ++i) EXPECT_EQ(views[i].kind, VerifyViewKind::interior);
+  for (const auto& v : views) {
+    EXPECT_DOUBLE_EQ(v.look.z, v.eye.z);                    // horizontal
+    EXPECT_NEAR(length(v.look - v.eye), 4, 1e-12);
+    EXPECT_GT(v.eye.x, 0);
+    EXPECT_LT(v.eye.x, 4);
+    EXPECT_GT(v.eye.y, 0);
+    EXPECT_LT(v.eye.y, 4);
+  }
+  const auto again = plan_verify_views(cell, true, {0, 0, 1}, 7, 42);
+  for (int i = 0; i < 7; ++i) EXPECT_EQ(again[i].eye, views[i].eye);
+  EXPECT_NE(plan_verify_views(cell, true, {0, 0, 1}, 7, 43)[6].eye, views[6].eye);
+
+  const auto cube = plan_verify_views(cell, false, {0, 0, 1}, 9, 1);
+  int low = 0, high = 0;
+  for (int i = 1; i <= 8; ++i) {
+    EXPECT_EQ(cube[i].kind, VerifyViewKind::corner);
+    low += cube[i].eye.z < 1, high += cube[i].eye.z > 3;
+  }
+  EXPECT_EQ(low, 4);
+  EXPECT_EQ(high, 4);
+  EXPECT_THROW(plan_verify_views(cell, true, {0, 0, 1}, 0, 1), std::invalid_argument);
+}
+
+TEST(VerifyViews, RegionsFromConfigText) {
+  const auto regions = regions_of_config_text("up=z\ncells.size=4\nregion=4,6,1.7,40,34,1.7\n");
+  ASSERT_EQ(regions.size(), 1u);
+  EXPECT_EQ(regions[0].hi, (Vec3d{40, 34, 1.7}));
+  EXPECT_TRUE(region_is_flat(regions[0], {0, 0, 1}, 4));
+  EXPECT_FALSE(region_is_flat(Box3d{{0, 0, 0}, {8, 8, 8}}, {0, 0, 1}, 4));
+  EXPECT_THROW(regions_of_config_text("region=1,2,3\n"), std::invalid_argument);
+}
+
+TEST(VerifyRun, TinyBakeReportIsCompleteAndResumable) {
+  test::TempDir dir;
+  test::write_text(dir / "room.obj", test::room_obj());
+  IngestParams ip;
+  ip.max_chunk_triangles = 128;
+  ingest_models({dir / "room.obj"}, dir / "room.store.db", ip, tbb_parallel_for());
+  BakeConfig c;
+  c.store = dir / "room.store.db";
+  c.regions = {Box3d{{1, 1, 1.6}, {5, 3, 1.6}}};  // 2 x 1 cells of 2 m
+  c.cell_size = 2.0;
+  c.near_budget = 600;
+  c.face_size = 32;
+  c.image_format = "png";
+  c.database = dir / "cells.db";
+  BakeOptions bo;
+  bo.threads = 2;
+  bo.quiet = true;
+  ASSERT_EQ(run_bake(c, bo).cells_baked, 2u);
+
+  VerifyOptions vo;
+  vo.views_per_cell = 2;
+  vo.width = 64;
+  vo.height = 48;
+  vo.threads = 2;
+  vo.quiet = true;
+  const std::filesystem::path report = dir / "report";
+  const VerifySummary s = run_verify(c.database, report, vo);
+  EXPECT_EQ(s.cells_selected, 2u);
+  EXPECT_EQ(s.cells_rendered, 2u);
+  EXPECT_EQ(s.cells_failed, 0u);
+  EXPECT_EQ(s.views_rendered, 4u);
+  ASSERT_TRUE(std::filesystem::exists(report / "report.html"));
+  const std::string html = read_text(report / "report.html");
+  EXPECT_NE(html.find("cell_map.svg"), std::string::npos);
+  EXPECT_NE(html.find("views/cell_"), std::string::npos);
+
+  const nlohmann::json j = nlohmann::json::parse(read_text(report / "report.json"));
+  ASSERT_EQ(j["cells"].size(), 2u);
+  for (const auto& cell : j["cells"]) {
+    ASSERT_EQ(cell["views"].size(), 2u);
+    EXPECT_GT(cell["bytes"].get<std::uint64_t>(), 0u);
+    EXPECT_GT(cell["bake_seconds"]["sample"].get<double>(), 0.0);
+    for (const auto& v : cell["views"]) {
+      const double ssim = v["ssim"].get<double>();
+      EXPECT_GT(ssim, 0.0);
+      EXPECT_LE(ssim, 1.0 + 1e-9);
+      EXPECT_GE(v["hole_fraction"].get<double>(), 0.0);
+      EXPECT_LE(v["hole_fraction"].get<double>(), 1.0);
+      EXPECT_GT(v["triangles_truth"].get<std::uint64_t>(), 0u);
+      EXPECT_GT(v["triangles_impostor"].get<std::uint64_t>(), 0u);
+      EXPECT_GE(v["ms_truth"].get<double>(), 0.0);
+      EXPECT_GE(v["distance_from_sample"].get<double>(), 0.0);
+      EXPECT_TRUE(v["psnr_db"].is_null() || v["psnr_db"].get<double>() > 5.0);
+    }
+    EXPECT_EQ(cell["views"][0]["kind"], "centre");
+    EXPECT_NEAR(cell["views"][0]["distance_from_sample"].get<double>(), 0.0, 1e-9);  // sample at the centre
+    EXPECT_EQ(cell["views"][1]["kind"], "corner");
+    EXPECT_TRUE(std::filesystem::file_size(report / cell["triptych"].get<std::string>()) > 100);
+  }
+  EXPECT_EQ(j["summary"]["views"].get<int>(), 4);
+  EXPECT_EQ(j["summary"]["psnr_db"]["count"].get<int>(), 4);
+  for (const char* plot : {"psnr_vs_bake_seconds", "psnr_vs_bytes", "psnr_vs_triangles", "psnr_vs_distance",
+                           "holes_vs_distance"}) {
+    const std::string svg = read_text(report / "plots" / (std::string(plot) + ".svg"));
+    EXPECT_EQ(svg.rfind("<svg", 0), 0u) << plot;
+    EXPECT_GT(count_of(svg, "<circle"), 0u) << plot;
+  }
+  EXPECT_EQ(count_of(read_text(report / "cell_map.svg"), "class=\"cell\""), 2u);
+
+  const VerifySummary again = run_verify(c.database, report, vo);
+  EXPECT_EQ(again.cells_rendered, 0u);
+  EXPECT_EQ(again.cells_reused, 2u);
+  EXPECT_EQ(again.views_rendered, 0u);
+  EXPECT_EQ(nlohmann::json::parse(read_text(report / "report.json"))["cells"].size(), 2u);
+
+  vo.views_per_cell = 3;  // other parameters: everything is rendered again
+  const VerifySummary changed = run_verify(c.database, report, vo);
+  EXPECT_EQ(changed.cells_rendered, 2u);
+  EXPECT_EQ(changed.views_rendered, 6u);
+}
+
+}  // namespace
+}  // namespace cellbake

@@ -1,0 +1,431 @@
+#include "viewer/verify_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "viewer/svg_plot.h"
+
+namespace cellbake {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+double number_from(const nlohmann::json& j, const char* key, double if_null) {
+  const auto& v = j.at(key);
+  return v.is_null() ? if_null : v.get<double>();
+}
+
+nlohmann::json vec_json(const Vec3d& v) { return nlohmann::json::array({v.x, v.y, v.z}); }
+Vec3d vec_from(const nlohmann::json& j) { return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()}; }
+
+std::string html_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string fmt(double v, const char* format = "%.4g") {
+  if (std::isnan(v)) return "&ndash;";
+  if (std::isinf(v)) return v > 0 ? "&infin;" : "&minus;&infin;";
+  char buf[48];
+  std::snprintf(buf, sizeof buf, format, v);
+  return buf;
+}
+
+double cell_median(const VerifyCellResult& c, double VerifyViewResult::*field) {
+  std::vector<double> v;
+  for (const auto& view : c.views) v.push_back(view.*field);
+  return median_of(v);
+}
+
+void write_svg(const std::filesystem::path& file, const std::string& svg, VerifyReportFiles& files) {
+  write_text_file_atomically(file, svg);
+  files.plots.push_back(file);
+}
+
+const char* kind_color(VerifyViewKind k) {
+  switch (k) {
+    case VerifyViewKind::centre: return "#1f77b4";
+    case VerifyViewKind::corner: return "#d62728";
+    case VerifyViewKind::interior: return "#2ca02c";
+  }
+  return "#000";
+}
+
+// One series per view kind, points (x(view, cell), y(view)).
+template <class X, class Y>
+std::vector<PlotSeries> per_view_series(const std::vector<VerifyCellResult>& cells, X x, Y y) {
+  std::vector<PlotSeries> series;
+  for (VerifyViewKind k : {VerifyViewKind::centre, VerifyViewKind::corner, VerifyViewKind::interior}) {
+    PlotSeries s{std::string(view_kind_name(k)) + " views", kind_color(k), {}};
+    for (const auto& c : cells)
+      for (std::size_t i = 0; i < c.views.size(); ++i)
+        if (c.views[i].kind == k)
+          s.points.push_back({x(c.views[i], c), y(c.views[i]), "cell " + std::to_string(c.id) + " view " + std::to_string(i)});
+    if (!s.points.empty()) series.push_back(std::move(s));
+  }
+  return series;
+}
+
+}  // namespace
+
+double VerifyCellResult::bake_seconds_total() const {
+  double s = 0;
+  for (const auto& [stage, seconds] : bake_seconds) s += seconds;
+  return s;
+}
+
+double median_of(const std::vector<double>& values) {
+  std::vector<double> v;
+  for (double x : values)
+    if (!std::isnan(x)) v.push_back(x);
+  if (v.empty()) return kNaN;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  if (n % 2) return v[n / 2];
+  const double a = v[n / 2 - 1], b = v[n / 2];
+  return a == b ? a : 0.5 * (a + b);  // inf + inf stays inf; inf - inf is avoided
+}
+
+const std::vector<MetricInfo>& verify_metrics() {
+  static const std::vector<MetricInfo> metrics{
+      {"psnr_db", true, &VerifyViewResult::psnr_db},
+      {"ssim", true, &VerifyViewResult::ssim},
+      {"hole_fraction", false, &VerifyViewResult::hole_fraction},
+      {"skin_fraction", false, &VerifyViewResult::skin_fraction},
+      {"extra_fraction", false, &VerifyViewResult::extra_fraction},
+      {"depth_error_median", false, &VerifyViewResult::depth_error_median},
+      {"ms_impostor", false, &VerifyViewResult::ms_impostor},
+      {"ms_truth", false, &VerifyViewResult::ms_truth},
+  };
+  return metrics;
+}
+
+MetricStats metric_stats(const std::vector<VerifyCellResult>& cells, const MetricInfo& metric) {
+  MetricStats s;
+  std::vector<double> all, centre, corner;
+  for (const auto& c : cells)
+    for (std::size_t i = 0; i < c.views.size(); ++i) {
+      const double v = c.views[i].*metric.field;
+      if (std::isnan(v)) continue;
+      all.push_back(v);
+      if (c.views[i].kind == VerifyViewKind::centre) centre.push_back(v);
+      if (c.views[i].kind == VerifyViewKind::corner) corner.push_back(v);
+      if (s.count++ == 0 || (metric.higher_is_better ? v < s.worst : v > s.worst)) {
+        s.worst = v;
+        s.worst_cell = c.id;
+        s.worst_view = int(i);
+      }
+    }
+  s.median = median_of(all);
+  s.median_centre = median_of(centre);
+  s.median_corner = median_of(corner);
+  return s;
+}
+
+int worst_view_index(const std::vector<VerifyViewResult>& views) {
+  int worst = -1;
+  for (int i = 0; i < int(views.size()); ++i) {
+    if (worst < 0) {
+      worst = i;
+      continue;
+    }
+    const auto &v = views[i], &w = views[worst];
+    if (v.psnr_db < w.psnr_db || (v.psnr_db == w.psnr_db && v.hole_fraction > w.hole_fraction)) worst = i;
+  }
+  return worst;
+}
+
+nlohmann::json to_json(const VerifyViewResult& v) {
+  return {{"kind", view_kind_name(v.kind)},
+          {"eye", vec_json(v.eye)},
+          {"look", vec_json(v.look)},
+          {"distance_from_sample", v.distance_from_sample},
+          {"psnr_db", number_or_null(v.psnr_db)},
+          {"ssim", number_or_null(v.ssim)},
+          {"hole_fraction", number_or_null(v.hole_fraction)},
+          {"skin_fraction", number_or_null(v.skin_fraction)},
+          {"extra_fraction", number_or_null(v.extra_fraction)},
+          {"depth_error_median", number_or_null(v.depth_error_median)},
+          {"triangles_impostor", v.triangles_impostor},
+          {"triangles_truth", v.triangles_truth},
+          {"ms_impostor", number_or_null(v.ms_impostor)},
+          {"ms_truth", number_or_null(v.ms_truth)}};
+}
+
+nlohmann::json to_json(const VerifyCellResult& c) {
+  nlohmann::json views = nlohmann::json::array();
+  for (const auto& v : c.views) views.push_back(to_json(v));
+  nlohmann::json j{{"id", c.id},
+                   {"bounds", {vec_json(c.bounds.lo), vec_json(c.bounds.hi)}},
+                   {"key", c.key},
+                   {"bake_seconds", c.bake_seconds},
+                   {"bake_seconds_total", c.bake_seconds_total()},
+                   {"bytes", c.bytes},
+                   {"near_triangles", c.near_triangles},
+                   {"far_triangles", c.far_triangles},
+                   {"views", views},
+                   {"triptych", c.triptych},
+                   {"worst_view", c.worst_view}};
+  if (!c.error.empty()) j["error"] = c.error;
+  return j;
+}
+
+VerifyCellResult cell_from_json(const nlohmann::json& j) {
+  VerifyCellResult c;
+  c.id = j.at("id").get<std::int64_t>();
+  c.bounds = {vec_from(j.at("bounds").at(0)), vec_from(j.at("bounds").at(1))};
+  c.key = j.at("key").get<std::string>();
+  c.bake_seconds = j.at("bake_seconds").get<std::map<std::string, double>>();
+  c.bytes = j.at("bytes").get<std::uint64_t>();
+  c.near_triangles = j.at("near_triangles").get<std::uint64_t>();
+  c.far_triangles = j.at("far_triangles").get<std::uint64_t>();
+  c.triptych = j.at("triptych").get<std::string>();
+  c.worst_view = j.at("worst_view").get<int>();
+  c.error = j.value("error", std::string());
+  for (const auto& v : j.at("views")) {
+    VerifyViewResult r;
+    r.kind = parse_view_kind(v.at("kind").get<std::string>());
+    r.eye = vec_from(v.at("eye"));
+    r.look = vec_from(v.at("look"));
+    r.distance_from_sample = v.at("distance_from_sample").get<double>();
+    r.psnr_db = number_from(v, "psnr_db", std::numeric_limits<double>::infinity());
+    r.ssim = number_from(v, "ssim", kNaN);
+    r.hole_fraction = number_from(v, "hole_fraction", kNaN);
+    r.skin_fraction = number_from(v, "skin_fraction", kNaN);
+    r.extra_fraction = number_from(v, "extra_fraction", kNaN);
+    r.depth_error_median = number_from(v, "depth_error_median", kNaN);
+    r.triangles_impostor = v.at("triangles_impostor").get<std::uint64_t>();
+    r.triangles_truth = v.at("triangles_truth").get<std::uint64_t>();
+    r.ms_impostor = number_from(v, "ms_impostor", kNaN);
+    r.ms_truth = number_from(v, "ms_truth", kNaN);
+    c.views.push_back(r);
+  }
+  return c;
+}
+
+nlohmann::json summary_json(const std::vector<VerifyCellResult>& cells) {
+  nlohmann::json s;
+  std::size_t views = 0, failed = 0;
+  std::vector<double> bake, bytes, tri_imp, tri_truth;
+  for (const auto& c : cells) {
+    views += c.views.size();
+    failed += !c.error.empty();
+    if (!c.error.empty()) continue;
+    bake.push_back(c.bake_seconds_total());
+    bytes.push_back(double(c.bytes));
+    for (const auto& v : c.views) {
+      tri_imp.push_back(double(v.triangles_impostor));
+      tri_truth.push_back(double(v.triangles_truth));
+    }
+  }
+  s["cells"] = cells.size();
+  s["cells_failed"] = failed;
+  s["views"] = views;
+  for (const auto& m : verify_metrics()) {
+    const MetricStats st = metric_stats(cells, m);
+    s[m.name] = {{"count", st.count},
+                 {"median", number_or_null(st.median)},
+                 {"worst", number_or_null(st.worst)},
+                 {"worst_cell", st.worst_cell},
+                 {"worst_view", st.worst_view},
+                 {"median_centre", number_or_null(st.median_centre)},
+                 {"median_corner", number_or_null(st.median_corner)},
+                 {"higher_is_better", m.higher_is_better}};
+  }
+  s["bake_seconds_median"] = number_or_null(median_of(bake));
+  s["bytes_median"] = number_or_null(median_of(bytes));
+  s["triangles_impostor_median"] = number_or_null(median_of(tri_imp));
+  s["triangles_truth_median"] = number_or_null(median_of(tri_truth));
+  return s;
+}
+
+void write_text_file_atomically(const std::filesystem::path& file, const std::string& text) {
+  const std::filesystem::path tmp = file.string() + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error("cannot write " + tmp.string());
+    out << text;
+    if (!out.flush()) throw std::runtime_error("cannot write " + tmp.string());
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, file, ec);
+  if (ec) throw std::runtime_error("cannot rename " + tmp.string() + " to " + file.string() + ": " + ec.message());
+}
+
+VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const VerifyReportInput& input) {
+  VerifyReportFiles files;
+  std::filesystem::create_directories(dir / "plots");
+  const auto& cells = input.cells;
+  const nlohmann::json summary = summary_json(cells);
+
+  // report.json
+  nlohmann::json report{{"database", input.database}, {"params", input.params}, {"summary", summary}};
+  report["cells"] = nlohmann::json::array();
+  for (const auto& c : cells) report["cells"].push_back(to_json(c));
+  files.json = dir / "report.json";
+  write_text_file_atomically(files.json, report.dump(1));
+
+  // Plots.
+  const std::string psnr_label = "median PSNR per cell, dB (higher is better)";
+  auto per_cell = [&](const std::string& name, const std::string& title, const std::string& x_label, bool log_x,
+                      auto x_of) {
+    ScatterPlot p{title, x_label, psnr_label, log_x, 640, 420, {}};
+    PlotSeries s{"cells", "#1f77b4", {}};
+    for (const auto& c : cells)
+      if (c.error.empty()) s.points.push_back({x_of(c), cell_median(c, &VerifyViewResult::psnr_db), "cell " + std::to_string(c.id)});
+    p.series.push_back(std::move(s));
+    write_svg(dir / "plots" / name, scatter_plot_svg(p), files);
+  };
+  per_cell("psnr_vs_bake_seconds.svg", "Error vs bake time", "bake seconds per cell (all stages)", false,
+           [](const VerifyCellResult& c) { return c.bake_seconds_total(); });
+  per_cell("psnr_vs_bytes.svg", "Error vs stored bytes", "stored bytes per cell", false,
+           [](const VerifyCellResult& c) { return double(c.bytes); });
+  {
+    ScatterPlot p{"Error vs triangles drawn", "triangles drawn (impostor: near + far field)",
+                  "PSNR per view, dB (higher is better)", false, 640, 420,
+                  per_view_series(cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return double(v.triangles_impostor); },
+                                  [](const VerifyViewResult& v) { return v.psnr_db; })};
+    write_svg(dir / "plots" / "psnr_vs_triangles.svg", scatter_plot_svg(p), files);
+  }
+  {
+    ScatterPlot p{"Error vs distance from the sample point", "eye distance from the nearest sample point (model units)",
+                  "PSNR per view, dB (higher is better)", false, 640, 420,
+                  per_view_series(cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return v.distance_from_sample; },
+                                  [](const VerifyViewResult& v) { return v.psnr_db; })};
+    write_svg(dir / "plots" / "psnr_vs_distance.svg", scatter_plot_svg(p), files);
+  }
+  {
+    ScatterPlot p{"Holes vs distance from the sample point", "eye distance from the nearest sample point (model units)",
+                  "hole fraction per view (lower is better)", false, 640, 420,
+                  per_view_series(cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return v.distance_from_sample; },
+                                  [](const VerifyViewResult& v) { return v.hole_fraction; })};
+    write_svg(dir / "plots" / "holes_vs_distance.svg", scatter_plot_svg(p), files);
+  }
+
+  // Cell map in plan: drop the up axis (the one with the most cells sharing one value is not known
+  // here, so use the database's up from params when given, else z).
+  const std::string up = input.params.value("up", std::string("z"));
+  const int a = up == "y" ? 2 : 0, b = up == "y" ? 0 : 1;  // y up: plan (z, x); z up: plan (x, y)
+  CellMap map{"Cell map: median PSNR per cell", "median PSNR (dB)", true, 720, {}};
+  std::vector<const VerifyCellResult*> order;
+  for (const auto& c : cells) order.push_back(&c);
+  // Worst cells last, so the worst of a stack of layers shows on top.
+  std::stable_sort(order.begin(), order.end(), [](const VerifyCellResult* x, const VerifyCellResult* y) {
+    const double px = cell_median(*x, &VerifyViewResult::psnr_db), py = cell_median(*y, &VerifyViewResult::psnr_db);
+    return (std::isnan(px) ? -1e300 : -px) < (std::isnan(py) ? -1e300 : -py);
+  });
+  for (const auto* c : order)
+    map.cells.push_back({c->id, c->bounds.lo[a], c->bounds.lo[b], c->bounds.hi[a], c->bounds.hi[b],
+                         cell_median(*c, &VerifyViewResult::psnr_db)});
+  files.cell_map = dir / "cell_map.svg";
+  write_text_file_atomically(files.cell_map, cell_map_svg(map));
+
+  // report.html
+  std::ostringstream h;
+  h << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>cellbake verify: "
+    << html_escape(input.database) << "</title>\n<style>\n"
+       "body{font-family:sans-serif;margin:2em;color:#222;max-width:1400px}\n"
+       "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}\n"
+       "th{background:#f0f0f0}td.l,th.l{text-align:left}tr.bad td{background:#fde2e2}\n"
+       ".plots img{margin:4px;border:1px solid #ddd}.trip img{max-width:100%;border:1px solid #ddd}\n"
+       "code{background:#f4f4f4;padding:1px 4px}.note{color:#666;font-size:90%}\n"
+       "</style></head><body>\n";
+  h << "<h1>cellbake verify</h1>\n<p>Database <code>" << html_escape(input.database) << "</code>; parameters <code>"
+    << html_escape(input.params.dump()) << "</code>. " << summary["cells"].get<std::size_t>() << " cells ("
+    << summary["cells_failed"].get<std::size_t>() << " could not be verified), " << summary["views"].get<std::size_t>()
+    << " views: each rendered as the cell's impostor (near field + textured depth meshes) and as ground truth.</p>\n";
+  h << "<p class=\"note\">PSNR and SSIM compare colours (higher is better); hole = truth surface the impostor "
+       "misses, skin = impostor surface >5% nearer than the truth, extra = impostor surface where the truth is empty "
+       "(fractions, lower is better); depth error = median relative depth error; ms = warm frame time of the "
+       "software renderer while other views render in parallel.</p>\n";
+  h << "<h2>Summary</h2>\n<table><tr><th class=\"l\">metric</th><th>median</th><th>worst</th><th>worst cell</th>"
+       "<th>median, centre views</th><th>median, corner views</th></tr>\n";
+  for (const auto& m : verify_metrics()) {
+    const MetricStats st = metric_stats(cells, m);
+    h << "<tr><td class=\"l\">" << m.name << "</td><td>" << fmt(st.median) << "</td><td>" << fmt(st.worst)
+      << "</td><td>" << (st.count ? std::to_string(st.worst_cell) : "&ndash;") << "</td><td>" << fmt(st.median_centre)
+      << "</td><td>" << fmt(st.median_corner) << "</td></tr>\n";
+  }
+  h << "</table>\n<p>Median per cell: bake " << fmt(summary["bake_seconds_median"].is_null() ? kNaN : summary["bake_seconds_median"].get<double>())
+    << " s, " << fmt(summary["bytes_median"].is_null() ? kNaN : summary["bytes_median"].get<double>(), "%.0f")
+    << " bytes stored; triangles drawn per view: impostor "
+    << fmt(summary["triangles_impostor_median"].is_null() ? kNaN : summary["triangles_impostor_median"].get<double>(), "%.0f")
+    << ", truth "
+    << fmt(summary["triangles_truth_median"].is_null() ? kNaN : summary["triangles_truth_median"].get<double>(), "%.0f")
+    << ".</p>\n";
+
+  h << "<h2>Cell map</h2>\n<img src=\"cell_map.svg\" alt=\"cell map\">\n";
+  h << "<h2>Plots</h2>\n<div class=\"plots\">\n";
+  for (const auto& p : files.plots)
+    h << "<img src=\"plots/" << html_escape(p.filename().string()) << "\" alt=\"" << html_escape(p.stem().string())
+      << "\">\n";
+  h << "</div>\n<p class=\"note\">Views whose impostor equals the truth exactly (PSNR = &infin;) are not drawn in "
+       "PSNR plots.</p>\n";
+
+  // Worst views: each cell's worst view, worst first.
+  std::vector<const VerifyCellResult*> worst;
+  for (const auto& c : cells)
+    if (c.worst_view >= 0 && c.worst_view < int(c.views.size()) && !c.triptych.empty()) worst.push_back(&c);
+  std::stable_sort(worst.begin(), worst.end(), [](const VerifyCellResult* x, const VerifyCellResult* y) {
+    const auto &vx = x->views[x->worst_view], &vy = y->views[y->worst_view];
+    return vx.psnr_db < vy.psnr_db || (vx.psnr_db == vy.psnr_db && vx.hole_fraction > vy.hole_fraction);
+  });
+  if (int(worst.size()) > input.worst_views) worst.resize(std::max(0, input.worst_views));
+  h << "<h2>Worst views</h2>\n<p class=\"note\">Left to right: ground truth, impostor, error image (magenta hole, "
+       "yellow skin, cyan extra surface, blue&rarr;green&rarr;red colour error).</p>\n";
+  for (const auto* c : worst) {
+    const auto& v = c->views[c->worst_view];
+    h << "<div class=\"trip\"><h3>cell " << c->id << ", view " << c->worst_view << " (" << view_kind_name(v.kind)
+      << "): PSNR " << fmt(v.psnr_db, "%.2f") << " dB, SSIM " << fmt(v.ssim, "%.3f") << ", holes "
+      << fmt(v.hole_fraction, "%.4f") << ", skins " << fmt(v.skin_fraction, "%.4f") << "</h3>\n<p class=\"note\">eye ("
+      << fmt(v.eye.x, "%.3f") << ", " << fmt(v.eye.y, "%.3f") << ", " << fmt(v.eye.z, "%.3f") << "), look ("
+      << fmt(v.look.x, "%.3f") << ", " << fmt(v.look.y, "%.3f") << ", " << fmt(v.look.z, "%.3f")
+      << "), " << fmt(v.distance_from_sample, "%.3f") << " from the sample point</p>\n<img src=\""
+      << html_escape(c->triptych) << "\" alt=\"cell " << c->id << "\"></div>\n";
+  }
+
+  h << "<h2>Cells</h2>\n<table><tr><th>cell</th><th>views</th><th>median PSNR</th><th>min PSNR</th><th>median SSIM</th>"
+       "<th>max holes</th><th>max skins</th><th>median depth err</th><th>tris impostor</th><th>tris truth</th>"
+       "<th>ms impostor</th><th>ms truth</th><th>bake s</th><th>bytes</th><th class=\"l\">note</th></tr>\n";
+  const MetricStats psnr_stats = metric_stats(cells, verify_metrics()[0]);
+  for (const auto& c : cells) {
+    std::vector<double> psnr, holes, skins;
+    for (const auto& v : c.views) psnr.push_back(v.psnr_db), holes.push_back(v.hole_fraction), skins.push_back(v.skin_fraction);
+    const double min_psnr = psnr.empty() ? kNaN : *std::min_element(psnr.begin(), psnr.end());
+    const bool bad = !c.error.empty() || (psnr_stats.count && c.id == psnr_stats.worst_cell);
+    h << "<tr" << (bad ? " class=\"bad\"" : "") << "><td>" << c.id << "</td><td>" << c.views.size() << "</td><td>"
+      << fmt(cell_median(c, &VerifyViewResult::psnr_db), "%.2f") << "</td><td>" << fmt(min_psnr, "%.2f") << "</td><td>"
+      << fmt(cell_median(c, &VerifyViewResult::ssim), "%.3f") << "</td><td>"
+      << fmt(holes.empty() ? kNaN : *std::max_element(holes.begin(), holes.end()), "%.4f") << "</td><td>"
+      << fmt(skins.empty() ? kNaN : *std::max_element(skins.begin(), skins.end()), "%.4f") << "</td><td>"
+      << fmt(cell_median(c, &VerifyViewResult::depth_error_median), "%.4f") << "</td><td>"
+      << fmt(median_of([&] { std::vector<double> v; for (auto& x : c.views) v.push_back(double(x.triangles_impostor)); return v; }()), "%.0f")
+      << "</td><td>"
+      << fmt(median_of([&] { std::vector<double> v; for (auto& x : c.views) v.push_back(double(x.triangles_truth)); return v; }()), "%.0f")
+      << "</td><td>" << fmt(cell_median(c, &VerifyViewResult::ms_impostor), "%.1f") << "</td><td>"
+      << fmt(cell_median(c, &VerifyViewResult::ms_truth), "%.1f") << "</td><td>" << fmt(c.bake_seconds_total(), "%.2f")
+      << "</td><td>" << c.bytes << "</td><td class=\"l\">" << html_escape(c.error) << "</td></tr>\n";
+  }
+  h << "</table>\n<p class=\"note\">Per-view numbers: <a href=\"report.json\">report.json</a>.</p>\n</body></html>\n";
+  files.html = dir / "report.html";
+  write_text_file_atomically(files.html, h.str());
+  return files;
+}
+
+}  // namespace cellbake

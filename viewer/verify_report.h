@@ -1,0 +1,111 @@
+// The `cellbake verify` report: per-view and per-cell results of rendering a
+// view cell's impostor against the ground truth, their statistics (medians and
+// worst values), their JSON form (report.json and the resume file), and the
+// report folder (report.html with inline CSS, SVG plots, the cell map).
+// Everything but write_verify_report is pure; none of it needs GL.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "stages/geometry.h"
+#include "viewer/verify_views.h"
+
+namespace cellbake {
+
+struct VerifyViewResult {
+  VerifyViewKind kind = VerifyViewKind::centre;
+  Vec3d eye, look;
+  double distance_from_sample = 0;  // eye to the nearest panoramic sample point of the cell, model units
+  double psnr_db = 0;               // +infinity when the images are identical
+  double ssim = 0, hole_fraction = 0, skin_fraction = 0, extra_fraction = 0, depth_error_median = 0;
+  std::uint64_t triangles_impostor = 0, triangles_truth = 0;
+  double ms_impostor = 0, ms_truth = 0;  // warm frame, wall clock
+};
+
+struct VerifyCellResult {
+  std::int64_t id = 0;
+  Box3d bounds;
+  std::string key;  // content hash + verify parameters: equal keys need no re-render
+  std::map<std::string, double> bake_seconds;  // per stage, from the cell database
+  std::uint64_t bytes = 0, near_triangles = 0, far_triangles = 0;
+  std::string error;     // non-empty when the cell could not be verified (views then empty)
+  std::string triptych;  // its worst view as truth | impostor | error image, path relative to the report folder
+  int worst_view = -1;   // index into views of that view
+  std::vector<VerifyViewResult> views;
+  double bake_seconds_total() const;
+};
+
+// Median of the finite-or-infinite (not NaN) values: for an even count the mean
+// of the two middle ones; NaN when there are none. Does not modify `values`.
+double median_of(const std::vector<double>& values);
+
+struct MetricStats {
+  std::size_t count = 0;  // non-NaN values
+  double median = std::numeric_limits<double>::quiet_NaN();
+  double worst = std::numeric_limits<double>::quiet_NaN();  // minimum when higher is better, else maximum
+  std::int64_t worst_cell = 0;  // the cell of the (first) worst value; 0 when count == 0
+  int worst_view = -1;          // its index in that cell's views
+  double median_centre = std::numeric_limits<double>::quiet_NaN();  // over centre views only
+  double median_corner = std::numeric_limits<double>::quiet_NaN();  // over corner views only
+};
+
+// The metrics summarised, each with whether higher is better.
+struct MetricInfo {
+  const char* name;  // report.json key, e.g. "psnr_db"
+  bool higher_is_better;
+  double VerifyViewResult::*field;
+};
+const std::vector<MetricInfo>& verify_metrics();
+
+// Statistics of one metric over every view of every cell (cells in the given
+// order, views in order: ties for the worst go to the first). Deterministic.
+MetricStats metric_stats(const std::vector<VerifyCellResult>& cells, const MetricInfo& metric);
+
+// The view of a cell that counts as its worst: lowest PSNR, ties broken by the
+// larger hole fraction, then the lower index; -1 when the cell has no views.
+int worst_view_index(const std::vector<VerifyViewResult>& views);
+
+// JSON forms (non-finite numbers as null, read back as +infinity for psnr_db
+// and NaN otherwise). cell_from_json throws nlohmann::json::exception on a
+// malformed object.
+nlohmann::json to_json(const VerifyViewResult& view);
+nlohmann::json to_json(const VerifyCellResult& cell);
+VerifyCellResult cell_from_json(const nlohmann::json& j);
+
+// The `summary` object of report.json: cells, cells_failed, views, and per
+// metric of verify_metrics() {count, median, worst, worst_cell, worst_view,
+// median_centre, median_corner}; also median bake seconds and bytes per cell.
+nlohmann::json summary_json(const std::vector<VerifyCellResult>& cells);
+
+struct VerifyReportInput {
+  std::string database;    // shown in the report
+  nlohmann::json params;   // the verify parameters, shown and stored
+  std::vector<VerifyCellResult> cells;  // in id order
+  int worst_views = 6;     // triptychs shown (cells with the worst views)
+};
+
+struct VerifyReportFiles {
+  std::filesystem::path html, json;
+  std::vector<std::filesystem::path> plots;  // SVG files
+  std::filesystem::path cell_map;            // SVG
+};
+
+// Writes into `dir` (created): report.json ({database, params, summary, cells}),
+// plots/*.svg (median PSNR per cell vs bake seconds, vs triangles drawn, vs
+// stored bytes; PSNR and hole fraction per view vs distance from the sample
+// point), cell_map.svg (cell footprints coloured by median PSNR) and
+// report.html (inline CSS; images by relative path inside `dir`). The
+// triptych PNGs named by the cells must already be in `dir`. Throws
+// std::runtime_error naming a file that cannot be written.
+VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const VerifyReportInput& input);
+
+// Writes `text` to `file` through a temporary file and a rename (readers never
+// see half a file). Throws std::runtime_error naming the file.
+void write_text_file_atomically(const std::filesystem::path& file, const std::string& text);
+
+}  // namespace cellbake
