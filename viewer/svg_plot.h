@@ -28,6 +28,9 @@ struct ScatterPlot {
   std::vector<PlotSeries> series;
 };
 
+// Escapes &, <, > and " for XML/HTML text and attribute values.
+std::string escape_xml(const std::string& s);
+
 // "Nice" tick values (steps of 1, 2 or 5 times a power of ten) covering
 // [lo, hi] with about `target` ticks, ascending, every tick inside [lo, hi].
 // lo == hi gives that one value; non-finite input or lo > hi gives {}.

@@ -48,21 +48,6 @@ struct Vertex {
   float x, y, z, u, v;
 };
 
-GLuint compile(const GlFunctions& gl, GLenum type, const char* source) {
-  const GLuint shader = gl.CreateShader(type);
-  gl.ShaderSource(shader, 1, &source, nullptr);
-  gl.CompileShader(shader);
-  GLint ok = GL_FALSE;
-  gl.GetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    std::array<char, 4096> log{};
-    gl.GetShaderInfoLog(shader, static_cast<GLsizei>(log.size()), nullptr, log.data());
-    gl.DeleteShader(shader);
-    throw std::runtime_error(std::string("tdm_renderer: shader failed to compile: ") + log.data());
-  }
-  return shader;
-}
-
 std::unique_ptr<GlFunctions> load_for(GlContext* context) {
   if (!context) throw std::invalid_argument("tdm_renderer: null GL context");
   context->make_current();
@@ -74,28 +59,7 @@ std::unique_ptr<GlFunctions> load_for(GlContext* context) {
 TdmRenderer::TdmRenderer(std::shared_ptr<GlContext> context)
     : context_(std::move(context)), gl_(load_for(context_.get())) {
   const GlFunctions& gl = *gl_;
-  const GLuint vs = compile(gl, GL_VERTEX_SHADER, kVertexShader);
-  GLuint fs = 0;
-  try {
-    fs = compile(gl, GL_FRAGMENT_SHADER, kFragmentShader);
-  } catch (...) {
-    gl.DeleteShader(vs);
-    throw;
-  }
-  program_ = gl.CreateProgram();
-  gl.AttachShader(program_, vs);
-  gl.AttachShader(program_, fs);
-  gl.LinkProgram(program_);
-  gl.DeleteShader(vs);
-  gl.DeleteShader(fs);
-  GLint ok = GL_FALSE;
-  gl.GetProgramiv(program_, GL_LINK_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    std::array<char, 4096> log{};
-    gl.GetProgramInfoLog(program_, static_cast<GLsizei>(log.size()), nullptr, log.data());
-    gl.DeleteProgram(program_);
-    throw std::runtime_error(std::string("tdm_renderer: shader program failed to link: ") + log.data());
-  }
+  program_ = build_gl_program(gl, kVertexShader, kFragmentShader, "tdm_renderer");
   u_offset_ = gl.GetUniformLocation(program_, "u_offset");
   u_view_projection_ = gl.GetUniformLocation(program_, "u_view_projection");
   u_forward_ = gl.GetUniformLocation(program_, "u_forward");

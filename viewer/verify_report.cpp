@@ -25,20 +25,6 @@ double number_from(const nlohmann::json& j, const char* key, double if_null) {
 nlohmann::json vec_json(const Vec3d& v) { return nlohmann::json::array({v.x, v.y, v.z}); }
 Vec3d vec_from(const nlohmann::json& j) { return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()}; }
 
-std::string html_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
 std::string fmt(double v, const char* format = "%.4g") {
   if (std::isnan(v)) return "&ndash;";
   if (std::isinf(v)) return v > 0 ? "&infin;" : "&minus;&infin;";
@@ -339,15 +325,15 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
   // report.html
   std::ostringstream h;
   h << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>cellbake verify: "
-    << html_escape(input.database) << "</title>\n<style>\n"
+    << escape_xml(input.database) << "</title>\n<style>\n"
        "body{font-family:sans-serif;margin:2em;color:#222;max-width:1400px}\n"
        "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}\n"
        "th{background:#f0f0f0}td.l,th.l{text-align:left}tr.bad td{background:#fde2e2}\n"
        ".plots img{margin:4px;border:1px solid #ddd}.trip img{max-width:100%;border:1px solid #ddd}\n"
        "code{background:#f4f4f4;padding:1px 4px}.note{color:#666;font-size:90%}\n"
        "</style></head><body>\n";
-  h << "<h1>cellbake verify</h1>\n<p>Database <code>" << html_escape(input.database) << "</code>; parameters <code>"
-    << html_escape(input.params.dump()) << "</code>. " << summary["cells"].get<std::size_t>() << " cells ("
+  h << "<h1>cellbake verify</h1>\n<p>Database <code>" << escape_xml(input.database) << "</code>; parameters <code>"
+    << escape_xml(input.params.dump()) << "</code>. " << summary["cells"].get<std::size_t>() << " cells ("
     << summary["cells_failed"].get<std::size_t>() << " could not be verified), " << summary["views"].get<std::size_t>()
     << " views: each rendered as the cell's impostor (near field + textured depth meshes) and as ground truth.</p>\n";
   h << "<p class=\"note\">PSNR and SSIM compare colours (higher is better); hole = truth surface the impostor "
@@ -373,7 +359,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
   h << "<h2>Cell map</h2>\n<img src=\"cell_map.svg\" alt=\"cell map\">\n";
   h << "<h2>Plots</h2>\n<div class=\"plots\">\n";
   for (const auto& p : files.plots)
-    h << "<img src=\"plots/" << html_escape(p.filename().string()) << "\" alt=\"" << html_escape(p.stem().string())
+    h << "<img src=\"plots/" << escape_xml(p.filename().string()) << "\" alt=\"" << escape_xml(p.stem().string())
       << "\">\n";
   h << "</div>\n<p class=\"note\">Views whose impostor equals the truth exactly (PSNR = &infin;) are not drawn in "
        "PSNR plots.</p>\n";
@@ -397,7 +383,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
       << fmt(v.eye.x, "%.3f") << ", " << fmt(v.eye.y, "%.3f") << ", " << fmt(v.eye.z, "%.3f") << "), look ("
       << fmt(v.look.x, "%.3f") << ", " << fmt(v.look.y, "%.3f") << ", " << fmt(v.look.z, "%.3f")
       << "), " << fmt(v.distance_from_sample, "%.3f") << " from the sample point</p>\n<img src=\""
-      << html_escape(c->triptych) << "\" alt=\"cell " << c->id << "\"></div>\n";
+      << escape_xml(c->triptych) << "\" alt=\"cell " << c->id << "\"></div>\n";
   }
 
   h << "<h2>Cells</h2>\n<table><tr><th>cell</th><th>views</th><th>median PSNR</th><th>min PSNR</th><th>median SSIM</th>"
@@ -420,7 +406,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
       << fmt(median_of([&] { std::vector<double> v; for (auto& x : c.views) v.push_back(double(x.triangles_truth)); return v; }()), "%.0f")
       << "</td><td>" << fmt(cell_median(c, &VerifyViewResult::ms_impostor), "%.1f") << "</td><td>"
       << fmt(cell_median(c, &VerifyViewResult::ms_truth), "%.1f") << "</td><td>" << fmt(c.bake_seconds_total(), "%.2f")
-      << "</td><td>" << c.bytes << "</td><td class=\"l\">" << html_escape(c.error) << "</td></tr>\n";
+      << "</td><td>" << c.bytes << "</td><td class=\"l\">" << escape_xml(c.error) << "</td></tr>\n";
   }
   h << "</table>\n<p class=\"note\">Per-view numbers: <a href=\"report.json\">report.json</a>.</p>\n</body></html>\n";
   files.html = dir / "report.html";

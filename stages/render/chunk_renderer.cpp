@@ -57,23 +57,6 @@ struct Vertex {
 };
 static_assert(sizeof(Vertex) == 16);
 
-GLuint compile_shader(const GlFunctions& gl, GLenum type, const char* source) {
-  const GLuint shader = gl.CreateShader(type);
-  gl.ShaderSource(shader, 1, &source, nullptr);
-  gl.CompileShader(shader);
-  GLint ok = GL_FALSE;
-  gl.GetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    std::array<char, 4096> log{};
-    gl.GetShaderInfoLog(shader, static_cast<GLsizei>(log.size()), nullptr, log.data());
-    gl.DeleteShader(shader);
-    throw std::runtime_error(std::string("chunk_renderer: ") +
-                             (type == GL_VERTEX_SHADER ? "vertex" : "fragment") +
-                             " shader failed to compile: " + log.data());
-  }
-  return shader;
-}
-
 // Column-major 4x4 matrices as GL expects them; built in double.
 using Mat4 = std::array<double, 16>;
 
@@ -166,27 +149,7 @@ ChunkRenderer::~ChunkRenderer() {
 void ChunkRenderer::make_current() { context_->make_current(); }
 
 void ChunkRenderer::build_program() {
-  const GLuint vs = compile_shader(gl_, GL_VERTEX_SHADER, kVertexShader);
-  GLuint fs = 0;
-  try {
-    fs = compile_shader(gl_, GL_FRAGMENT_SHADER, kFragmentShader);
-  } catch (...) {
-    gl_.DeleteShader(vs);
-    throw;
-  }
-  program_ = gl_.CreateProgram();
-  gl_.AttachShader(program_, vs);
-  gl_.AttachShader(program_, fs);
-  gl_.LinkProgram(program_);
-  gl_.DeleteShader(vs);
-  gl_.DeleteShader(fs);
-  GLint ok = GL_FALSE;
-  gl_.GetProgramiv(program_, GL_LINK_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    std::array<char, 4096> log{};
-    gl_.GetProgramInfoLog(program_, static_cast<GLsizei>(log.size()), nullptr, log.data());
-    throw std::runtime_error(std::string("chunk_renderer: shader program failed to link: ") + log.data());
-  }
+  program_ = build_gl_program(gl_, kVertexShader, kFragmentShader, "chunk_renderer");
   u_offset_ = gl_.GetUniformLocation(program_, "u_offset");
   u_view_projection_ = gl_.GetUniformLocation(program_, "u_view_projection");
   u_forward_ = gl_.GetUniformLocation(program_, "u_forward");

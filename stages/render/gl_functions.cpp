@@ -1,5 +1,6 @@
 #include "stages/render/gl_functions.h"
 
+#include <array>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
@@ -53,6 +54,53 @@ void check_gl_error(const GlFunctions& gl, const char* what) {
   char code[16];
   std::snprintf(code, sizeof code, "0x%04x", first);
   throw std::runtime_error(std::string("GL error ") + code + " in " + what);
+}
+
+namespace {
+
+GLuint compile_shader(const GlFunctions& gl, GLenum type, const char* source, const char* who) {
+  const GLuint shader = gl.CreateShader(type);
+  gl.ShaderSource(shader, 1, &source, nullptr);
+  gl.CompileShader(shader);
+  GLint ok = GL_FALSE;
+  gl.GetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    std::array<char, 4096> log{};
+    gl.GetShaderInfoLog(shader, static_cast<GLsizei>(log.size()), nullptr, log.data());
+    gl.DeleteShader(shader);
+    throw std::runtime_error(std::string(who) + ": " + (type == GL_VERTEX_SHADER ? "vertex" : "fragment") +
+                             " shader failed to compile: " + log.data());
+  }
+  return shader;
+}
+
+}  // namespace
+
+GLuint build_gl_program(const GlFunctions& gl, const char* vertex_source, const char* fragment_source,
+                        const char* who) {
+  const GLuint vs = compile_shader(gl, GL_VERTEX_SHADER, vertex_source, who);
+  GLuint fs = 0;
+  try {
+    fs = compile_shader(gl, GL_FRAGMENT_SHADER, fragment_source, who);
+  } catch (...) {
+    gl.DeleteShader(vs);
+    throw;
+  }
+  const GLuint program = gl.CreateProgram();
+  gl.AttachShader(program, vs);
+  gl.AttachShader(program, fs);
+  gl.LinkProgram(program);
+  gl.DeleteShader(vs);
+  gl.DeleteShader(fs);
+  GLint ok = GL_FALSE;
+  gl.GetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    std::array<char, 4096> log{};
+    gl.GetProgramInfoLog(program, static_cast<GLsizei>(log.size()), nullptr, log.data());
+    gl.DeleteProgram(program);
+    throw std::runtime_error(std::string(who) + ": shader program failed to link: " + log.data());
+  }
+  return program;
 }
 
 }  // namespace cellbake

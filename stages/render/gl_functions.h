@@ -91,4 +91,10 @@ GlFunctions load_gl_functions(const GlContext& context);
 // reports an error (the error flags are cleared either way).
 void check_gl_error(const GlFunctions& gl, const char* what);
 
+// Compiles and links a vertex + fragment shader program. Throws
+// std::runtime_error("WHO: ... shader failed to compile/link: LOG") and leaves
+// no GL objects behind on failure. Needs a current context.
+GLuint build_gl_program(const GlFunctions& gl, const char* vertex_source, const char* fragment_source,
+                        const char* who);
+
 }  // namespace cellbake
