@@ -11,7 +11,7 @@
 namespace cellbake {
 namespace {
 
-constexpr int kCellDbSchemaVersion = 1;
+constexpr int kCellDbSchemaVersion = 2;
 
 // Migrations: entry i upgrades schema version i to i + 1.
 const char* kMigrations[] = {
@@ -23,7 +23,7 @@ CREATE TABLE cells(
   status TEXT NOT NULL, error TEXT NOT NULL DEFAULT '',
   input_hash TEXT NOT NULL, cull_hash TEXT NOT NULL, content_hash TEXT NOT NULL,
   cull_half_size REAL, near_triangles INTEGER, near_chunks BLOB,
-  far_triangles INTEGER, bytes INTEGER, max_boundary_error_px REAL, max_depth_error REAL,
+  far_triangles INTEGER, bytes INTEGER, max_coverage_error REAL, max_depth_error REAL,
   stage_seconds TEXT NOT NULL DEFAULT '{}');
 CREATE TABLE samples(
   cell_id INTEGER NOT NULL REFERENCES cells(id) ON DELETE CASCADE, sample_index INTEGER NOT NULL,
@@ -32,9 +32,14 @@ CREATE TABLE samples(
 CREATE TABLE faces(
   cell_id INTEGER NOT NULL, sample_index INTEGER NOT NULL, face INTEGER NOT NULL,
   image_format TEXT NOT NULL, image BLOB NOT NULL, mesh BLOB NOT NULL,
-  triangles INTEGER NOT NULL, boundary_error_px REAL, depth_error REAL,
+  triangles INTEGER NOT NULL, coverage_error REAL, depth_error REAL,
   PRIMARY KEY(cell_id, sample_index, face),
   FOREIGN KEY(cell_id, sample_index) REFERENCES samples(cell_id, sample_index) ON DELETE CASCADE);
+)sql",
+    // v2: the simplifier reports outline movement in pixels, not coverage samples.
+    R"sql(
+ALTER TABLE cells RENAME COLUMN max_coverage_error TO max_boundary_error_px;
+ALTER TABLE faces RENAME COLUMN coverage_error TO boundary_error_px;
 )sql",
 };
 
