@@ -123,7 +123,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
   const std::filesystem::path cache_file = report_dir / "verify-cells.json";
   std::map<std::int64_t, VerifyCellResult> cached = load_cache(cache_file);
   std::map<std::int64_t, VerifyCellResult> results;
-  std::vector<CellTask> todo;
+  std::vector<CellTask> pending;
   VerifySummary summary;
   summary.cells_selected = specs.size();
   for (const auto& s : specs) {
@@ -136,11 +136,11 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
       ++summary.cells_reused;
       continue;
     }
-    todo.push_back({s.id, key});
+    pending.push_back({s.id, key});
   }
 
   std::mutex mutex;  // guards db, results, the cache file and the counters
-  ProgressBar progress("verify", todo.size(), "cells");
+  ProgressBar progress("verify", pending.size(), "cells");
   std::uint64_t done = 0;
   auto last_save = std::chrono::steady_clock::now();
 
@@ -240,12 +240,12 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
   tbb::task_arena arena(threads);
   arena.execute([&] {
     tbb::enumerable_thread_specific<std::unique_ptr<SceneDrawer>> drawers;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, todo.size(), 1),
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pending.size(), 1),
                       [&](const tbb::blocked_range<std::size_t>& range) {
-                        for (std::size_t i = range.begin(); i != range.end(); ++i) verify_cell(todo[i], drawers.local());
+                        for (std::size_t i = range.begin(); i != range.end(); ++i) verify_cell(pending[i], drawers.local());
                       });
   });
-  if (!options.quiet && !todo.empty()) progress.finish();
+  if (!options.quiet && !pending.empty()) progress.finish();
   save_cache(cache_file, results, cached);
 
   VerifyReportInput input;
