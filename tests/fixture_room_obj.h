@@ -3,9 +3,13 @@
 // text so tests can ingest it through the library or the `cellbake` CLI.
 #pragma once
 
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <string>
 
+#include "pipeline/ingest.h"
+#include "runner/parallel.h"
 #include "stages/geometry.h"
 
 namespace cellbake::test {
@@ -45,6 +49,18 @@ inline std::string room_obj(bool pillars = true) {
     for (int y = 0; y < 4; ++y)
       for (int x = 0; x < 4; ++x) obj_box(o, next, {1.5 + 3 * x, 1.5 + 3 * y, 0}, {1.8 + 3 * x, 1.8 + 3 * y, 4}, 3);
   return o.str();
+}
+
+// Writes the room as DIR/NAME.obj and ingests it (128-triangle chunks) into
+// DIR/NAME.store.db, which it returns.
+inline std::filesystem::path ingest_room_store(const std::filesystem::path& dir, const std::string& name = "room",
+                                               bool pillars = true) {
+  const auto obj = dir / (name + ".obj"), store = dir / (name + ".store.db");
+  std::ofstream(obj, std::ios::binary) << room_obj(pillars);
+  IngestParams params;
+  params.max_chunk_triangles = 128;
+  ingest_models({obj}, store, params, tbb_parallel_for());
+  return store;
 }
 
 }  // namespace cellbake::test

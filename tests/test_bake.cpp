@@ -25,11 +25,7 @@ namespace {
 
 // The room of fixture_room_obj.h, ingested in 128-triangle chunks.
 std::filesystem::path make_room_store(const test::TempDir& dir) {
-  test::write_text(dir / "room.obj", test::room_obj());
-  IngestParams p;
-  p.max_chunk_triangles = 128;
-  ingest_models({dir / "room.obj"}, dir / "room.store.db", p, tbb_parallel_for());
-  return dir / "room.store.db";
+  return test::ingest_room_store(dir.path());
 }
 
 BakeConfig room_config(const test::TempDir& dir, const std::string& db) {

@@ -24,11 +24,7 @@ namespace {
 constexpr int kShards = 4;
 
 std::filesystem::path make_store(const std::filesystem::path& dir, const std::string& name, bool pillars) {
-  test::write_text(dir / (name + ".obj"), test::room_obj(pillars));
-  IngestParams p;
-  p.max_chunk_triangles = 128;
-  ingest_models({dir / (name + ".obj")}, dir / (name + ".store.db"), p, tbb_parallel_for());
-  return dir / (name + ".store.db");
+  return test::ingest_room_store(dir, name, pillars);
 }
 
 BakeConfig room_config(const std::filesystem::path& store, const std::filesystem::path& db) {

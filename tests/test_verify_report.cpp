@@ -205,10 +205,7 @@ TEST(VerifyViews, RegionsFromConfigText) {
 
 TEST(VerifyRun, TinyBakeReportIsCompleteAndResumable) {
   test::TempDir dir;
-  test::write_text(dir / "room.obj", test::room_obj());
-  IngestParams ip;
-  ip.max_chunk_triangles = 128;
-  ingest_models({dir / "room.obj"}, dir / "room.store.db", ip, tbb_parallel_for());
+  test::ingest_room_store(dir.path());
   BakeConfig c;
   c.store = dir / "room.store.db";
   c.regions = {Box3d{{1, 1, 1.6}, {5, 3, 1.6}}};  // 2 x 1 cells of 2 m
