@@ -30,7 +30,7 @@ struct StageVersions {
   static constexpr int cull_box = 1;
   static constexpr int sample = 1;
   static constexpr int depth_mesh = 1;
-  static constexpr int simplify = 2;
+  static constexpr int simplify = 3;
   static constexpr int encode = 1;
 };
 

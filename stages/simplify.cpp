@@ -12,10 +12,13 @@
 //    greedy insertion (Garland & Heckbert 1995, "Fast polygonal approximation
 //    of terrains and height fields"): every triangle whose plane in (x, y, 1/z)
 //    screen space misses one of its region's dense vertices by more than the
-//    relative depth bound gets its worst vertex inserted, until none does. A
-//    world-space plane is an exact plane in (x, y, 1/z), so flat surfaces end
-//    as a few large triangles. A violation on a straightened outline segment
-//    re-inserts that segment's farthest staircase point instead.
+//    relative depth bound is queued by its worst miss; the worst in the queue
+//    is inserted first, until none is left or the triangle cap is reached with
+//    every miss within the cap's looser bound. A world-space plane is an exact
+//    plane in (x, y, 1/z), so flat surfaces end as a few large triangles. A
+//    violation on a straightened outline segment re-inserts that segment's
+//    farthest staircase point instead (all such segments at once, then the
+//    triangulation is rebuilt).
 // Each triangle belongs to the region that holds most of its triangulation
 // component (the cells bounded by constraints) and takes, at every corner, the
 // dense vertex of that region there (the pixel in the triangle's direction
@@ -30,6 +33,8 @@
 #include <algorithm>
 #include <array>
 #include <climits>
+#include <memory>
+#include <optional>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -47,6 +52,7 @@ namespace {
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 struct FaceInfo {
   int label = INT_MIN;
+  std::uint32_t stamp = 0;  // changes whenever the face is (re)made, for the refinement queue
 };
 using FaceBaseWithInfo = CGAL::Triangulation_face_base_with_info_2<FaceInfo, Kernel>;
 using FaceBase = CGAL::Constrained_triangulation_face_base_2<Kernel, FaceBaseWithInfo>;
@@ -59,53 +65,92 @@ struct ConstraintOwner {
   int chain = -1, i = 0, j = 0;
 };
 
+// The worst violations of one triangle: the worst dense vertex off its
+// constrained edges (to insert), and the worst on a straightened outline
+// segment among its edges (to refine that segment). Errors are relative
+// depth errors; 0 when there is no violation of that kind.
+struct FaceViolation {
+  double free_error = 0, bound_error = 0;
+  LatticePoint free_at{-1, -1};
+  ConstraintOwner bound_owner;
+  double worst() const { return std::max(free_error, bound_error); }
+};
+
+// A triangle waiting in the refinement queue; stale once its face was
+// destroyed or changed (the stamp no longer matches).
+struct QueuedFace {
+  double error = 0;
+  std::uint32_t tie = 0;  // lattice index of the violating point: deterministic order among equal errors
+  std::uint32_t stamp = 0;
+  Cdt::Face_handle face;
+  FaceViolation violation;
+};
+
+// Max-heap order: larger error first, then the smaller lattice index.
+bool queued_before(const QueuedFace& a, const QueuedFace& b) {
+  if (a.error != b.error) return a.error < b.error;
+  if (a.tie != b.tie) return a.tie > b.tie;
+  return a.stamp > b.stamp;
+}
+
 class TinSimplifier {
  public:
+  // `cap` and `ceiling`: once the mesh has at least `cap` triangles, refinement
+  // stops as soon as every violation is <= ceiling.
   TinSimplifier(const FaceGrid& g, const FaceRegions& regions, FaceOutlines outlines,
-                const std::vector<FixedSegment>& fixed, double eps)
-      : g_(g), regions_(regions), outlines_(std::move(outlines)), fixed_(fixed), n_(g.size), eps_(eps),
-        steiner_flag_(std::size_t(n_ + 1) * (n_ + 1), 0) {}
+                const std::vector<FixedSegment>& fixed, double eps, std::size_t cap, double ceiling)
+      : g_(g), regions_(regions), outlines_(std::move(outlines)), fixed_(fixed), n_(g.size), eps_(eps), cap_(cap),
+        ceiling_(std::max(eps, ceiling)), steiner_flag_(std::size_t(n_ + 1) * (n_ + 1), 0) {
+    index_interior_lattice();
+  }
 
+  // Greedy insertion, worst violation first (Garland & Heckbert 1995). Returns
+  // the triangles (dense vertex ids, three per triangle).
   std::vector<std::uint32_t> run() {
+    if (!built_) build();
     for (;;) {
-      build();
-      bool rebuild = false;
-      for (;;) {
-        std::vector<LatticePoint> inserts;
-        std::vector<ConstraintOwner> refines;
-        evaluate(inserts, refines);
-        if (!refines.empty()) {
-          std::vector<ChainSegment> segments;
-          for (const ConstraintOwner& o : refines) segments.push_back({o.chain, o.i, o.j});
-          if (refine_outline_segments(outlines_, segments, fixed_, n_)) {
-            for (const LatticePoint& p : inserts) add_steiner(p);
-            rebuild = true;
-            break;
-          }
-        }
-        if (inserts.empty()) break;
-        // Only faces around the new vertices change (Delaunay flips stay
-        // around the inserted point); they inherit the region of the face
-        // the point fell in.
-        std::vector<Cdt::Vertex_handle> added;
-        for (const LatticePoint& p : inserts) {
-          add_steiner(p);
-          if (const Cdt::Vertex_handle v = insert_steiner(p); v != Cdt::Vertex_handle()) added.push_back(v);
-        }
-        pending_.clear();
-        for (const Cdt::Vertex_handle& v : added) {
-          auto f = cdt_.incident_faces(v), end = f;
-          do {
-            if (!cdt_.is_infinite(f)) pending_.push_back(f);
-          } while (++f != end);
-        }
-        std::sort(pending_.begin(), pending_.end());
-        pending_.erase(std::unique(pending_.begin(), pending_.end()), pending_.end());
+      while (!queue_.empty() && stale(queue_.front())) pop();
+      if (queue_.empty()) break;
+      const QueuedFace top = queue_.front();
+      if (capped() && top.error <= ceiling_) {
+        bound_used_ = std::max(bound_used_, top.error);
+        break;
       }
-      if (!rebuild) break;
+      const FaceViolation& v = top.violation;
+      if (v.bound_error > 0 && v.bound_error >= v.free_error && refine_outlines()) {
+        build();
+        continue;
+      }
+      pop();
+      if (v.free_at.x < 0) {
+        unresolved_ = std::max(unresolved_, top.error);  // an outline segment that cannot be refined further
+        continue;
+      }
+      add_steiner(v.free_at);
+      const Cdt::Vertex_handle added = insert_steiner(v.free_at);
+      if (added == Cdt::Vertex_handle()) {
+        unresolved_ = std::max(unresolved_, top.error);
+        continue;
+      }
+      labelled_faces_ += 2;  // a split face (or two faces split at an edge) and flips within one component
+      auto f = cdt_.incident_faces(added), end = f;
+      do {
+        if (!cdt_.is_infinite(f)) enqueue(f);
+      } while (++f != end);
     }
+    bound_used_ = std::max({bound_used_, unresolved_, eps_});
     return emit();
   }
+
+  // Triangles of the constrained triangulation of the outlines and face
+  // borders alone: a lower bound on the result's size.
+  std::size_t outline_triangles() {
+    if (!built_) build();
+    return labelled_faces_;
+  }
+
+  // The largest depth error the result may have at a dense vertex off the outlines.
+  double bound_used() const { return bound_used_; }
 
  private:
   std::size_t lattice_index(int x, int y) const { return std::size_t(y) * (n_ + 1) + x; }
@@ -114,6 +159,61 @@ class TinSimplifier {
   }
   static LatticePoint lattice_of(const CdtPoint& p) { return {int(std::lround(p.x())), int(std::lround(p.y()))}; }
   int label(int i, int j) const { return regions_.label[std::size_t(j) * n_ + i]; }
+  bool capped() const { return labelled_faces_ + 2 > cap_; }  // one more insertion would pass the cap
+
+  // Lattice points off every outline: all pixels around one share a region
+  // and a vertex (or none is covered), so their vertex needs no search.
+  void index_interior_lattice() {
+    const std::size_t points = std::size_t(n_ + 1) * (n_ + 1);
+    interior_region_.assign(points, -1);
+    interior_w_.assign(points, 0.0);
+    for (int y = 0; y <= n_; ++y)
+      for (int x = 0; x <= n_; ++x) {
+        const std::size_t k = lattice_index(x, y);
+        if (outlines_.on_outline[k]) continue;
+        const int i = std::min(x, n_ - 1), j = std::min(y, n_ - 1);
+        const int l = label(i, j);
+        if (l < 0) continue;
+        interior_region_[k] = l;
+        interior_w_[k] = g_.w[g_.vertex(i, j, x, y)];
+      }
+  }
+
+  void pop() {
+    std::pop_heap(queue_.begin(), queue_.end(), queued_before);
+    queue_.pop_back();
+  }
+  bool stale(const QueuedFace& q) const { return q.face->info().stamp != q.stamp; }
+
+  // Gives `f` a fresh stamp and queues it when it violates the bound.
+  void enqueue(Cdt::Face_handle f) {
+    f->info().stamp = ++stamp_counter_;
+    const FaceViolation v = evaluate(f);
+    if (v.worst() <= eps_) return;
+    const LatticePoint at = v.free_error >= v.bound_error ? v.free_at : LatticePoint{0, 0};
+    queue_.push_back({v.worst(), std::uint32_t(lattice_index(std::max(at.x, 0), std::max(at.y, 0))),
+                      f->info().stamp, f, v});
+    std::push_heap(queue_.begin(), queue_.end(), queued_before);
+  }
+
+  // Re-inserts the farthest staircase point of every queued outline segment
+  // whose depth violation still has to go; true when some outline changed.
+  bool refine_outlines() {
+    const double threshold = capped() ? ceiling_ : eps_;
+    std::vector<ChainSegment> segments;
+    for (const QueuedFace& q : queue_)
+      if (!stale(q) && q.violation.bound_error > threshold)
+        segments.push_back({q.violation.bound_owner.chain, q.violation.bound_owner.i, q.violation.bound_owner.j});
+    std::sort(segments.begin(), segments.end(), [](const ChainSegment& a, const ChainSegment& b) {
+      return std::tie(a.chain, a.i, a.j) < std::tie(b.chain, b.i, b.j);
+    });
+    segments.erase(std::unique(segments.begin(), segments.end(),
+                               [](const ChainSegment& a, const ChainSegment& b) {
+                                 return a.chain == b.chain && a.i == b.i && a.j == b.j;
+                               }),
+                   segments.end());
+    return !segments.empty() && refine_outline_segments(outlines_, segments, fixed_, n_);
+  }
 
   void add_steiner(LatticePoint p) {
     std::uint8_t& f = steiner_flag_[lattice_index(p.x, p.y)];
@@ -142,11 +242,23 @@ class TinSimplifier {
     return v;
   }
 
+  // Triangulates the fixed and outline constraints (all end points inserted
+  // at once, spatially sorted, then the constraints between them), re-inserts
+  // the Steiner points, labels the components and queues every violating face.
   void build() {
     cdt_.clear();
     owners_.clear();
+    queue_.clear();
+    std::vector<CdtPoint> points;
+    std::vector<std::pair<std::size_t, std::size_t>> segments;
+    std::unordered_map<std::size_t, std::size_t> point_of;
+    auto point_id = [&](LatticePoint p) {
+      const auto [it, added] = point_of.try_emplace(lattice_index(p.x, p.y), points.size());
+      if (added) points.emplace_back(p.x, p.y);
+      return it->second;
+    };
     for (const FixedSegment& s : fixed_) {
-      cdt_.insert_constraint(CdtPoint(s.a.x, s.a.y), CdtPoint(s.b.x, s.b.y));
+      segments.emplace_back(point_id(s.a), point_id(s.b));
       owners_[key(lattice_index(s.a.x, s.a.y), lattice_index(s.b.x, s.b.y))] = {};
     }
     for (std::size_t c = 0; c < outlines_.chains.size(); ++c) {
@@ -156,16 +268,23 @@ class TinSimplifier {
         if (ch.kept[k]) {
           const LatticePoint a = ch.points[prev], b = ch.points[k];
           if (!(a == b)) {
-            cdt_.insert_constraint(CdtPoint(a.x, a.y), CdtPoint(b.x, b.y));
+            segments.emplace_back(point_id(a), point_id(b));
             owners_[key(lattice_index(a.x, a.y), lattice_index(b.x, b.y))] = {int(c), int(prev), int(k)};
           }
           prev = k;
         }
     }
+    cdt_.insert_constraints(points.begin(), points.end(), segments.begin(), segments.end());
     for (const LatticePoint& p : steiner_) insert_steiner(p);
     label_components();
-    pending_.clear();
-    for (auto f = cdt_.finite_faces_begin(); f != cdt_.finite_faces_end(); ++f) pending_.push_back(f);
+    labelled_faces_ = 0;
+    std::vector<Cdt::Face_handle> faces;
+    for (auto f = cdt_.finite_faces_begin(); f != cdt_.finite_faces_end(); ++f) {
+      if (f->info().label >= 0) ++labelled_faces_;
+      faces.push_back(f);
+    }
+    for (const Cdt::Face_handle& f : faces) enqueue(f);
+    built_ = true;
   }
 
   // Components of finite faces joined across unconstrained edges; each takes
@@ -292,84 +411,78 @@ class TinSimplifier {
     return true;
   }
 
-  void evaluate(std::vector<LatticePoint>& inserts, std::vector<ConstraintOwner>& refines) {
+  // The worst violations of face f (see FaceViolation); none for background.
+  FaceViolation evaluate(const Cdt::Face_handle& f) const {
+    FaceViolation out;
     std::array<LatticePoint, 3> p;
     std::array<std::uint32_t, 3> v;
-    for (const Cdt::Face_handle& f : pending_) {
-      const int l = f->info().label;
-      if (l < 0 || !corners(f, p, v)) continue;
-      const double w0 = g_.w[v[0]], w1 = g_.w[v[1]], w2 = g_.w[v[2]];
-      const double x0 = p[0].x, y0 = p[0].y;
-      const double orient = double(p[1].x - p[0].x) * (p[2].y - p[0].y) - double(p[1].y - p[0].y) * (p[2].x - p[0].x);
-      if (orient == 0) continue;
-      const double alpha = ((w1 - w0) * (p[2].y - y0) - (w2 - w0) * (p[1].y - y0)) / orient;
-      const double beta = ((w2 - w0) * (p[1].x - x0) - (w1 - w0) * (p[2].x - x0)) / orient;
-      const double gamma = w0 - alpha * x0 - beta * y0;
-      const double cx = (p[0].x + p[1].x + p[2].x) / 3.0, cy = (p[0].y + p[1].y + p[2].y) / 3.0;
-      double worst_free = eps_, worst_bound = eps_;
-      LatticePoint free_at{-1, -1};
-      ConstraintOwner bound_owner;
-      bool bound_found = false;
-      const int ymin = std::min({p[0].y, p[1].y, p[2].y}), ymax = std::max({p[0].y, p[1].y, p[2].y});
-      for (int y = ymin; y <= ymax; ++y) {
-        double xl = 1e300, xr = -1e300;
-        for (int e = 0; e < 3; ++e) {
-          const LatticePoint a = p[e], b = p[(e + 1) % 3];
-          if (a.y == b.y) {
-            if (a.y == y) xl = std::min({xl, double(a.x), double(b.x)}), xr = std::max({xr, double(a.x), double(b.x)});
-            continue;
-          }
-          if ((a.y - y) * (b.y - y) > 0) continue;
-          const double x = a.x + double(y - a.y) * (b.x - a.x) / (b.y - a.y);
-          xl = std::min(xl, x), xr = std::max(xr, x);
+    const int l = f->info().label;
+    if (l < 0 || !corners(f, p, v)) return out;
+    const double w0 = g_.w[v[0]], w1 = g_.w[v[1]], w2 = g_.w[v[2]];
+    const double x0 = p[0].x, y0 = p[0].y;
+    const double orient = double(p[1].x - p[0].x) * (p[2].y - p[0].y) - double(p[1].y - p[0].y) * (p[2].x - p[0].x);
+    if (orient == 0) return out;
+    const double alpha = ((w1 - w0) * (p[2].y - y0) - (w2 - w0) * (p[1].y - y0)) / orient;
+    const double beta = ((w2 - w0) * (p[1].x - x0) - (w1 - w0) * (p[2].x - x0)) / orient;
+    const double gamma = w0 - alpha * x0 - beta * y0;
+    const double cx = (p[0].x + p[1].x + p[2].x) / 3.0, cy = (p[0].y + p[1].y + p[2].y) / 3.0;
+    double worst_free = eps_, worst_bound = eps_;
+    const int ymin = std::min({p[0].y, p[1].y, p[2].y}), ymax = std::max({p[0].y, p[1].y, p[2].y});
+    for (int y = ymin; y <= ymax; ++y) {
+      double xl = 1e300, xr = -1e300;
+      for (int e = 0; e < 3; ++e) {
+        const LatticePoint a = p[e], b = p[(e + 1) % 3];
+        if (a.y == b.y) {
+          if (a.y == y) xl = std::min({xl, double(a.x), double(b.x)}), xr = std::max({xr, double(a.x), double(b.x)});
+          continue;
         }
-        if (!(xl <= xr)) continue;
-        for (int x = int(std::ceil(xl - 1e-9)); x <= int(std::floor(xr + 1e-9)); ++x) {
-          const LatticePoint q{x, y};
-          if (q == p[0] || q == p[1] || q == p[2]) continue;
+        if ((a.y - y) * (b.y - y) > 0) continue;
+        const double x = a.x + double(y - a.y) * (b.x - a.x) / (b.y - a.y);
+        xl = std::min(xl, x), xr = std::max(xr, x);
+      }
+      if (!(xl <= xr)) continue;
+      const int x_end = int(std::floor(xr + 1e-9));
+      for (int x = int(std::ceil(xl - 1e-9)); x <= x_end; ++x) {
+        const std::size_t k = lattice_index(x, y);
+        const bool outline = outlines_.on_outline[k] != 0;
+        double w;
+        if (!outline) {
+          if (interior_region_[k] != l) continue;
+          w = interior_w_[k];
+        } else {
           // Outline points too: a straightened outline must not bridge a skin
           // (where the region meets itself there, the side the triangle is on).
-          const bool outline = outlines_.on_outline[lattice_index(x, y)] != 0;
-          const std::uint32_t dv = outline ? pick_vertex(l, q, cx, cy) : pick_vertex(l, q, x, y);
+          const std::uint32_t dv = pick_vertex(l, {x, y}, cx, cy);
           if (dv == kNoVertex) continue;
-          const double wp = alpha * x + beta * y + gamma;
-          const double err = wp > 0 ? std::abs(g_.w[dv] - wp) / wp : 1e300;
-          if (err <= eps_) continue;
-          // On a constrained edge of this triangle?
-          int edge = -1;
-          for (int e = 0; e < 3 && edge < 0; ++e) {
-            const LatticePoint a = p[(e + 1) % 3], b = p[(e + 2) % 3];
-            const long o = long(b.x - a.x) * (q.y - a.y) - long(b.y - a.y) * (q.x - a.x);
-            if (o == 0 && cdt_.is_constrained({f, e})) edge = e;
-          }
-          if (edge < 0) {
-            if (err > worst_free && (!outline || unique_vertex(l, q))) worst_free = err, free_at = q;
-          } else if (err > worst_bound) {
-            const LatticePoint a = p[(edge + 1) % 3], b = p[(edge + 2) % 3];
-            const auto it = owners_.find(key(lattice_index(a.x, a.y), lattice_index(b.x, b.y)));
-            if (it != owners_.end() && it->second.chain >= 0) {
-              worst_bound = err;
-              bound_owner = it->second;
-              bound_found = true;
-            }
+          w = g_.w[dv];
+        }
+        const double wp = alpha * x + beta * y + gamma;
+        if (wp > 0 && std::abs(w - wp) <= eps_ * wp) continue;
+        const LatticePoint q{x, y};
+        if (q == p[0] || q == p[1] || q == p[2]) continue;
+        const double err = wp > 0 ? std::abs(w - wp) / wp : 1e300;
+        // On a constrained edge of this triangle?
+        int edge = -1;
+        for (int e = 0; e < 3 && edge < 0; ++e) {
+          const LatticePoint a = p[(e + 1) % 3], b = p[(e + 2) % 3];
+          const long o = long(b.x - a.x) * (q.y - a.y) - long(b.y - a.y) * (q.x - a.x);
+          if (o == 0 && cdt_.is_constrained({f, e})) edge = e;
+        }
+        if (edge < 0) {
+          if (err > worst_free && (!outline || unique_vertex(l, q))) worst_free = err, out.free_at = q;
+        } else if (err > worst_bound) {
+          const LatticePoint a = p[(edge + 1) % 3], b = p[(edge + 2) % 3];
+          const auto it = owners_.find(key(lattice_index(a.x, a.y), lattice_index(b.x, b.y)));
+          if (it != owners_.end() && it->second.chain >= 0) {
+            worst_bound = err;
+            out.bound_owner = it->second;
           }
         }
       }
-      if (free_at.x >= 0) inserts.push_back(free_at);
-      if (bound_found) refines.push_back(bound_owner);
     }
-    std::sort(inserts.begin(), inserts.end(), [](const LatticePoint& a, const LatticePoint& b) {
-      return a.y != b.y ? a.y < b.y : a.x < b.x;
-    });
-    inserts.erase(std::unique(inserts.begin(), inserts.end()), inserts.end());
-    std::sort(refines.begin(), refines.end(), [](const ConstraintOwner& a, const ConstraintOwner& b) {
-      return std::tie(a.chain, a.i, a.j) < std::tie(b.chain, b.i, b.j);
-    });
-    refines.erase(std::unique(refines.begin(), refines.end(),
-                              [](const ConstraintOwner& a, const ConstraintOwner& b) {
-                                return a.chain == b.chain && a.i == b.i && a.j == b.j;
-                              }),
-                  refines.end());
+    if (out.free_at.x >= 0) out.free_error = worst_free;
+    if (worst_bound > eps_) out.bound_error = worst_bound;
+    return out;
   }
 
   std::vector<std::uint32_t> emit() const {
@@ -401,10 +514,18 @@ class TinSimplifier {
   const std::vector<FixedSegment>& fixed_;
   int n_;
   double eps_;
+  std::size_t cap_;
+  double ceiling_;
+  bool built_ = false;
+  std::size_t labelled_faces_ = 0;       // triangles of the mesh (faces with a region)
+  double bound_used_ = 0, unresolved_ = 0;
+  std::vector<std::int32_t> interior_region_;  // per lattice point off the outlines: its region, or -1
+  std::vector<double> interior_w_;             // and the inverse depth of its vertex
   std::vector<std::uint8_t> steiner_flag_;
   std::vector<LatticePoint> steiner_;
   Cdt cdt_;
-  std::vector<Cdt::Face_handle> pending_;  // faces to evaluate next
+  std::uint32_t stamp_counter_ = 0;
+  std::vector<QueuedFace> queue_;  // a max-heap by queued_before
   std::unordered_map<std::uint64_t, ConstraintOwner> owners_;
 };
 
@@ -432,11 +553,14 @@ SimplifyResult simplify_face_mesh(const FaceMesh& in, int face_size, const Simpl
     throw std::invalid_argument("simplify_face_mesh: depth_error_relative must be >= 0");
   if (!(params.boundary_error_px >= 0))
     throw std::invalid_argument("simplify_face_mesh: boundary_error_px must be >= 0");
+  if (!(params.max_depth_error_factor >= 1))
+    throw std::invalid_argument("simplify_face_mesh: max_depth_error_factor must be >= 1");
   const FaceGrid grid = read_face_grid(in, face_size);
   SimplifyResult result;
   result.triangles_in = in.triangle_count();
   double eps = params.depth_error_relative;
   std::vector<std::uint32_t> tris;
+  std::optional<FaceOutlines> traced;
   if (face_size < 4) {
     tris = dense_triangles(in);  // too small to simplify
   } else {
@@ -447,27 +571,27 @@ SimplifyResult simplify_face_mesh(const FaceMesh& in, int face_size, const Simpl
       const auto a = border_point(p.side, p.a, face_size), b = border_point(p.side, p.b, face_size);
       fixed.push_back({{a[0], a[1]}, {b[0], b[1]}});
     }
-    const FaceOutlines traced = trace_face_outlines(grid, regions);
-    auto simplify_with = [&](double depth_error) {
-      FaceOutlines outlines = traced;
-      straighten_face_outlines(outlines, fixed, params.boundary_error_px, depth_error, face_size);
-      return TinSimplifier(grid, regions, std::move(outlines), fixed, depth_error).run();
+    traced = trace_face_outlines(grid, regions);
+    const double ceiling = eps * params.max_depth_error_factor;
+    auto simplifier = [&](double outline_depth_error) {
+      FaceOutlines outlines = *traced;
+      straighten_face_outlines(outlines, fixed, params.boundary_error_px, outline_depth_error, face_size);
+      return std::make_unique<TinSimplifier>(grid, regions, std::move(outlines), fixed, eps, params.max_triangles,
+                                             ceiling);
     };
-    tris = simplify_with(eps);
-    for (int attempt = 0; tris.size() / 3 > params.max_triangles && attempt < params.max_relaxations; ++attempt) {
-      const double looser = eps > 0 ? eps * 2 : 1e-3;
-      std::vector<std::uint32_t> next = simplify_with(looser);
-      // When relaxing the depth bound no longer pays (< 5 % fewer triangles), keep the tighter mesh.
-      if (next.size() * 20 > tris.size() * 19) break;
-      tris = std::move(next);
-      eps = looser;
-    }
+    auto tin = simplifier(eps);
+    // When the outlines alone exceed the cap, the cap's looser bound applies
+    // from the start, to their straightening too.
+    if (tin->outline_triangles() > params.max_triangles && ceiling > eps) tin = simplifier(ceiling);
+    tris = tin->run();
+    eps = tin->bound_used();
   }
   result.mesh = compact(in, tris);
   result.triangles_out = result.mesh.triangle_count();
   result.depth_error_bound_used = eps;
   result.cap_forced_larger_error = eps > params.depth_error_relative;
-  result.achieved = measure_simplification_error(in, result.mesh, face_size);
+  result.achieved = face_size < 4 ? measure_simplification_error(in, result.mesh, face_size)
+                                  : measure_simplification_error(grid, *traced, result.mesh);
   return result;
 }
 

@@ -27,20 +27,21 @@ struct SimplifyParams {
   // coverage edges (the outlines of the dense mesh inside the face). 0 keeps
   // them pixel-exact (staircases). Face borders never move.
   double boundary_error_px = 0.5;
-  // Per-face triangle cap (VWALK used 10,000). When the result is larger, the
-  // interior depth bound is doubled, up to `max_relaxations` times and only
-  // while each doubling removes >= 5 % of the triangles (outlines stay within
-  // boundary_error_px, so an outline-dominated face may stay above the cap);
-  // face borders always use `depth_error_relative` so neighbouring faces still agree.
+  // Per-face triangle cap (VWALK used 10,000). Refinement inserts the worst
+  // violation first; once the mesh reaches the cap it stops as soon as no
+  // violation exceeds depth_error_relative * max_depth_error_factor (it goes on
+  // past the cap until then, e.g. when the outlines alone need more
+  // triangles than the cap). Outlines and face borders always use
+  // depth_error_relative, so neighbouring faces still agree.
   std::size_t max_triangles = 10000;
-  int max_relaxations = 8;
+  double max_depth_error_factor = 8;
 };
 
 struct SimplifyResult {
   FaceMesh mesh;  // vertices are a subset of the input's (bit-identical positions and uvs)
   std::size_t triangles_in = 0;
   std::size_t triangles_out = 0;
-  double depth_error_bound_used = 0;    // interior bound of the final mesh (> params' when the cap forced it)
+  double depth_error_bound_used = 0;    // interior bound of the final mesh (> params' when the cap stopped refinement)
   bool cap_forced_larger_error = false;  // the cap made us exceed depth_error_relative
   SimplifyError achieved;                // measured against the input
 };

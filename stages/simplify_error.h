@@ -8,6 +8,8 @@
 #include <cstddef>
 
 #include "stages/cube_map.h"
+#include "stages/simplify_grid.h"
+#include "stages/simplify_outline.h"
 
 namespace cellbake {
 
@@ -43,5 +45,10 @@ struct SimplifyError {
 // Deterministic; O(pixels + covered area of the simplified triangles). Throws
 // std::invalid_argument when `dense` is not a pixel-grid mesh.
 SimplifyError measure_simplification_error(const FaceMesh& dense, const FaceMesh& simplified, int face_size);
+
+// The same measurement from the dense mesh's grid and its traced (not
+// straightened) outlines, as simplify_face_mesh already holds them.
+SimplifyError measure_simplification_error(const FaceGrid& grid, const FaceOutlines& outlines,
+                                           const FaceMesh& simplified);
 
 }  // namespace cellbake

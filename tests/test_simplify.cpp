@@ -170,22 +170,26 @@ TEST(Simplify, TriangleCapRelaxesTheInteriorBoundAndReportsIt) {
   expect_bounds(capped, capped.depth_error_bound_used, 0);
 }
 
-TEST(Simplify, CapDoesNotTradeErrorForNothingOnOutlineDominatedFaces) {
-  // Pixel-exact outlines (boundary_error_px = 0) cannot be simplified: when
-  // doubling the bound barely helps, the tighter mesh is kept.
+TEST(Simplify, OutlineDominatedFaceOverTheCapStopsAtTheLooserBound) {
+  // Pixel-exact outlines (boundary_error_px = 0) cannot be simplified, so the
+  // cap is out of reach: refinement stops once every miss is within
+  // max_depth_error_factor times the bound, with fewer triangles than uncapped.
   const int n = 64;
   const auto dense = build_depth_meshes(raycast_analytic_scene(cluttered_room(), {0, 0, 0}, n), DepthMeshParams{});
   SimplifyParams params;
   params.depth_error_relative = 0.0005;
   params.boundary_error_px = 0;
+  params.max_triangles = std::size_t(1) << 40;
   const SimplifyResult free_run = simplify_face_mesh(dense[2], n, params);
   EXPECT_LT(free_run.achieved.max_boundary_error_px, 1e-6);
   EXPECT_EQ(free_run.achieved.uncovered_samples, 0u);
   EXPECT_EQ(free_run.achieved.spurious_samples, 0u);
+  expect_bounds(free_run, params.depth_error_relative, 2);
   params.max_triangles = free_run.triangles_out / 10;
   const SimplifyResult capped = simplify_face_mesh(dense[2], n, params);
   EXPECT_GT(capped.triangles_out, params.max_triangles);
-  EXPECT_LE(capped.triangles_out, free_run.triangles_out);
+  EXPECT_LT(capped.triangles_out, free_run.triangles_out);
+  EXPECT_LE(capped.depth_error_bound_used, params.depth_error_relative * params.max_depth_error_factor);
   EXPECT_LT(capped.achieved.max_boundary_error_px, 1e-6);
   expect_bounds(capped, capped.depth_error_bound_used, 2);
 }
@@ -217,8 +221,8 @@ TEST(Simplify, PipeArrayMeetsTheTriangleCapWithinTheBounds) {
   EXPECT_GT(r.achieved.max_boundary_error_px, 0.2);  // the outlines did move
   // Straightening pays: pixel-exact outlines need more triangles at the same bound.
   SimplifyParams free_params = params, exact = params;
-  free_params.max_relaxations = 0;
-  exact.max_relaxations = 0;
+  free_params.max_triangles = std::size_t(1) << 40;
+  exact.max_triangles = std::size_t(1) << 40;
   exact.boundary_error_px = 0;
   const SimplifyResult straightened = simplify_face_mesh(dense[4], n, free_params);
   const SimplifyResult pixel_exact = simplify_face_mesh(dense[4], n, exact);

@@ -1,0 +1,163 @@
+// Simplification of real cube faces, side by side with meshoptimizer: for each
+// selected cell of a bake configuration, runs the cull box, the sample and the
+// depth meshes once (as `cellbake bake` does), then times, per face,
+//  * ours       - simplify_face_mesh with the configuration's parameters;
+//  * meshopt    - meshopt_simplify of the same dense face to the same
+//                 triangle count (error target 1e-2, locked borders);
+// and measures both with one ruler (measure_simplification_error). Prints one
+// row per face and a summary: total seconds, the speed ratio, the worst
+// boundary error and the faces above the triangle cap.
+//
+//   cellbake demo --out /tmp/demo
+//   bench_simplify_cells /tmp/demo/plant-demo.toml --store /tmp/demo/plant.store.db --cells 20-27 --repeat 3
+//
+// Not a Google Benchmark program: it needs a geometry store and reports
+// per-face error figures next to the times.
+#include <meshoptimizer.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "pipeline/bake_config.h"
+#include "pipeline/cell_grid.h"
+#include "pipeline/cell_job.h"
+#include "stages/render/chunk_renderer.h"
+#include "stages/render/gl_context.h"
+#include "stages/simplify.h"
+#include "storage/geometry_store.h"
+
+namespace cellbake {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Args {
+  std::string config, store, cells = "1-8";
+  int repeat = 3;
+  bool meshopt = true;
+};
+
+Args parse_args(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    const std::string s = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::invalid_argument("missing value after " + s);
+      return argv[++i];
+    };
+    if (s == "--store") a.store = value();
+    else if (s == "--cells") a.cells = value();
+    else if (s == "--repeat") a.repeat = std::max(1, std::stoi(value()));
+    else if (s == "--no-meshopt") a.meshopt = false;
+    else if (s == "-h" || s == "--help") {
+      std::printf("usage: bench_simplify_cells CONFIG.toml [--store STORE.db] [--cells LIST] [--repeat R] [--no-meshopt]\n");
+      std::exit(0);
+    } else if (a.config.empty()) a.config = s;
+    else throw std::invalid_argument("unexpected argument " + s);
+  }
+  if (a.config.empty()) throw std::invalid_argument("a bake configuration is required (see --help)");
+  return a;
+}
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+// meshopt_simplify of a dense face to `target` triangles; positions as floats.
+FaceMesh meshopt_face(const FaceMesh& in, std::size_t target) {
+  std::vector<float> xyz;
+  xyz.reserve(in.positions.size() * 3);
+  for (const Vec3f& p : in.positions) xyz.insert(xyz.end(), {p.x, p.y, p.z});
+  std::vector<std::uint32_t> out(in.indices.size());
+  const std::size_t n = meshopt_simplify(out.data(), in.indices.data(), in.indices.size(), xyz.data(),
+                                         in.positions.size(), sizeof(float) * 3, target * 3, 1e-2f,
+                                         meshopt_SimplifyLockBorder, nullptr);
+  FaceMesh m;
+  m.positions = in.positions;
+  m.uvs = in.uvs;
+  m.indices.assign(out.begin(), out.begin() + std::ptrdiff_t(n));
+  return m;
+}
+
+int run(int argc, char** argv) {
+  const Args args = parse_args(argc, argv);
+  if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", "1", 1);
+  BakeConfig config = load_bake_config(args.config);
+  if (!args.store.empty()) config.store = args.store;
+  GeometryStore store(config.store);
+  ChunkRenderer renderer(create_gl_context(GlBackend::osmesa, 1, 1));
+  SimplifyParams params;
+  params.depth_error_relative = config.depth_error_relative;
+  params.boundary_error_px = config.boundary_error_px;
+  params.max_triangles = std::size_t(config.max_face_triangles);
+
+  double ours_total = 0, meshopt_total = 0, worst_boundary = 0, worst_depth = 0;
+  std::size_t faces = 0, over_cap = 0, tris_total = 0;
+  std::printf("%5s %4s %8s %7s %9s %9s %8s %8s %9s %9s\n", "cell", "face", "dense", "ours", "ours_ms", "depth_err",
+              "bnd_px", "flips", "mopt_ms", "mopt_bnd");
+  for (const CellSpec& cell : select_cells(enumerate_cells(config.regions, config.cell_size), args.cells)) {
+    CellWork work;
+    work.cell = cell;
+    run_cull_box(work, config, store);
+    run_sample(work, config, store, renderer);
+    run_depth_mesh(work, config);
+    for (int f = 0; f < kCubeFaces; ++f) {
+      const FaceMesh& dense = work.dense[f];
+      if (dense.indices.empty()) continue;
+      std::vector<double> ours_s, mopt_s;
+      SimplifyResult r;
+      for (int k = 0; k < args.repeat; ++k) {
+        const auto t0 = Clock::now();
+        r = simplify_face_mesh(dense, config.face_size, params);
+        ours_s.push_back(seconds_since(t0));
+      }
+      double mopt_ms = 0, mopt_bnd = 0;
+      if (args.meshopt) {
+        FaceMesh m;
+        for (int k = 0; k < args.repeat; ++k) {
+          const auto t0 = Clock::now();
+          m = meshopt_face(dense, std::max<std::size_t>(1, r.triangles_out));
+          mopt_s.push_back(seconds_since(t0));
+        }
+        mopt_ms = 1e3 * median(mopt_s);
+        mopt_bnd = measure_simplification_error(dense, m, config.face_size).max_boundary_error_px;
+        meshopt_total += median(mopt_s);
+      }
+      const double ours = median(ours_s);
+      ours_total += ours;
+      ++faces;
+      tris_total += r.triangles_out;
+      if (r.triangles_out > params.max_triangles) ++over_cap;
+      worst_boundary = std::max(worst_boundary, r.achieved.max_boundary_error_px);
+      worst_depth = std::max(worst_depth, r.achieved.max_depth_error_relative);
+      std::printf("%5lld %4d %8zu %7zu %9.1f %9.4f %8.2f %8zu %9.1f %9.2f\n", static_cast<long long>(cell.id), f,
+                  r.triangles_in, r.triangles_out, 1e3 * ours, r.achieved.max_depth_error_relative,
+                  r.achieved.max_boundary_error_px, r.achieved.flipped_triangles, mopt_ms, mopt_bnd);
+    }
+  }
+  std::printf("faces %zu, ours %.3f s (%.1f ms/face), meshopt %.3f s, ours/meshopt %.2f, triangles %zu, over cap %zu, "
+              "worst boundary %.2f px, worst depth %.4f\n",
+              faces, ours_total, faces ? 1e3 * ours_total / faces : 0.0, meshopt_total,
+              meshopt_total > 0 ? ours_total / meshopt_total : 0.0, tris_total, over_cap, worst_boundary, worst_depth);
+  return 0;
+}
+
+}  // namespace
+}  // namespace cellbake
+
+int main(int argc, char** argv) {
+  try {
+    return cellbake::run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_simplify_cells: %s\n", e.what());
+    return 1;
+  }
+}
