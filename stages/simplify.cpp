@@ -288,12 +288,23 @@ class TinSimplifier {
   }
 
   // Components of finite faces joined across unconstrained edges; each takes
-  // the region label holding most of its area (by the pixel under each
-  // triangle's centroid), -1 for background.
+  // the region label of most of the pixel centres inside its triangles (the
+  // pixel under a triangle's centroid, weighted by area, breaks ties and
+  // labels components too thin to hold a pixel centre), -1 for background.
   void label_components() {
     for (auto f = cdt_.all_faces_begin(); f != cdt_.all_faces_end(); ++f) f->info().label = INT_MIN;
     std::vector<Cdt::Face_handle> stack, members;
-    std::vector<std::pair<int, double>> votes;
+    struct Vote {
+      int label;
+      std::size_t centres;
+      double area;
+    };
+    std::vector<Vote> votes;
+    auto vote = [&](int l, std::size_t centres, double area) {
+      auto it = std::find_if(votes.begin(), votes.end(), [&](const Vote& v) { return v.label == l; });
+      if (it == votes.end()) votes.push_back({l, centres, area});
+      else it->centres += centres, it->area += area;
+    };
     for (auto start = cdt_.finite_faces_begin(); start != cdt_.finite_faces_end(); ++start) {
       if (start->info().label != INT_MIN) continue;
       members.clear();
@@ -304,15 +315,14 @@ class TinSimplifier {
         const Cdt::Face_handle f = stack.back();
         stack.pop_back();
         members.push_back(f);
-        const LatticePoint a = lattice_of(f->vertex(0)->point()), b = lattice_of(f->vertex(1)->point()),
-                           c = lattice_of(f->vertex(2)->point());
-        const double area = std::abs(double(b.x - a.x) * (c.y - a.y) - double(b.y - a.y) * (c.x - a.x));
-        const int px = std::clamp(int(std::floor((a.x + b.x + c.x) / 3.0)), 0, n_ - 1);
-        const int py = std::clamp(int(std::floor((a.y + b.y + c.y) / 3.0)), 0, n_ - 1);
-        const int l = label(px, py);
-        auto it = std::find_if(votes.begin(), votes.end(), [&](const auto& v) { return v.first == l; });
-        if (it == votes.end()) votes.push_back({l, area});
-        else it->second += area;
+        const std::array<LatticePoint, 3> p{lattice_of(f->vertex(0)->point()), lattice_of(f->vertex(1)->point()),
+                                            lattice_of(f->vertex(2)->point())};
+        const double area =
+            std::abs(double(p[1].x - p[0].x) * (p[2].y - p[0].y) - double(p[1].y - p[0].y) * (p[2].x - p[0].x));
+        const int px = std::clamp(int(std::floor((p[0].x + p[1].x + p[2].x) / 3.0)), 0, n_ - 1);
+        const int py = std::clamp(int(std::floor((p[0].y + p[1].y + p[2].y) / 3.0)), 0, n_ - 1);
+        vote(label(px, py), 0, area);
+        vote_pixel_centres(p, vote);
         for (int e = 0; e < 3; ++e) {
           const Cdt::Face_handle nb = f->neighbor(e);
           if (cdt_.is_infinite(nb) || cdt_.is_constrained({f, e}) || nb->info().label != INT_MIN) continue;
@@ -320,11 +330,29 @@ class TinSimplifier {
           stack.push_back(nb);
         }
       }
-      int best = -1;
-      double best_area = -1;
-      for (const auto& [l, area] : votes)
-        if (area > best_area) best = l, best_area = area;
-      for (const Cdt::Face_handle& f : members) f->info().label = best;
+      const Vote* best = &votes.front();
+      for (const Vote& v : votes)
+        if (v.centres > best->centres || (v.centres == best->centres && v.area > best->area)) best = &v;
+      for (const Cdt::Face_handle& f : members) f->info().label = best->label;
+    }
+  }
+
+  // Calls vote(label, 1, 0) for every pixel whose centre lies in the closed triangle p.
+  template <typename VoteFn>
+  void vote_pixel_centres(const std::array<LatticePoint, 3>& p, VoteFn&& vote) const {
+    const int ymin = std::min({p[0].y, p[1].y, p[2].y}), ymax = std::max({p[0].y, p[1].y, p[2].y});
+    for (int py = std::max(ymin, 0); py < std::min(ymax, n_); ++py) {
+      const double y = py + 0.5;
+      double xl = 1e300, xr = -1e300;
+      for (int e = 0; e < 3; ++e) {
+        const LatticePoint a = p[e], b = p[(e + 1) % 3];
+        if ((a.y - y) * (b.y - y) > 0 || a.y == b.y) continue;
+        const double x = a.x + (y - a.y) * (b.x - a.x) / (b.y - a.y);
+        xl = std::min(xl, x), xr = std::max(xr, x);
+      }
+      if (!(xl <= xr)) continue;
+      const int x0 = std::max(0, int(std::ceil(xl - 0.5))), x1 = std::min(n_ - 1, int(std::floor(xr - 0.5)));
+      for (int px = x0; px <= x1; ++px) vote(label(px, py), 1, 0.0);
     }
   }
 
