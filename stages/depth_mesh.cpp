@@ -15,9 +15,13 @@
 // for every face that shares the point, hence bit-identical positions.
 //
 // Cost: the skin test of every in-face neighbour pair (4 per pixel) is made
-// once per face and cached as flags, with the face's surface points; corners
-// inside a face read the flags, only the 4N corners on a face border gather and
-// test their pixels across faces.
+// once per face and cached as flags, with the face's surface points and screen
+// coordinates; only the 4N corners on a face border gather and test their
+// pixels across faces. Corners inside a face take their components from a
+// 64-entry table indexed by the flags of their 6 pixel pairs, and their depth
+// from the cached screen coordinates with corner_inverse_depth's arithmetic
+// (the same bits); vertex ids live in two rows of pixels, the triangles of a
+// row being written once its lower corners are known.
 #include "stages/depth_mesh.h"
 
 #include <algorithm>
@@ -66,6 +70,7 @@ class CubeLattice {
       const double tan_limit = std::tan(angle_limit_);
       tan_low_ = tan_limit * (1 - 1e-9);
       tan_high_ = tan_limit * (1 + 1e-9);
+      squares_decide_ = tan_low_ >= 0 && std::isfinite(tan_high_);
     } else {  // near or past a right angle: always take the exact path
       tan_low_ = -1;
       tan_high_ = std::numeric_limits<double>::infinity();
@@ -106,13 +111,21 @@ class CubeLattice {
     points_.resize(count);
     distances_.resize(count);
     screens_.resize(count);
-    for (int j = 0; j < n_; ++j)
+    // compute_point's arithmetic with the pixel-centre coordinates taken once
+    // per column and row (the same bits).
+    column_s_.resize(n_);
+    for (int i = 0; i < n_; ++i) column_s_[i] = 2.0 * (i + 0.5) / n_ - 1.0;
+    const FaceBasis& b = basis_[f];
+    const float* face_depth = sample_.faces[f].depth.data();
+    for (int j = 0; j < n_; ++j) {
+      const double t = 1.0 - 2.0 * (j + 0.5) / n_;
       for (int i = 0; i < n_; ++i) {
         const std::size_t k = std::size_t(j) * n_ + i;
-        points_[k] = compute_point({f, i, j});
+        points_[k] = cube_face_direction(b, column_s_[i], t) * double(face_depth[k]);
         distances_[k] = length(points_[k]);
         screens_[k] = compute_screen(points_[k], f);
       }
+    }
     cached_face_ = f;
     std::vector<std::uint8_t>& flags = flags_[f];
     flags.assign(count, 0);
@@ -138,6 +151,13 @@ class CubeLattice {
   std::uint8_t skin_flags(int f, int i, int j) const { return flags_[f][std::size_t(j) * n_ + i]; }
 
   static constexpr std::uint8_t kSkinEast = 1, kSkinSouth = 2, kSkinSouthEast = 4, kSkinSouthWest = 8;
+
+  // Row-major arrays of face f: depths, skin flags (valid after cache_face(f))
+  // and, for the cached face, the screen coordinates of its pixels.
+  const float* depths(int f) const { return sample_.faces[f].depth.data(); }
+  const std::uint8_t* skin_flags_of(int f) const { return flags_[f].data(); }
+  const Screen* cached_screens() const { return screens_.data(); }
+  const IntBasis& int_basis(int f) const { return ibasis_[f]; }
 
  private:
   Vec3d compute_point(const PixelRef& p) const {
@@ -165,7 +185,19 @@ class CubeLattice {
     if (std::abs(da - db) > jump_limit_ * std::min(da, db)) return true;
     const Vec3d e = pb - pa;
     const Vec3d m = (pa + pb) * 0.5;
-    const double across = length(cross(e, m)), along = std::abs(cellbake::dot(e, m));
+    const Vec3d c = cross(e, m);
+    const double across_squared = cellbake::dot(c, c), along = std::abs(cellbake::dot(e, m));
+    if (squares_decide_) {
+      // Most pairs are far from the limit: decide on the squares (no square
+      // root) where they clear it by a relative 1e-12, far above rounding, so
+      // the decision is the one below; normal squares only (no underflow).
+      const double low = tan_low_ * along, high = tan_high_ * along;
+      const double low_squared = low * low, high_squared = high * high;
+      constexpr double kNormal = std::numeric_limits<double>::min();
+      if (low_squared >= kNormal && across_squared < low_squared * (1 - 1e-12)) return true;
+      if (high_squared >= kNormal && across_squared > high_squared * (1 + 1e-12)) return false;
+    }
+    const double across = std::sqrt(across_squared);
     if (across < tan_low_ * along) return true;
     if (across > tan_high_ * along) return false;
     return std::atan2(across, along) < angle_limit_;
@@ -204,12 +236,14 @@ class CubeLattice {
   const CubeSample& sample_;
   int n_;
   double angle_limit_ = 0, jump_limit_ = 0, tan_low_ = 0, tan_high_ = 0;
+  bool squares_decide_ = false;  // skin_between may decide on squared lengths
   std::array<FaceBasis, kCubeFaces> basis_;
   std::array<IntBasis, kCubeFaces> ibasis_;
   int cached_face_ = -1;
   std::vector<Vec3d> points_;
   std::vector<double> distances_;
   std::vector<Screen> screens_;
+  std::vector<double> column_s_;
   std::array<std::vector<std::uint8_t>, kCubeFaces> flags_;
 };
 
@@ -228,10 +262,9 @@ int pair_index(int a, int b) {
   return table[a][b];
 }
 
-// `connected(a, b)` says whether pixels a < b of the corner are not a skin.
+// `connected(a, b)` says whether pixels a < b (of n) of the corner are not a skin.
 template <class Connected>
-void analyse_corner_with(Corner& c, Connected connected_pair) {
-  const int n = int(c.pixels.size());
+void analyse_corner_with(Corner& c, int n, Connected connected_pair) {
   std::array<int, 4> parent{0, 1, 2, 3};
   auto find = [&](int x) {
     while (parent[x] != x) x = parent[x];
@@ -256,23 +289,22 @@ void analyse_corner_with(Corner& c, Connected connected_pair) {
 }
 
 void analyse_corner(const CubeLattice& lat, Corner& c) {
-  analyse_corner_with(c, [&](int a, int b) { return !lat.skin(c.pixels[a], c.pixels[b]); });
+  analyse_corner_with(c, int(c.pixels.size()), [&](int a, int b) { return !lat.skin(c.pixels[a], c.pixels[b]); });
 }
 
-// A corner inside face f: pixels NW, NE, SW, SE (already in canonical order),
-// connectivity from the cached skin flags.
-void analyse_interior_corner(const CubeLattice& lat, int f, int ci, int cj, Corner& c) {
-  c.pixels.resize(4);
-  c.pixels[0] = {f, ci - 1, cj - 1};
-  c.pixels[1] = {f, ci, cj - 1};
-  c.pixels[2] = {f, ci - 1, cj};
-  c.pixels[3] = {f, ci, cj};
-  const std::uint8_t nw = lat.skin_flags(f, ci - 1, cj - 1), ne = lat.skin_flags(f, ci, cj - 1),
-                     sw = lat.skin_flags(f, ci - 1, cj);
-  const std::array<bool, 6> skin{bool(nw & CubeLattice::kSkinEast), bool(nw & CubeLattice::kSkinSouth),
-                                 bool(nw & CubeLattice::kSkinSouthEast), bool(ne & CubeLattice::kSkinSouthWest),
-                                 bool(ne & CubeLattice::kSkinSouth), bool(sw & CubeLattice::kSkinEast)};
-  analyse_corner_with(c, [&](int a, int b) { return !skin[pair_index(a, b)]; });
+// Component labels of the 4 pixels NW, NE, SW, SE of a corner inside a face,
+// indexed by its skin bits in pair order (bit 0 = NW-NE, 1 = NW-SW, 2 = NW-SE,
+// 3 = NE-SW, 4 = NE-SE, 5 = SW-SE): analyse_corner_with's labels, tabulated.
+using InteriorCornerLabels = std::array<std::array<std::uint8_t, 4>, 64>;
+
+InteriorCornerLabels interior_corner_labels() {
+  InteriorCornerLabels table{};
+  Corner c;
+  for (unsigned skins = 0; skins < 64; ++skins) {
+    analyse_corner_with(c, 4, [&](int a, int b) { return !(skins >> pair_index(a, b) & 1u); });
+    for (int a = 0; a < 4; ++a) table[skins][a] = std::uint8_t(c.label[a]);
+  }
+  return table;
 }
 
 // True when a cube-edge lattice point is fully connected (see depth_mesh.h).
@@ -396,67 +428,175 @@ void validate(const CubeSample& sample) {
 
 constexpr std::uint32_t kNone = 0xffffffffu;
 
-FaceMesh build_face(const CubeLattice& lat, int f) {
+// Inverse planar depth at an interior corner of the cached face for one
+// component of k (1 to 4) pixels of that face, listed in canonical order by
+// their indices into the face: corner_inverse_depth's one-face case, the same
+// arithmetic in the same order (hence the same bits), without the unused
+// slopes of the plane fit; the mean inverse depth is computed only when needed.
+inline double interior_inverse_depth(const CubeLattice::Screen* screens, const float* depth, const std::size_t* pixel, int k,
+                              double s0, double t0) {
+  double m00 = 0, m01 = 0, m02 = 0, m11 = 0, m12 = 0, m22 = 0, r0 = 0, r1 = 0, r2 = 0;
+  for (int a = 0; a < k; ++a) {
+    const CubeLattice::Screen& q = screens[pixel[a]];
+    const double s = q.s - s0, t = q.t - t0, w = q.w;
+    m00 += 1, m01 += s, m02 += t, m11 += s * s, m12 += s * t, m22 += t * t;
+    r0 += w, r1 += s * w, r2 += t * w;
+  }
+  if (k < 3) return r0 / m00;
+  auto own_mean = [&] {
+    double sum = 0;
+    for (int a = 0; a < k; ++a) sum += 1.0 / double(depth[pixel[a]]);
+    return sum / k;
+  };
+  const double det = m00 * (m11 * m22 - m12 * m12) - m01 * (m01 * m22 - m12 * m02) + m02 * (m01 * m12 - m11 * m02);
+  if (!(std::abs(det) > 1e-12 * std::max(1.0, m11 * m22))) return own_mean();
+  const double w0 = (r0 * (m11 * m22 - m12 * m12) - m01 * (r1 * m22 - m12 * r2) + m02 * (r1 * m12 - m11 * r2)) / det;
+  return w0 > 0 ? w0 : own_mean();
+}
+
+// Vertex ids of one row of pixels at their corners NW, NE, SW, SE.
+using PixelCorners = std::array<std::uint32_t, 4>;
+
+// Appends the vertex at lattice point d (pixel corner (ci, cj) of face f) with
+// inverse planar depth w.
+inline std::uint32_t add_vertex(FaceMesh& mesh, const Lattice& d, double w, int n, int ci, int cj, float inv_n) {
+  const double scale = (1.0 / w) / double(n);
+  mesh.positions.push_back({float(double(d[0]) * scale), float(double(d[1]) * scale), float(double(d[2]) * scale)});
+  mesh.uvs.push_back({float(ci) * inv_n, float(cj) * inv_n});
+  return std::uint32_t(mesh.positions.size() - 1);
+}
+
+// One corner on the border of face f (gathered across faces, see depth_mesh.h);
+// records its vertex ids in the rows of pixels above (`north`) and below
+// (`south`) corner row cj.
+void border_corner(const CubeLattice& lat, int f, int ci, int cj, Corner& c, FaceMesh& mesh, PixelCorners* north,
+                   PixelCorners* south) {
   const int n = lat.size();
-  FaceMesh mesh;
-  // Vertex ids per pixel corner: NW, NE, SW, SE.
-  std::vector<std::array<std::uint32_t, 4>> corner_vertex(std::size_t(n) * n, {kNone, kNone, kNone, kNone});
-  Corner c;
-  const float inv_n = 1.0f / float(n);
-  for (int cj = 0; cj <= n; ++cj) {
-    for (int ci = 0; ci <= n; ++ci) {
-      const Lattice d = lat.corner(f, ci, cj);
-      const bool border = ci == 0 || cj == 0 || ci == n || cj == n;
-      if (border) {
-        lat.gather(d, c.pixels);
-        analyse_corner(lat, c);
-      } else {
-        analyse_interior_corner(lat, f, ci, cj, c);
-      }
-      const int count = int(c.pixels.size());
-      // Per-pixel records at cube-edge points that are not fully connected.
-      bool split_per_pixel = false;
-      if (border && count == 4 && lat.on_cube_edge(d)) {
-        split_per_pixel = !edge_point_fully_connected(c);
-        if (!split_per_pixel) {
-          // Next to a cube corner along this edge?
-          int free_axis = 0;
-          for (int k = 0; k < 3; ++k)
-            if (std::abs(d[k]) != n) free_axis = k;
-          if (std::abs(d[free_axis]) == n - 2) {
-            Lattice cube_corner = d;
-            cube_corner[free_axis] = d[free_axis] > 0 ? n : -n;
-            split_per_pixel = !cube_corner_fully_connected(lat, cube_corner);
-          }
-        }
-      }
-      // Inverse planar depth of each component at the corner ray.
-      std::array<double, 4> corner_w{};
-      for (int l = 0; l < c.components; ++l) corner_w[l] = corner_inverse_depth(lat, c, l, d);
-      std::array<std::uint32_t, 4> component_vertex{kNone, kNone, kNone, kNone};
-      for (int a = 0; a < count; ++a) {
-        const PixelRef& p = c.pixels[a];
-        if (p.face != f || lat.background(p)) continue;
-        const int l = c.label[a];
-        std::uint32_t id = split_per_pixel ? kNone : component_vertex[l];
-        if (id == kNone) {
-          const double scale = (1.0 / corner_w[l]) / double(n);
-          mesh.positions.push_back({float(double(d[0]) * scale), float(double(d[1]) * scale), float(double(d[2]) * scale)});
-          mesh.uvs.push_back({float(ci) * inv_n, float(cj) * inv_n});
-          id = std::uint32_t(mesh.positions.size() - 1);
-          if (!split_per_pixel) component_vertex[l] = id;
-        }
-        const int slot = (cj - p.j) * 2 + (ci - p.i);
-        corner_vertex[std::size_t(p.j) * n + p.i][slot] = id;
+  const Lattice d = lat.corner(f, ci, cj);
+  lat.gather(d, c.pixels);
+  analyse_corner(lat, c);
+  const int count = int(c.pixels.size());
+  // Per-pixel records at cube-edge points that are not fully connected.
+  bool split_per_pixel = false;
+  if (count == 4 && lat.on_cube_edge(d)) {
+    split_per_pixel = !edge_point_fully_connected(c);
+    if (!split_per_pixel) {
+      // Next to a cube corner along this edge?
+      int free_axis = 0;
+      for (int k = 0; k < 3; ++k)
+        if (std::abs(d[k]) != n) free_axis = k;
+      if (std::abs(d[free_axis]) == n - 2) {
+        Lattice cube_corner = d;
+        cube_corner[free_axis] = d[free_axis] > 0 ? n : -n;
+        split_per_pixel = !cube_corner_fully_connected(lat, cube_corner);
       }
     }
   }
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const auto& v = corner_vertex[std::size_t(j) * n + i];
-      if (v[0] == kNone) continue;  // background pixel
-      mesh.indices.insert(mesh.indices.end(), {v[0], v[2], v[3], v[0], v[3], v[1]});
+  // Inverse planar depth of each component at the corner ray.
+  std::array<double, 4> corner_w{};
+  for (int l = 0; l < c.components; ++l) corner_w[l] = corner_inverse_depth(lat, c, l, d);
+  std::array<std::uint32_t, 4> component_vertex{kNone, kNone, kNone, kNone};
+  const float inv_n = 1.0f / float(n);
+  for (int a = 0; a < count; ++a) {
+    const PixelRef& p = c.pixels[a];
+    if (p.face != f || lat.background(p)) continue;
+    const int l = c.label[a];
+    std::uint32_t id = split_per_pixel ? kNone : component_vertex[l];
+    if (id == kNone) {
+      id = add_vertex(mesh, d, corner_w[l], n, ci, cj, inv_n);
+      if (!split_per_pixel) component_vertex[l] = id;
     }
+    const int slot = (cj - p.j) * 2 + (ci - p.i);
+    (p.j < cj ? north : south)[p.i][slot] = id;
+  }
+}
+
+FaceMesh build_face(const CubeLattice& lat, const InteriorCornerLabels& interior_labels, int f) {
+  const int n = lat.size();
+  const float* depth = lat.depths(f);
+  const std::uint8_t* flags = lat.skin_flags_of(f);
+  const CubeLattice::Screen* screens = lat.cached_screens();
+  FaceMesh mesh;
+  std::size_t covered = 0;
+  for (std::size_t k = 0; k < std::size_t(n) * n; ++k) covered += std::isfinite(depth[k]);
+  if (covered == 0) return mesh;
+  mesh.positions.reserve(covered + 2 * std::size_t(n) + 1);
+  mesh.uvs.reserve(covered + 2 * std::size_t(n) + 1);
+  mesh.indices.reserve(6 * covered);
+  // Vertex ids of the pixel rows above and below the current corner row.
+  std::vector<PixelCorners> north(n, {kNone, kNone, kNone, kNone}), south(n, {kNone, kNone, kNone, kNone});
+  Corner c;
+  const float inv_n = 1.0f / float(n);
+  const double nd = n;
+  // Screen coordinates of the corners (corner_inverse_depth's s0 and t0: the
+  // dot products of the integer corner direction with the axis-aligned basis
+  // are exactly 2 ci - n and n - 2 cj; a zero's sign cannot matter as no pixel
+  // centre has a zero screen coordinate where a corner does).
+  std::vector<double> column_s0(n + 1);
+  for (int ci = 0; ci <= n; ++ci) column_s0[ci] = double(2 * ci - n) / nd;
+  for (int cj = 0; cj <= n; ++cj) {
+    if (cj > 0) std::fill(south.begin(), south.end(), PixelCorners{kNone, kNone, kNone, kNone});
+    border_corner(lat, f, 0, cj, c, mesh, north.data(), south.data());
+    if (cj == 0 || cj == n) {
+      for (int ci = 1; ci < n; ++ci) border_corner(lat, f, ci, cj, c, mesh, north.data(), south.data());
+    } else {
+      // Interior corners: pixels NW, NE, SW, SE of this face, connectivity from
+      // the cached skin flags, one vertex per
+      // component that holds a covered pixel.
+      const std::size_t row_n = std::size_t(cj - 1) * n, row_s = std::size_t(cj) * n;
+      const Lattice row_d = lat.corner(f, 0, cj);
+      const Lattice& right = lat.int_basis(f).right;
+      const double t0 = double(n - 2 * cj) / nd;
+      for (int ci = 1; ci < n; ++ci) {
+        const std::array<std::size_t, 4> px{row_n + ci - 1, row_n + ci, row_s + ci - 1, row_s + ci};
+        const std::array<bool, 4> covered_px{std::isfinite(depth[px[0]]), std::isfinite(depth[px[1]]),
+                                             std::isfinite(depth[px[2]]), std::isfinite(depth[px[3]])};
+        if (!(covered_px[0] | covered_px[1] | covered_px[2] | covered_px[3])) continue;
+        const std::uint8_t nw = flags[px[0]], ne = flags[px[1]], sw = flags[px[2]];
+        const unsigned skins = unsigned(nw & CubeLattice::kSkinEast) | unsigned(nw & CubeLattice::kSkinSouth) |
+                               unsigned(nw & CubeLattice::kSkinSouthEast) |
+                               (ne & CubeLattice::kSkinSouthWest ? 8u : 0u) |
+                               (ne & CubeLattice::kSkinSouth ? 16u : 0u) | (sw & CubeLattice::kSkinEast ? 32u : 0u);
+        const std::array<std::uint8_t, 4>& label = interior_labels[skins];
+        Lattice d;
+        for (int k = 0; k < 3; ++k) d[k] = row_d[k] + long(2 * ci) * right[k];
+        const double s0 = column_s0[ci];
+        if (skins == 0) {  // the common case: four covered pixels, one component
+          const std::uint32_t id =
+              add_vertex(mesh, d, interior_inverse_depth(screens, depth, px.data(), 4, s0, t0), n, ci, cj, inv_n);
+          north[ci - 1][3] = id, north[ci][2] = id, south[ci - 1][1] = id, south[ci][0] = id;
+          continue;
+        }
+        std::array<std::uint32_t, 4> component_vertex{kNone, kNone, kNone, kNone};
+        for (int a = 0; a < 4; ++a) {
+          if (!covered_px[a]) continue;
+          const int l = label[a];
+          std::uint32_t id = component_vertex[l];
+          if (id == kNone) {
+            std::array<std::size_t, 4> members;
+            int k = 0;
+            for (int m = 0; m < 4; ++m)
+              if (label[m] == l) members[k++] = px[m];
+            id = add_vertex(mesh, d, interior_inverse_depth(screens, depth, members.data(), k, s0, t0), n, ci, cj,
+                            inv_n);
+            component_vertex[l] = id;
+          }
+          if (a < 2)
+            north[ci - 1 + a][2 + (1 - a)] = id;  // NW pixel: its SE corner; NE pixel: its SW corner
+          else
+            south[ci - 1 + (a - 2)][1 - (a - 2)] = id;  // SW pixel: its NE corner; SE pixel: its NW corner
+        }
+      }
+    }
+    border_corner(lat, f, n, cj, c, mesh, north.data(), south.data());
+    if (cj > 0)
+      for (int i = 0; i < n; ++i) {
+        const PixelCorners& v = north[i];
+        if (v[0] == kNone) continue;  // background pixel
+        mesh.indices.insert(mesh.indices.end(), {v[0], v[2], v[3], v[0], v[3], v[1]});
+      }
+    std::swap(north, south);
+  }
   return mesh;
 }
 
@@ -493,10 +633,11 @@ std::array<FaceMesh, kCubeFaces> build_depth_meshes(const CubeSample& sample, co
                                                     DepthMeshStats* stats) {
   validate(sample);
   CubeLattice lat(sample, params);
+  const InteriorCornerLabels interior_labels = interior_corner_labels();
   std::array<FaceMesh, kCubeFaces> meshes;
   for (int f = 0; f < kCubeFaces; ++f) {
     lat.cache_face(f);
-    meshes[f] = build_face(lat, f);
+    meshes[f] = build_face(lat, interior_labels, f);
   }
   if (stats) {
     *stats = {};
