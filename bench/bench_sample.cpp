@@ -6,14 +6,28 @@
 // (the llvmpipe thread count is read from the environment; the bench sets nothing).
 // Both wall time and the CPU time of the whole process (all llvmpipe threads)
 // are reported: on a shared machine the latter is the steadier figure.
+//
+// BM_SampleStore samples real cells of a geometry store the way one bake
+// worker does (one renderer and one store kept across cells, cells in order,
+// cull boxes from the cull_box stage with the 100,000-triangle budget):
+//   CELLBAKE_BENCH_STORE=/tmp/demo/plant.store.db and optionally
+//   CELLBAKE_BENCH_EYES="18,14,1.7;22,14,1.7" LP_NUM_THREADS=1 build/bench/bench_sample
+// Without CELLBAKE_BENCH_STORE it is skipped; without CELLBAKE_BENCH_EYES the
+// eyes are 8 points along the model's x midline at 1/4 of its z extent.
 #include <benchmark/benchmark.h>
 
+#include <cstdlib>
 #include <memory>
 #include <random>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "stages/render/chunk_renderer.h"
 #include "stages/render/gl_context.h"
+#include "stages/cull_box.h"
 #include "stages/sample.h"
+#include "storage/geometry_store.h"
 #include "tests/fixture_chunk_source.h"
 
 namespace cellbake {
@@ -101,6 +115,59 @@ void BM_SampleCubeCold(benchmark::State& state) {
   state.counters["tris_drawn_per_cube"] = static_cast<double>(triangles) / static_cast<double>(state.iterations());
 }
 BENCHMARK(BM_SampleCubeCold)->Arg(512)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+
+// Eye positions from CELLBAKE_BENCH_EYES ("x,y,z;x,y,z;..."), or 8 points
+// along the x midline of `model` at a quarter of its z extent.
+std::vector<Vec3d> bench_eyes(const Box3d& model) {
+  std::vector<Vec3d> eyes;
+  if (const char* text = std::getenv("CELLBAKE_BENCH_EYES")) {
+    std::stringstream points(text);
+    std::string point;
+    while (std::getline(points, point, ';')) {
+      Vec3d e;
+      char comma = 0;
+      std::stringstream(point) >> e.x >> comma >> e.y >> comma >> e.z;
+      eyes.push_back(e);
+    }
+    return eyes;
+  }
+  for (int i = 0; i < 8; ++i)
+    eyes.push_back({model.lo.x + (model.hi.x - model.lo.x) * (i + 0.5) / 8, model.center().y,
+                    model.lo.z + 0.25 * (model.hi.z - model.lo.z)});
+  return eyes;
+}
+
+void BM_SampleStore(benchmark::State& state) {
+  const char* path = std::getenv("CELLBAKE_BENCH_STORE");
+  if (!path) {
+    state.SkipWithError("CELLBAKE_BENCH_STORE is not set");
+    return;
+  }
+  const GeometryStore store(path);
+  std::vector<std::pair<Vec3d, Box3d>> cells;
+  for (const Vec3d& eye : bench_eyes(store.model_bounds())) {
+    CullBoxParams cull;
+    cull.min_half_size = 2.0;  // 4 m cells, as in configs/plant-demo.toml
+    cells.emplace_back(eye, Box3d::cube(eye, find_cull_box(eye, cull, store).half_size));
+  }
+  SampleParams params;
+  params.face_size = static_cast<int>(state.range(0));
+  auto renderer = make_renderer();
+  for (const auto& [eye, cull_box] : cells) sample_cube(eye, cull_box, params, store, *renderer);  // warm caches
+  const ChunkRendererStats before = renderer->stats();
+  for (auto _ : state)
+    for (const auto& [eye, cull_box] : cells) benchmark::DoNotOptimize(sample_cube(eye, cull_box, params, store, *renderer));
+  const double cube_maps = static_cast<double>(state.iterations() * cells.size());
+  const ChunkRendererStats stats = renderer->stats();
+  state.counters["cells"] = static_cast<double>(cells.size());
+  state.counters["tris_drawn_per_cube"] = static_cast<double>(stats.triangles_drawn - before.triangles_drawn) / cube_maps;
+  state.counters["uploads_per_cube"] = static_cast<double>(stats.uploads - before.uploads) / cube_maps;
+  state.counters["occluded_per_cube"] = static_cast<double>(stats.chunks_occluded - before.chunks_occluded) / cube_maps;
+  state.counters["drawn_per_cube"] = static_cast<double>(stats.chunks_drawn - before.chunks_drawn) / cube_maps;
+}
+// After one untimed pass over the cells (caches warm, as on a worker that has
+// baked a few neighbours), times passes over all cells; divide by the `cells` counter for one cube map.
+BENCHMARK(BM_SampleStore)->Arg(512)->Arg(128)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime()->Iterations(2);
 
 }  // namespace
 }  // namespace cellbake

@@ -28,7 +28,7 @@ class ChunkRenderer;
 // cell that used it is then recomputed on the next bake.
 struct StageVersions {
   static constexpr int cull_box = 1;
-  static constexpr int sample = 1;
+  static constexpr int sample = 2;
   static constexpr int depth_mesh = 1;
   static constexpr int simplify = 3;
   static constexpr int encode = 1;

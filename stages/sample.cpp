@@ -127,13 +127,20 @@ CubeSample sample_cube(const Vec3d& eye, const Box3d& cull_box, const SamplePara
   const ChunkLoader load = [&source](std::int64_t id) { return source.load(id); };
   CubeSample sample;
   sample.eye = eye;
-  std::vector<std::int64_t> ids;
   std::vector<Rgba8> color;
   std::vector<float> depth;
   for (int face = 0; face < kCubeFaces; ++face) {
-    ids.clear();
-    for (const ChunkRef& ref : chunks_in_face(face, eye, cull_box, params.near_plane, source)) ids.push_back(ref.id);
     const FaceBasis b = cube_face_basis(face);
+    // Nearest first (by the nearest forward distance of the bounds, then id),
+    // so that the renderer can skip chunks hidden behind those drawn before.
+    std::vector<ChunkRef> refs = chunks_in_face(face, eye, cull_box, params.near_plane, source);
+    std::vector<std::pair<double, std::size_t>> order(refs.size());
+    for (std::size_t i = 0; i < refs.size(); ++i)
+      order[i] = {max_dot(b.forward * -1.0, refs[i].bounds.lo - eye, refs[i].bounds.hi - eye) * -1.0, i};
+    std::sort(order.begin(), order.end());  // refs are sorted by id, so ties keep id order
+    std::vector<ChunkRef> nearest_first;
+    nearest_first.reserve(refs.size());
+    for (const auto& [distance, i] : order) nearest_first.push_back(refs[i]);
     RenderCamera camera;
     camera.eye = eye;
     camera.forward = b.forward;
@@ -141,7 +148,7 @@ CubeSample sample_cube(const Vec3d& eye, const Box3d& cull_box, const SamplePara
     camera.up = b.up;
     camera.near_plane = params.near_plane;
     renderer.begin_frame(render_size, render_size);
-    renderer.draw(camera, cull_box, ids, load);
+    renderer.draw_unoccluded(camera, cull_box, nearest_first, load);
     renderer.read_frame(color, depth);
     CubeFace& out = sample.faces[static_cast<std::size_t>(face)];
     if (params.supersample == 1) {

@@ -44,8 +44,11 @@ std::vector<ChunkRef> chunks_in_face(int face, const Vec3d& eye, const Box3d& cu
 
 // Renders the cube map at `eye` of everything outside `cull_box` (fragments
 // strictly inside it are discarded, so off-centre eyes work). Chunks are drawn
-// per face in id order; a chunk is loaded from `source` only when some face's
-// frustum needs it and `renderer` has not cached it. Throws
+// per face nearest first (by the nearest forward distance of their bounds, ties
+// by id) through ChunkRenderer::draw_unoccluded(), which skips chunks provably
+// hidden behind those already drawn; a chunk is loaded from `source` only when
+// some face's frustum needs it, it is not hidden there, and `renderer` has not
+// cached it. Throws
 // std::invalid_argument for bad parameters and passes on load and GL errors.
 // Deterministic for the same inputs, renderer settings and Mesa version.
 CubeSample sample_cube(const Vec3d& eye, const Box3d& cull_box, const SampleParams& params,

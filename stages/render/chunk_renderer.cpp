@@ -51,6 +51,31 @@ void main() {
 }
 )";
 
+// Occlusion test of chunk bounds (GL 4.3): instanced unit cubes stretched to
+// eye-relative boxes; with early fragment tests only fragments that pass the
+// depth test run the fragment shader, which flags the box as visible.
+constexpr const char* kOcclusionVertexShader = R"(#version 430 core
+layout(location = 0) in vec3 a_corner;  // unit cube corner, 0 or 1 per axis
+layout(location = 1) in vec3 a_lo;      // per instance: box relative to the eye
+layout(location = 2) in vec3 a_hi;
+uniform mat4 u_view_projection;
+flat out int v_box;
+void main() {
+  v_box = gl_InstanceID;
+  gl_Position = u_view_projection * vec4(mix(a_lo, a_hi, a_corner), 1.0);
+}
+)";
+
+constexpr const char* kOcclusionFragmentShader = R"(#version 430 core
+layout(early_fragment_tests) in;
+flat in int v_box;
+layout(std430, binding = 0) buffer Visible { uint visible[]; };
+void main() { visible[v_box] = 1u; }
+)";
+
+// The first batch draw_unoccluded() draws untested; later batches double.
+constexpr std::size_t kFirstUntestedBatch = 64;
+
 struct Vertex {
   float x, y, z;
   Rgba8 color;
@@ -130,6 +155,7 @@ ChunkRenderer::ChunkRenderer(std::unique_ptr<GlContext> context, ChunkRendererPa
       gl_functions_(std::make_unique<GlFunctions>(load_current_functions(context_.get()))),
       gl_(*gl_functions_) {
   build_program();
+  build_occlusion_program();
 }
 
 ChunkRenderer::~ChunkRenderer() {
@@ -138,6 +164,12 @@ ChunkRenderer::~ChunkRenderer() {
     clear_cache();
     release_framebuffer();
     if (program_) gl_.DeleteProgram(program_);
+    if (occlusion_program_) {
+      gl_.DeleteProgram(occlusion_program_);
+      gl_.DeleteVertexArrays(1, &occlusion_vertex_array_);
+      const GLuint buffers[] = {occlusion_corners_, occlusion_indices_, occlusion_boxes_, occlusion_flags_};
+      gl_.DeleteBuffers(4, buffers);
+    }
   } catch (...) {
     // The context goes away with us; its objects go with it.
   }
@@ -157,6 +189,36 @@ void ChunkRenderer::build_program() {
   u_discard_hi_ = gl_.GetUniformLocation(program_, "u_discard_hi");
   u_keep_inside_ = gl_.GetUniformLocation(program_, "u_keep_inside");
   check_gl_error(gl_, "chunk_renderer: build_program");
+}
+
+void ChunkRenderer::build_occlusion_program() {
+  if (!gl_.MemoryBarrier) return;  // no GL 4.3: draw_unoccluded() draws everything
+  occlusion_program_ = build_gl_program(gl_, kOcclusionVertexShader, kOcclusionFragmentShader, "chunk_renderer");
+  u_occlusion_view_projection_ = gl_.GetUniformLocation(occlusion_program_, "u_view_projection");
+  static constexpr float corners[24] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 0, 0, 1, 1, 0, 1, 0, 1, 1, 1, 1, 1};
+  static constexpr std::uint8_t faces[36] = {0, 2, 6, 0, 6, 4, 1, 5, 7, 1, 7, 3, 0, 4, 5, 0, 5, 1,
+                                             2, 3, 7, 2, 7, 6, 0, 1, 3, 0, 3, 2, 4, 6, 7, 4, 7, 5};
+  gl_.GenVertexArrays(1, &occlusion_vertex_array_);
+  gl_.BindVertexArray(occlusion_vertex_array_);
+  GLuint buffers[4] = {0, 0, 0, 0};
+  gl_.GenBuffers(4, buffers);
+  occlusion_corners_ = buffers[0], occlusion_indices_ = buffers[1], occlusion_boxes_ = buffers[2],
+  occlusion_flags_ = buffers[3];
+  gl_.BindBuffer(GL_ARRAY_BUFFER, occlusion_corners_);
+  gl_.BufferData(GL_ARRAY_BUFFER, sizeof corners, corners, GL_STATIC_DRAW);
+  gl_.EnableVertexAttribArray(0);
+  gl_.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 3 * sizeof(float), nullptr);
+  gl_.BindBuffer(GL_ARRAY_BUFFER, occlusion_boxes_);
+  for (GLuint attribute : {1u, 2u}) {
+    gl_.EnableVertexAttribArray(attribute);
+    gl_.VertexAttribPointer(attribute, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
+                            reinterpret_cast<const void*>((attribute - 1) * 3 * sizeof(float)));
+    gl_.VertexAttribDivisor(attribute, 1);
+  }
+  gl_.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, occlusion_indices_);
+  gl_.BufferData(GL_ELEMENT_ARRAY_BUFFER, sizeof faces, faces, GL_STATIC_DRAW);
+  gl_.BindVertexArray(0);
+  check_gl_error(gl_, "chunk_renderer: build_occlusion_program");
 }
 
 void ChunkRenderer::release_framebuffer() {
@@ -349,6 +411,10 @@ void ChunkRenderer::draw(const RenderCamera& camera, const Box3d& discard_box, s
   require_frame("draw");
   make_current();
   set_camera_uniforms(camera, discard_box, clip);
+  draw_ids(camera, ids, load);
+}
+
+void ChunkRenderer::draw_ids(const RenderCamera& camera, std::span<const std::int64_t> ids, const ChunkLoader& load) {
   for (std::int64_t id : ids) {
     auto it = cache_.find(id);
     if (it != cache_.end()) {
@@ -365,6 +431,117 @@ void ChunkRenderer::draw(const RenderCamera& camera, const Box3d& discard_box, s
   }
   gl_.BindVertexArray(0);
   check_gl_error(gl_, "chunk_renderer: draw");
+}
+
+void ChunkRenderer::test_boxes(const RenderCamera& camera, const std::vector<float>& boxes,
+                               std::vector<std::uint32_t>& visible) {
+  const std::size_t n = boxes.size() / 6;
+  visible.assign(n, 0);
+  if (n == 0) return;
+  if (n > occlusion_capacity_) {
+    occlusion_capacity_ = std::max(n, 2 * occlusion_capacity_);
+    gl_.BindBuffer(GL_ARRAY_BUFFER, occlusion_boxes_);
+    gl_.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(occlusion_capacity_ * 6 * sizeof(float)), nullptr,
+                   GL_STREAM_DRAW);
+    gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, occlusion_flags_);
+    gl_.BufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(occlusion_capacity_ * sizeof(std::uint32_t)),
+                   nullptr, GL_STREAM_READ);
+  }
+  gl_.BindBuffer(GL_ARRAY_BUFFER, occlusion_boxes_);
+  gl_.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(boxes.size() * sizeof(float)), boxes.data());
+  gl_.BindBuffer(GL_SHADER_STORAGE_BUFFER, occlusion_flags_);
+  gl_.BufferSubData(GL_SHADER_STORAGE_BUFFER, 0, static_cast<GLsizeiptr>(n * sizeof(std::uint32_t)), visible.data());
+  gl_.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, occlusion_flags_);
+
+  const std::array<float, 16> matrix = camera_view_projection(camera, reversed_z());
+  gl_.UseProgram(occlusion_program_);
+  gl_.UniformMatrix4fv(u_occlusion_view_projection_, 1, GL_FALSE, matrix.data());
+  gl_.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+  gl_.DepthMask(GL_FALSE);
+  gl_.BindVertexArray(occlusion_vertex_array_);
+  gl_.DrawElementsInstanced(GL_TRIANGLES, 36, GL_UNSIGNED_BYTE, nullptr, static_cast<GLsizei>(n));
+  gl_.BindVertexArray(0);
+  gl_.MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+  gl_.Finish();
+  gl_.GetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, static_cast<GLsizeiptr>(n * sizeof(std::uint32_t)),
+                       visible.data());
+  gl_.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  gl_.DepthMask(GL_TRUE);
+  gl_.UseProgram(program_);
+  stats_.occlusion_tests += n;
+  check_gl_error(gl_, "chunk_renderer: occlusion test");
+}
+
+void ChunkRenderer::draw_unoccluded(const RenderCamera& camera, const Box3d& discard_box,
+                                    std::span<const ChunkRef> chunks, const ChunkLoader& load) {
+  require_frame("draw_unoccluded");
+  make_current();
+  set_camera_uniforms(camera, discard_box, BoxClip::discard_inside);
+  std::vector<std::int64_t> ids;
+  ids.reserve(chunks.size());
+  if (!occlusion_culling()) {
+    for (const ChunkRef& c : chunks) ids.push_back(c.id);
+    draw_ids(camera, ids, load);
+    check_gl_error(gl_, "chunk_renderer: draw_unoccluded");
+    return;
+  }
+  std::vector<ChunkRef> pending(chunks.begin(), chunks.end());
+  std::vector<ChunkRef> kept, tested;
+  std::vector<float> boxes;
+  std::vector<std::uint32_t> visible;
+  std::size_t batch = kFirstUntestedBatch;
+  while (!pending.empty()) {
+    const std::size_t count = std::min(batch, pending.size());
+    ids.clear();
+    for (std::size_t i = 0; i < count; ++i) ids.push_back(pending[i].id);
+    draw_ids(camera, ids, load);
+    pending.erase(pending.begin(), pending.begin() + static_cast<std::ptrdiff_t>(count));
+    batch *= 2;
+    if (pending.empty()) break;
+
+    // Boxes relative to the eye, enlarged by a margin ~1000x float rounding of
+    // their coordinates so that rounding in rasterising box and chunk alike
+    // cannot put a chunk fragment in front of its box.
+    kept.clear();
+    tested.clear();
+    boxes.clear();
+    for (const ChunkRef& c : pending) {
+      Vec3d lo = c.bounds.lo - camera.eye, hi = c.bounds.hi - camera.eye;
+      double scale = 0;
+      for (int k = 0; k < 3; ++k) scale = std::max({scale, std::abs(lo[k]), std::abs(hi[k])});
+      const double margin = 1e-4 * scale + 1e-6;
+      lo = lo - Vec3d{margin, margin, margin};
+      hi = hi + Vec3d{margin, margin, margin};
+      double nearest = 0;  // smallest forward distance over the box
+      for (int k = 0; k < 3; ++k) nearest += camera.forward[k] * (camera.forward[k] >= 0 ? lo[k] : hi[k]);
+      if (nearest <= 2 * camera.near_plane) {
+        kept.push_back(c);  // the near plane would clip the box open: never cull
+        continue;
+      }
+      tested.push_back(c);
+      for (const Vec3d& p : {lo, hi})
+        for (int k = 0; k < 3; ++k) boxes.push_back(static_cast<float>(p[k]));
+    }
+    if (tested.empty()) continue;
+    test_boxes(camera, boxes, visible);
+    // Keep the draw order: merge the untested and visible chunks back by position.
+    std::vector<ChunkRef> next;
+    next.reserve(pending.size());
+    std::size_t ti = 0, ki = 0;
+    for (const ChunkRef& c : pending) {
+      if (ki < kept.size() && kept[ki].id == c.id) {
+        next.push_back(c);
+        ++ki;
+      } else if (visible[ti++]) {
+        next.push_back(c);
+      } else {
+        ++stats_.chunks_occluded;
+      }
+    }
+    pending = std::move(next);
+  }
+  gl_.BindVertexArray(0);
+  check_gl_error(gl_, "chunk_renderer: draw_unoccluded");
 }
 
 void ChunkRenderer::draw(const RenderCamera& camera, const Box3d& discard_box,

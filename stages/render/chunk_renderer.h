@@ -25,6 +25,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "stages/chunk_source.h"
 #include "stages/geometry.h"
 #include "stages/render/gl_context.h"
 
@@ -72,6 +73,8 @@ struct ChunkRendererStats {
   std::uint64_t evictions = 0;  // chunks evicted by the cache cap
   std::uint64_t chunks_drawn = 0;
   std::uint64_t triangles_drawn = 0;  // submitted, before clipping and discard
+  std::uint64_t chunks_occluded = 0;  // skipped by draw_unoccluded() as hidden
+  std::uint64_t occlusion_tests = 0;  // bounding boxes tested by draw_unoccluded()
   std::size_t cached_chunks = 0;
   std::size_t cached_bytes = 0;
 };
@@ -113,7 +116,22 @@ class ChunkRenderer {
   // one per position) naming its id.
   void draw(const RenderCamera& camera, const Box3d& discard_box, std::span<const std::int64_t> ids,
             const ChunkLoader& load, BoxClip clip = BoxClip::discard_inside);
-  // Same, for chunks the caller already holds (uploaded unless cached).
+  // Draws the same image as draw() with the chunks of `chunks` in the given
+  // order, except where two surfaces tie exactly in depth, while skipping
+  // chunks that are provably hidden. Pass them nearest first: after drawing a
+  // batch, the bounds of every chunk not yet drawn (enlarged by a margin
+  // far above float rounding) are depth-tested against what is drawn so far
+  // (one instanced draw, early fragment tests, no colour or depth writes), and
+  // a chunk none of whose box samples passes is dropped for good: every
+  // fragment of it lies behind its box and the depth buffer only ever gets
+  // nearer. Boxes that reach the near plane are never tested. Falls back to
+  // drawing everything where the context lacks GL 4.3. Loads only chunks it
+  // draws. Deterministic for the same inputs, renderer settings and Mesa.
+  void draw_unoccluded(const RenderCamera& camera, const Box3d& discard_box, std::span<const ChunkRef> chunks,
+                       const ChunkLoader& load);
+  // True when draw_unoccluded() can skip hidden chunks (GL 4.3 available).
+  bool occlusion_culling() const { return occlusion_program_ != 0; }
+  // Same as draw(), for chunks the caller already holds (uploaded unless cached).
   void draw(const RenderCamera& camera, const Box3d& discard_box,
             std::span<const std::shared_ptr<const Chunk>> chunks, BoxClip clip = BoxClip::discard_inside);
   // Reads the frame back, row-major with row 0 at the top: RGBA8 colour and
@@ -144,6 +162,11 @@ class ChunkRenderer {
   void release(CachedChunk& entry);
   void set_camera_uniforms(const RenderCamera& camera, const Box3d& discard_box, BoxClip clip);
   void draw_cached(const CachedChunk& entry, const Vec3d& eye);
+  void draw_ids(const RenderCamera& camera, std::span<const std::int64_t> ids, const ChunkLoader& load);
+  void build_occlusion_program();
+  // Which of `boxes` (eye-relative lo/hi pairs) have a sample passing the depth
+  // test of the current frame; one flag (0 or 1) per box.
+  void test_boxes(const RenderCamera& camera, const std::vector<float>& boxes, std::vector<std::uint32_t>& visible);
   void require_frame(const char* what) const;
 
   std::unique_ptr<GlContext> context_;  // first member: destroyed last
@@ -159,6 +182,11 @@ class ChunkRenderer {
   std::list<std::int64_t> lru_;
   std::size_t cached_bytes_ = 0;
   ChunkRendererStats stats_;
+  unsigned occlusion_program_ = 0;  // 0: occlusion culling unavailable
+  int u_occlusion_view_projection_ = -1;
+  unsigned occlusion_vertex_array_ = 0, occlusion_corners_ = 0, occlusion_indices_ = 0, occlusion_boxes_ = 0,
+           occlusion_flags_ = 0;
+  std::size_t occlusion_capacity_ = 0;  // boxes the instance and flag buffers hold
   std::vector<float> readback_depth_;
   std::vector<Rgba8> readback_color_;
 };

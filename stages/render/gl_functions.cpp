@@ -39,6 +39,8 @@ GlFunctions load_gl_functions(const GlContext& context) {
                              std::to_string(major) + "." + std::to_string(minor));
   if (major > 4 || (major == 4 && minor >= 5) || has_extension(gl, "GL_ARB_clip_control"))
     gl.ClipControl = reinterpret_cast<PFNGLCLIPCONTROLPROC>(context.get_proc_address("glClipControl"));
+  if (major > 4 || (major == 4 && minor >= 3))
+    gl.MemoryBarrier = reinterpret_cast<PFNGLMEMORYBARRIERPROC>(context.get_proc_address("glMemoryBarrier"));
   check_gl_error(gl, "load_gl_functions");
   return gl;
 }

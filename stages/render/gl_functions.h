@@ -71,7 +71,13 @@ namespace cellbake {
   X(PFNGLTEXIMAGE2DPROC, TexImage2D, "glTexImage2D")                                    \
   X(PFNGLTEXPARAMETERIPROC, TexParameteri, "glTexParameteri")                           \
   X(PFNGLPOLYGONMODEPROC, PolygonMode, "glPolygonMode")                                 \
-  X(PFNGLBLITFRAMEBUFFERPROC, BlitFramebuffer, "glBlitFramebuffer")
+  X(PFNGLBLITFRAMEBUFFERPROC, BlitFramebuffer, "glBlitFramebuffer")                   \
+  X(PFNGLCOLORMASKPROC, ColorMask, "glColorMask")                                       \
+  X(PFNGLDRAWELEMENTSINSTANCEDPROC, DrawElementsInstanced, "glDrawElementsInstanced")   \
+  X(PFNGLVERTEXATTRIBDIVISORPROC, VertexAttribDivisor, "glVertexAttribDivisor")         \
+  X(PFNGLBINDBUFFERBASEPROC, BindBufferBase, "glBindBufferBase")                        \
+  X(PFNGLBUFFERSUBDATAPROC, BufferSubData, "glBufferSubData")                           \
+  X(PFNGLGETBUFFERSUBDATAPROC, GetBufferSubData, "glGetBufferSubData")
 
 struct GlFunctions {
 #define CELLBAKE_GL_MEMBER(type, member, name) type member = nullptr;
@@ -79,12 +85,16 @@ struct GlFunctions {
 #undef CELLBAKE_GL_MEMBER
   // Optional (GL 4.5 / GL_ARB_clip_control): nullptr when the context lacks it.
   PFNGLCLIPCONTROLPROC ClipControl = nullptr;
+  // Optional (GL 4.3: shader storage buffers and early fragment tests, used by
+  // ChunkRenderer's occlusion culling): nullptr when the context lacks GL 4.3.
+  PFNGLMEMORYBARRIERPROC MemoryBarrier = nullptr;
 };
 
 // Fetches every entry point through `context`'s get-proc-address. Throws
 // std::runtime_error naming the first missing required function. Optional
 // functions are left nullptr when absent (ClipControl is kept only when the
-// context reports GL 4.5+ or GL_ARB_clip_control; `context` must be current).
+// context reports GL 4.5+ or GL_ARB_clip_control, MemoryBarrier only on GL 4.3+;
+// `context` must be current).
 GlFunctions load_gl_functions(const GlContext& context);
 
 // Throws std::runtime_error naming `what` and the GL error code when glGetError
