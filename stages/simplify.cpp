@@ -589,22 +589,23 @@ SimplifyResult simplify_face_mesh(const FaceMesh& in, int face_size, const Simpl
   double eps = params.depth_error_relative;
   std::vector<std::uint32_t> tris;
   std::optional<FaceOutlines> traced;
+  std::optional<FaceRegions> regions;
   if (face_size < 4) {
     tris = dense_triangles(in);  // too small to simplify
   } else {
-    const FaceRegions regions = label_face_regions(grid);
+    regions = label_face_regions(grid);
     std::vector<FixedSegment> fixed;
     for (const BorderPiece& p : split_face_border(in, grid, params.depth_error_relative)) {
       if (!p.covered) continue;
       const auto a = border_point(p.side, p.a, face_size), b = border_point(p.side, p.b, face_size);
       fixed.push_back({{a[0], a[1]}, {b[0], b[1]}});
     }
-    traced = trace_face_outlines(grid, regions);
+    traced = trace_face_outlines(grid, *regions);
     const double ceiling = eps * params.max_depth_error_factor;
     auto simplifier = [&](double outline_depth_error) {
       FaceOutlines outlines = *traced;
       straighten_face_outlines(outlines, fixed, params.boundary_error_px, outline_depth_error, face_size);
-      return std::make_unique<TinSimplifier>(grid, regions, std::move(outlines), fixed, eps, params.max_triangles,
+      return std::make_unique<TinSimplifier>(grid, *regions, std::move(outlines), fixed, eps, params.max_triangles,
                                              ceiling);
     };
     auto tin = simplifier(eps);
@@ -619,7 +620,7 @@ SimplifyResult simplify_face_mesh(const FaceMesh& in, int face_size, const Simpl
   result.depth_error_bound_used = eps;
   result.cap_forced_larger_error = eps > params.depth_error_relative;
   result.achieved = face_size < 4 ? measure_simplification_error(in, result.mesh, face_size)
-                                  : measure_simplification_error(grid, *traced, result.mesh);
+                                  : measure_simplification_error(in, grid, *regions, *traced, result.mesh);
   return result;
 }
 

@@ -159,21 +159,52 @@ std::vector<Segment2> boundary_edges(const FaceMesh& mesh, int n, bool skip_face
   return out;
 }
 
+// Per simplified vertex: the region of the dense vertex it copies (same
+// lattice point, bit-identical position), or -1 when it copies none or that
+// vertex is shared by pixels of several regions.
+std::vector<std::int32_t> simplified_vertex_regions(const FaceMesh& dense, const FaceGrid& grid,
+                                                    const FaceRegions& regions, const FaceMesh& simplified) {
+  const int n = grid.size;
+  std::vector<std::int32_t> dense_region(dense.positions.size(), -2);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      if (!grid.covered(i, j)) continue;
+      const std::int32_t l = regions.label[std::size_t(j) * n + i];
+      for (std::uint32_t v : grid.corner_vertex[std::size_t(j) * n + i])
+        dense_region[v] = dense_region[v] == -2 || dense_region[v] == l ? l : -1;
+    }
+  std::vector<std::int32_t> out(simplified.positions.size(), -1);
+  for (std::size_t v = 0; v < out.size(); ++v) {
+    const int x = int(std::lround(double(simplified.uvs[v].u) * n)), y = int(std::lround(double(simplified.uvs[v].v) * n));
+    const Vec3f p = simplified.positions[v];
+    for (int j = y - 1; j <= y && out[v] < 0; ++j)
+      for (int i = x - 1; i <= x && out[v] < 0; ++i) {
+        if (i < 0 || j < 0 || i >= n || j >= n || !grid.covered(i, j)) continue;
+        const std::uint32_t d = grid.vertex(i, j, x, y);
+        const Vec3f q = dense.positions[d];
+        if (q.x == p.x && q.y == p.y && q.z == p.z && dense_region[d] >= 0) out[v] = dense_region[d];
+      }
+  }
+  return out;
+}
+
 }  // namespace
 
 SimplifyError measure_simplification_error(const FaceMesh& dense, const FaceMesh& simplified, int face_size) {
   const FaceGrid grid = read_face_grid(dense, face_size);
-  return measure_simplification_error(grid, trace_face_outlines(grid, label_face_regions(grid)), simplified);
+  const FaceRegions regions = label_face_regions(grid);
+  return measure_simplification_error(dense, grid, regions, trace_face_outlines(grid, regions), simplified);
 }
 
-SimplifyError measure_simplification_error(const FaceGrid& grid, const FaceOutlines& outlines,
-                                           const FaceMesh& simplified) {
+SimplifyError measure_simplification_error(const FaceMesh& dense, const FaceGrid& grid, const FaceRegions& regions,
+                                           const FaceOutlines& outlines, const FaceMesh& simplified) {
   const int n = grid.size;
   std::vector<ScreenVertex> sv(simplified.positions.size());
   for (std::size_t v = 0; v < sv.size(); ++v) {
     const double x = double(simplified.uvs[v].u) * n, y = double(simplified.uvs[v].v) * n;
     sv[v] = {x, y, inverse_planar_depth(simplified.positions[v], x, y, n)};
   }
+  const std::vector<std::int32_t> vertex_region = simplified_vertex_regions(dense, grid, regions, simplified);
   SimplifyError err;
   // Per sample: how many simplified triangles cover it.
   std::vector<std::uint8_t> hits(std::size_t(n) * n * 4, 0);
@@ -184,6 +215,10 @@ SimplifyError measure_simplification_error(const FaceGrid& grid, const FaceOutli
     const ScreenVertex& c = sv[simplified.indices[3 * t + 2]];
     const double orient = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
     if (orient == 0 || (orient > 0 ? 1 : -1) != grid.orientation) ++err.flipped_triangles;
+    // The surface region the triangle stands for (-1: none or several).
+    std::int32_t region = vertex_region[simplified.indices[3 * t]];
+    for (int k = 1; k < 3; ++k)
+      if (vertex_region[simplified.indices[3 * t + k]] != region) region = -1;
     if (orient == 0) continue;
     // Plane w = alpha x + beta y + gamma through the three vertices.
     const double alpha = ((b.w - a.w) * (c.y - a.y) - (c.w - a.w) * (b.y - a.y)) / orient;
@@ -215,6 +250,9 @@ SimplifyError measure_simplification_error(const FaceGrid& grid, const FaceOutli
             if (hits[s] < 255) ++hits[s];
             if (!grid.covered(i, j)) continue;
             if (outlines.on_outline[std::size_t(j + dy) * (n + 1) + i + dx]) continue;
+            // Another surface moved over this pixel by a displaced outline:
+            // a coverage change (measured above), not a depth error.
+            if (region >= 0 && regions.label[std::size_t(j) * n + i] != region) continue;
             // The surface on the vertex's own eye ray: only a triangle holding the vertex.
             if (!contains(a, b, c, orient, i + dx, j + dy)) continue;
             const std::uint32_t v = grid.vertex(i, j, i + dx, j + dy);

@@ -19,8 +19,10 @@ struct SimplifyError {
   // the simplified triangles that hold the vertex and cover a coverage sample
   // of a pixel next to it). Vertices on
   // an outline (a silhouette, skin or coverage edge inside the face) are left
-  // out: an outline may move (max_boundary_error_px), so the surface on its
-  // other side may legitimately cover them.
+  // out, and so are pixels a triangle of another surface region covers: an
+  // outline may move (max_boundary_error_px), so the surface on its other
+  // side may legitimately cover them (a triangle is of a region when its
+  // three vertices copy dense vertices of that region only).
   double max_depth_error_relative = 0;
   // Screen-space Hausdorff distance, in pixels, between the dense mesh's
   // outlines and the simplified mesh's boundary edges (edges of one triangle)
@@ -46,9 +48,9 @@ struct SimplifyError {
 // std::invalid_argument when `dense` is not a pixel-grid mesh.
 SimplifyError measure_simplification_error(const FaceMesh& dense, const FaceMesh& simplified, int face_size);
 
-// The same measurement from the dense mesh's grid and its traced (not
+// The same measurement from the dense mesh's grid, regions and traced (not
 // straightened) outlines, as simplify_face_mesh already holds them.
-SimplifyError measure_simplification_error(const FaceGrid& grid, const FaceOutlines& outlines,
-                                           const FaceMesh& simplified);
+SimplifyError measure_simplification_error(const FaceMesh& dense, const FaceGrid& grid, const FaceRegions& regions,
+                                           const FaceOutlines& outlines, const FaceMesh& simplified);
 
 }  // namespace cellbake

@@ -266,6 +266,54 @@ TEST(Simplify, TinyIslandsKeepTheirOwnTrianglesWithinHalfAPixel) {
   EXPECT_LT(r.achieved.uncovered_samples + r.achieved.spurious_samples, std::size_t(n) * n / 20);
 }
 
+// Random boxes and pipes around the eye (seeded), inside a room for most seeds.
+AnalyticScene random_clutter(int seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-20, 20), s(0.05, 3), r(0.02, 0.6);
+  AnalyticScene scene;
+  if (seed % 3) scene.boxes.push_back(Box3d::cube({0, 0, 0}, 25.0));
+  for (int k = 0; k < 5 + seed % 40; ++k) {
+    const Vec3d c{u(rng), u(rng), u(rng)};
+    if (std::abs(c.x) < 2 && std::abs(c.y) < 2 && std::abs(c.z) < 2) continue;
+    scene.boxes.push_back({c, {c.x + s(rng), c.y + s(rng), c.z + s(rng)}});
+  }
+  for (int k = 0; k < seed % 30; ++k) {
+    const double x = u(rng), y = u(rng), z0 = u(rng), z1 = u(rng);
+    if (std::abs(x) < 1.5 && std::abs(y) < 1.5) continue;
+    scene.cylinders.push_back({x, y, r(rng), std::min(z0, z1), std::max(z0, z1)});
+  }
+  return scene;
+}
+
+TEST(Simplify, RandomClutterKeepsEveryBoundAtLooseAndExactOutlines) {
+  // Seeds that once exposed a loose outline tolerance (1.5 px) counting the
+  // surface moved over a pixel as a depth error, a tight cap, exact outlines.
+  struct Case {
+    int seed;
+    double boundary_px;
+    std::size_t cap;
+  };
+  for (const Case c : {Case{31, 1.5, 10000}, Case{17, 1.5, 300}, Case{73, 1.5, 10000}, Case{12, 0, 10000},
+                       Case{9, 0.5, 300}}) {
+    const int n = c.seed % 2 ? 128 : 96;
+    const auto dense = build_depth_meshes(raycast_analytic_scene(random_clutter(c.seed), {0.1, -0.2, 0.3}, n),
+                                          DepthMeshParams{});
+    SimplifyParams params;
+    params.boundary_error_px = c.boundary_px;
+    params.max_triangles = c.cap;
+    for (int f = 0; f < kCubeFaces; ++f) {
+      const SimplifyResult r = simplify_face_mesh(dense[f], n, params);
+      EXPECT_LE(r.achieved.max_depth_error_relative, r.depth_error_bound_used * (1 + 1e-6) + 1e-7)
+          << "seed " << c.seed << " face " << f;
+      EXPECT_LE(r.depth_error_bound_used, params.depth_error_relative * params.max_depth_error_factor + 1e-12);
+      // uv rounding at 96 px (k / 96 is not a float) shows as ~1e-5 px.
+      EXPECT_LE(r.achieved.max_boundary_error_px, c.boundary_px + 1e-4) << "seed " << c.seed << " face " << f;
+      EXPECT_EQ(r.achieved.flipped_triangles, 0u) << "seed " << c.seed << " face " << f;
+      EXPECT_EQ(r.achieved.overlapping_samples, 0u) << "seed " << c.seed << " face " << f;
+    }
+  }
+}
+
 TEST(Simplify, RejectsMeshesThatAreNotPixelGrids) {
   FaceMesh m;
   m.positions = {{1, 0, 0}, {1, 1, 0}, {1, 0, 1}};
