@@ -215,10 +215,18 @@ SimplifyError measure_simplification_error(const FaceMesh& dense, const FaceGrid
     const ScreenVertex& c = sv[simplified.indices[3 * t + 2]];
     const double orient = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
     if (orient == 0 || (orient > 0 ? 1 : -1) != grid.orientation) ++err.flipped_triangles;
-    // The surface region the triangle stands for (-1: none or several).
-    std::int32_t region = vertex_region[simplified.indices[3 * t]];
-    for (int k = 1; k < 3; ++k)
-      if (vertex_region[simplified.indices[3 * t + k]] != region) region = -1;
+    // The surface region the triangle stands for: the one region of its
+    // vertices that belong to a single region (-1: none, or they disagree).
+    std::int32_t region = -1;
+    for (int k = 0; k < 3; ++k) {
+      const std::int32_t r = vertex_region[simplified.indices[3 * t + k]];
+      if (r < 0) continue;
+      if (region >= 0 && r != region) {
+        region = -1;
+        break;
+      }
+      region = r;
+    }
     if (orient == 0) continue;
     // Plane w = alpha x + beta y + gamma through the three vertices.
     const double alpha = ((b.w - a.w) * (c.y - a.y) - (c.w - a.w) * (b.y - a.y)) / orient;

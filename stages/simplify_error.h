@@ -21,8 +21,8 @@ struct SimplifyError {
   // an outline (a silhouette, skin or coverage edge inside the face) are left
   // out, and so are pixels a triangle of another surface region covers: an
   // outline may move (max_boundary_error_px), so the surface on its other
-  // side may legitimately cover them (a triangle is of a region when its
-  // three vertices copy dense vertices of that region only).
+  // side may legitimately cover them (a triangle is of a region when those
+  // of its vertices that copy a dense vertex of a single region all name it).
   double max_depth_error_relative = 0;
   // Screen-space Hausdorff distance, in pixels, between the dense mesh's
   // outlines and the simplified mesh's boundary edges (edges of one triangle)

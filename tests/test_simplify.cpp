@@ -293,7 +293,7 @@ TEST(Simplify, RandomClutterKeepsEveryBoundAtLooseAndExactOutlines) {
     double boundary_px;
     std::size_t cap;
   };
-  for (const Case c : {Case{31, 1.5, 10000}, Case{17, 1.5, 300}, Case{73, 1.5, 10000}, Case{12, 0, 10000},
+  for (const Case c : {Case{31, 1.5, 10000}, Case{17, 1.5, 300}, Case{73, 1.5, 10000}, Case{941, 1.5, 300}, Case{12, 0, 10000},
                        Case{9, 0.5, 300}}) {
     const int n = c.seed % 2 ? 128 : 96;
     const auto dense = build_depth_meshes(raycast_analytic_scene(random_clutter(c.seed), {0.1, -0.2, 0.3}, n),
