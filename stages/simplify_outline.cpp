@@ -350,7 +350,7 @@ FaceOutlines trace_face_outlines(const FaceGrid& g, const FaceRegions& regions) 
       step = next;
     }
     c.kept.assign(c.points.size(), 0);
-    c.kept.front() = c.kept.back() = 1;
+    if (!c.kept.empty()) c.kept.front() = c.kept.back() = 1;  // a chain has at least its start point
     return c;
   };
   for (int y = 0; y <= n; ++y)
