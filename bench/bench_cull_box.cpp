@@ -6,12 +6,15 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <memory>
 #include <random>
 #include <vector>
 
+#include "bench/bench_store_eyes.h"
 #include "stages/cull_box.h"
 #include "stages/encode.h"
+#include "storage/geometry_store.h"
 #include "tests/fixture_memory_chunk_source.h"
 
 namespace cellbake {
@@ -147,6 +150,46 @@ void BM_CullBoxPerCell(benchmark::State& state) {
   state.SetItemsProcessed(cells);
 }
 BENCHMARK(BM_CullBoxPerCell)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
+// The same search on a real geometry store (CELLBAKE_BENCH_STORE; eyes from
+// CELLBAKE_BENCH_EYES, see bench_store_eyes.h), 4 m cells, budget 100 k.
+// Arg 1: warm (one store for all passes, its chunk cache filled by an untimed
+// pass, as on a worker that baked neighbours); arg 0: cold (a fresh store per
+// pass: every chunk the search cuts is read and decoded).
+void BM_CullBoxStore(benchmark::State& state) {
+  const char* path = std::getenv("CELLBAKE_BENCH_STORE");
+  if (!path) {
+    state.SkipWithError("CELLBAKE_BENCH_STORE is not set");
+    return;
+  }
+  const bool warm = state.range(0) != 0;
+  auto store = std::make_unique<GeometryStore>(path);
+  const std::vector<Vec3d> eyes = bench_eyes(store->model_bounds());
+  CullBoxParams params;
+  params.triangle_budget = 100000;
+  params.min_half_size = 2.0;
+  if (warm)
+    for (const Vec3d& eye : eyes) find_cull_box(eye, params, *store);
+  double loaded = 0, queried = 0;
+  for (auto _ : state) {
+    if (!warm) {
+      state.PauseTiming();
+      store = std::make_unique<GeometryStore>(path);
+      state.ResumeTiming();
+    }
+    for (const Vec3d& eye : eyes) {
+      const CullBoxResult r = find_cull_box(eye, params, *store);
+      loaded += static_cast<double>(r.chunks_loaded);
+      queried += static_cast<double>(r.chunks_queried);
+    }
+  }
+  const double cells = static_cast<double>(state.iterations() * eyes.size());
+  state.counters["cells"] = static_cast<double>(eyes.size());
+  state.counters["ms_per_cell"] = benchmark::Counter(cells / 1e3, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["chunks_loaded_per_cell"] = loaded / cells;
+  state.counters["chunks_queried_per_cell"] = queried / cells;
+}
+BENCHMARK(BM_CullBoxStore)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime()->Iterations(3);
 
 // A 512 x 512 face that looks like a render: shaded gradients, hard edges, sky.
 std::vector<Rgba8> face_image() {

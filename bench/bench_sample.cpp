@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_store_eyes.h"
 #include "stages/render/chunk_renderer.h"
 #include "stages/render/gl_context.h"
 #include "stages/cull_box.h"
@@ -115,27 +116,6 @@ void BM_SampleCubeCold(benchmark::State& state) {
   state.counters["tris_drawn_per_cube"] = static_cast<double>(triangles) / static_cast<double>(state.iterations());
 }
 BENCHMARK(BM_SampleCubeCold)->Arg(512)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
-
-// Eye positions from CELLBAKE_BENCH_EYES ("x,y,z;x,y,z;..."), or 8 points
-// along the x midline of `model` at a quarter of its z extent.
-std::vector<Vec3d> bench_eyes(const Box3d& model) {
-  std::vector<Vec3d> eyes;
-  if (const char* text = std::getenv("CELLBAKE_BENCH_EYES")) {
-    std::stringstream points(text);
-    std::string point;
-    while (std::getline(points, point, ';')) {
-      Vec3d e;
-      char comma = 0;
-      std::stringstream(point) >> e.x >> comma >> e.y >> comma >> e.z;
-      eyes.push_back(e);
-    }
-    return eyes;
-  }
-  for (int i = 0; i < 8; ++i)
-    eyes.push_back({model.lo.x + (model.hi.x - model.lo.x) * (i + 0.5) / 8, model.center().y,
-                    model.lo.z + 0.25 * (model.hi.z - model.lo.z)});
-  return eyes;
-}
 
 void BM_SampleStore(benchmark::State& state) {
   const char* path = std::getenv("CELLBAKE_BENCH_STORE");
