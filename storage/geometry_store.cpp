@@ -135,7 +135,11 @@ struct GeometryStore::Connection {
               "WHERE r.max_x >= ?1 AND r.min_x <= ?2 AND r.max_y >= ?3 AND r.min_y <= ?4 "
               "AND r.max_z >= ?5 AND r.min_z <= ?6 ORDER BY c.id"),
         load(db, "SELECT origin_x, origin_y, origin_z, min_x, min_y, min_z, max_x, max_y, max_z, geometry "
-                 "FROM chunks WHERE id = ?") {}
+                 "FROM chunks WHERE id = ?") {
+    // Map the file (no read syscall per page) and keep a page cache that holds
+    // the index and the chunk rows a bake's neighbourhood of cells touches.
+    db.exec("PRAGMA mmap_size=4294967296; PRAGMA cache_size=-65536;");
+  }
   SqliteDb db;
   SqliteStatement query;
   SqliteStatement load;
