@@ -42,7 +42,9 @@ TEST(Chunking, EveryTriangleInExactlyOneChunkWithinSize) {
     covered = r.end;
     for (std::size_t k = r.begin; k < r.end; ++k) {
       ++seen[keys[k].index];
-      if (k > r.begin) EXPECT_LT(keys[k - 1].index, keys[k].index);
+      if (k > r.begin) {
+        EXPECT_LT(keys[k - 1].index, keys[k].index);
+      }
     }
   }
   EXPECT_EQ(covered, tris.size());
