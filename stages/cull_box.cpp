@@ -31,7 +31,7 @@ struct Candidate {
   std::vector<double> lower, upper;
 };
 
-double linf_norm(const Vec3d& v) { return std::max({std::fabs(v.x), std::fabs(v.y), std::fabs(v.z)}); }
+inline double linf_norm(const Vec3d& v) { return std::max(std::max(std::fabs(v.x), std::fabs(v.y)), std::fabs(v.z)); }
 
 // Gap kept below the (budget+1)-th distance d*: 256 ulps of the coordinates'
 // magnitude (see find_cull_box's contract).
@@ -226,7 +226,6 @@ double select_threshold(std::vector<Candidate>& cands, const Vec3d& center, std:
 
     const double probe = bracket_lo + 0.5 * (bracket_hi - bracket_lo);
     std::vector<Item> next;
-    next.reserve(active.size());
     if (any_chunk) {
       // Load the chunks holding the midpoint, or failing that the nearest one.
       std::vector<std::uint32_t> to_load;
@@ -241,6 +240,9 @@ double select_threshold(std::vector<Candidate>& cands, const Vec3d& center, std:
         }
         to_load.push_back(nearest);
       }
+      std::size_t capacity = active.size();
+      for (std::uint32_t ci : to_load) capacity += cands[ci].ref.triangle_count;
+      next.reserve(capacity);
       for (const Item& it : active)
         if (it.triangle != kWholeChunk || std::find(to_load.begin(), to_load.end(), it.cand) == to_load.end())
           next.push_back(it);
@@ -256,6 +258,7 @@ double select_threshold(std::vector<Candidate>& cands, const Vec3d& center, std:
         }
       }
     } else {
+      next.reserve(active.size());
       // Only triangles straddle the bracket: make them exact.
       for (Item it : active) {
         if (it.lo != it.hi) {

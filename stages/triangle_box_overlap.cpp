@@ -84,14 +84,6 @@ inline double edge_gaps(const Vec3d& e, const Vec3d& a, const Vec3d& o) {
 
 }  // namespace
 
-double triangle_box_axes_gap(const Vec3d& v0, const Vec3d& v1, const Vec3d& v2) {
-  double d = 0;
-  d = std::max(d, std::max(std::min(std::min(v0.x, v1.x), v2.x), -std::max(std::max(v0.x, v1.x), v2.x)));
-  d = std::max(d, std::max(std::min(std::min(v0.y, v1.y), v2.y), -std::max(std::max(v0.y, v1.y), v2.y)));
-  d = std::max(d, std::max(std::min(std::min(v0.z, v1.z), v2.z), -std::max(std::max(v0.z, v1.z), v2.z)));
-  return d;
-}
-
 double triangle_linf_distance_relative(const Vec3d& v0, const Vec3d& v1, const Vec3d& v2) {
   double d = triangle_box_axes_gap(v0, v1, v2);
   const Vec3d e0 = v1 - v0, e1 = v2 - v1, e2 = v0 - v2;

@@ -7,6 +7,8 @@
 // products).
 #pragma once
 
+#include <algorithm>
+
 #include "stages/geometry.h"
 
 namespace cellbake {
@@ -39,7 +41,14 @@ double triangle_linf_distance_relative(const Vec3d& v0, const Vec3d& v1, const V
 // A cheap lower bound of triangle_linf_distance_relative: the Chebyshev
 // distance from the point to the triangle's bounding box (the 3 box-face axes
 // alone). Corners relative to the point.
-double triangle_box_axes_gap(const Vec3d& v0, const Vec3d& v1, const Vec3d& v2);
+// Inline: the cull box evaluates it for every triangle of every chunk it loads.
+inline double triangle_box_axes_gap(const Vec3d& v0, const Vec3d& v1, const Vec3d& v2) {
+  double d = 0;
+  d = std::max(d, std::max(std::min(std::min(v0.x, v1.x), v2.x), -std::max(std::max(v0.x, v1.x), v2.x)));
+  d = std::max(d, std::max(std::min(std::min(v0.y, v1.y), v2.y), -std::max(std::max(v0.y, v1.y), v2.y)));
+  d = std::max(d, std::max(std::min(std::min(v0.z, v1.z), v2.z), -std::max(std::max(v0.z, v1.z), v2.z)));
+  return d;
+}
 
 // Chebyshev distance from `point` to the closed box: the smallest h >= 0 such
 // that cube(point, h) touches `box` (0 when the point is inside). Undefined for
