@@ -8,6 +8,7 @@
 // edges and background pixels of the result (from one untimed call with stats).
 #include <benchmark/benchmark.h>
 
+#include "bench/bench_room_scene.h"
 #include "stages/depth_mesh.h"
 #include "stages/depth_mesh_analytic_scene.h"
 
@@ -16,17 +17,6 @@ namespace {
 using namespace cellbake;
 
 constexpr int kSize = 512;
-
-CubeSample room_sample() {
-  AnalyticScene scene;
-  scene.boxes.push_back(Box3d::cube({0, 0, 0}, 30.0));
-  scene.boxes.push_back({{4, -3, -6}, {6, 2, 1}});
-  scene.boxes.push_back({{12, 3, -30}, {14, 9, 4}});
-  scene.boxes.push_back({{20, -12, -8}, {24, -4, 12}});
-  for (int k = 0; k < 6; ++k) scene.cylinders.push_back({7.0 + 3 * k, -8.0 + 3.1 * k, 0.08 + 0.05 * k, -30, 30});
-  scene.cylinders.push_back({9, 5, 1.5, -30, 2});
-  return raycast_analytic_scene(scene, {0.2, 0.1, 0.3}, kSize);
-}
 
 CubeSample open_sample() {
   const Vec3d c{12345.6, -9876.5, 432.1};
@@ -40,7 +30,7 @@ CubeSample open_sample() {
 }
 
 const CubeSample& sample(int scene) {
-  static const CubeSample room = room_sample();
+  static const CubeSample room = bench_room_sample(kSize);
   static const CubeSample open = open_sample();
   return scene == 0 ? room : open;
 }

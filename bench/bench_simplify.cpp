@@ -6,8 +6,8 @@
 // the error each achieved, measured with one ruler
 // (measure_simplification_error): max relative depth error at the dense
 // vertices off outlines, max outline displacement in px, screen-coverage
-// samples lost / gained (4 per pixel), screen-space flipped triangles. Also
-// the cost of build_depth_meshes for all six 512^2 faces of the first scene.
+// samples lost / gained (4 per pixel), screen-space flipped triangles. The
+// cost of build_depth_meshes is in bench_depth_mesh.
 // OpenMesh takes ~10 s per face: it runs one iteration on scene 0 only.
 #include <benchmark/benchmark.h>
 
@@ -18,6 +18,7 @@
 
 #include <cmath>
 
+#include "bench/bench_room_scene.h"
 #include "stages/depth_mesh.h"
 #include "stages/depth_mesh_analytic_scene.h"
 #include "stages/simplify.h"
@@ -29,16 +30,7 @@ using namespace cellbake;
 constexpr int kSize = 512;
 
 const CubeSample& room_sample() {
-  static const CubeSample sample = [] {
-    AnalyticScene scene;
-    scene.boxes.push_back(Box3d::cube({0, 0, 0}, 30.0));
-    scene.boxes.push_back({{4, -3, -6}, {6, 2, 1}});
-    scene.boxes.push_back({{12, 3, -30}, {14, 9, 4}});
-    scene.boxes.push_back({{20, -12, -8}, {24, -4, 12}});
-    for (int k = 0; k < 6; ++k) scene.cylinders.push_back({7.0 + 3 * k, -8.0 + 3.1 * k, 0.08 + 0.05 * k, -30, 30});
-    scene.cylinders.push_back({9, 5, 1.5, -30, 2});
-    return raycast_analytic_scene(scene, {0.2, 0.1, 0.3}, kSize);
-  }();
+  static const CubeSample sample = bench_room_sample(kSize);
   return sample;
 }
 
@@ -85,18 +77,6 @@ std::size_t our_triangle_count(int scene) {
   static const std::array<std::size_t, 2> count{simplify_face_mesh(dense_face(0), kSize, our_params()).triangles_out,
                                                 simplify_face_mesh(dense_face(1), kSize, our_params()).triangles_out};
   return count[scene];
-}
-
-void BM_BuildDepthMeshes(benchmark::State& state) {
-  const CubeSample& sample = room_sample();
-  std::size_t triangles = 0;
-  for (auto _ : state) {
-    const auto meshes = build_depth_meshes(sample, DepthMeshParams{});
-    triangles = 0;
-    for (const FaceMesh& m : meshes) triangles += m.triangle_count();
-    benchmark::DoNotOptimize(triangles);
-  }
-  state.counters["tris"] = double(triangles);
 }
 
 void BM_Ours(benchmark::State& state) {
@@ -174,7 +154,6 @@ void BM_OpenMeshDecimater(benchmark::State& state) {
   report(state, 0, out);
 }
 
-BENCHMARK(BM_BuildDepthMeshes)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Ours)->ArgsProduct({{0, 1}, {0, 1}})->ArgNames({"scene", "capped"})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Meshoptimizer)->ArgsProduct({{0, 1}, {0, 1}})->ArgNames({"scene", "lock_border"})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_OpenMeshDecimater)->Unit(benchmark::kMillisecond)->Iterations(1);
