@@ -99,6 +99,21 @@ const std::map<std::string, Setter>& setters() {
       {"sample.near_plane", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.near_plane = number(n, w, "sample.near_plane", 1e-6, 1e3);
        }},
+      {"samples.initial", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.samples_initial = text(n, w, "samples.initial", {"centre", "corners", "corners+centre"});
+       }},
+      {"samples.void_threshold", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.samples_void_threshold = number(n, w, "samples.void_threshold", 0, 1);
+       }},
+      {"samples.max", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.samples_max = int(integer(n, w, "samples.max", 1, 64));
+       }},
+      {"samples.redundancy_tolerance", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.samples_redundancy_tolerance = number(n, w, "samples.redundancy_tolerance", 0, 0.1);
+       }},
+      {"view.far_budget", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.far_budget = static_cast<std::uint64_t>(integer(n, w, "view.far_budget", 0, std::int64_t(1) << 40));
+       }},
       {"depth_mesh.skin_angle_deg", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.skin_angle_deg = number(n, w, "depth_mesh.skin_angle_deg", 0, 45);
        }},
@@ -240,7 +255,10 @@ std::string describe_bake_config(const BakeConfig& c) {
   o.precision(17);
   o << "up=" << c.up << "\ncells.size=" << c.cell_size << "\nnear.budget=" << c.near_budget
     << "\nsample.face_size=" << c.face_size << "\nsample.supersample=" << c.supersample
-    << "\nsample.near_plane=" << c.near_plane << "\ndepth_mesh.skin_angle_deg=" << c.skin_angle_deg
+    << "\nsample.near_plane=" << c.near_plane << "\nsamples.initial=" << c.samples_initial
+    << "\nsamples.void_threshold=" << c.samples_void_threshold << "\nsamples.max=" << c.samples_max
+    << "\nsamples.redundancy_tolerance=" << c.samples_redundancy_tolerance << "\nview.far_budget=" << c.far_budget
+    << "\ndepth_mesh.skin_angle_deg=" << c.skin_angle_deg
     << "\ndepth_mesh.depth_jump=" << c.depth_jump
     << "\nsimplify.depth_error_relative=" << c.depth_error_relative
     << "\nsimplify.boundary_error_px=" << c.boundary_error_px << "\nsimplify.max_triangles=" << c.max_face_triangles << "\nencode.image_format=" << c.image_format

@@ -35,6 +35,12 @@ struct BakeConfig {
   int supersample = 1;           // render at face_size * supersample, box-filter down
   double near_plane = 0.01;      // model units
 
+  // [samples]: where a cell's panoramic samples go (Wilson 2002 ch. 3, ch. 5)
+  std::string samples_initial = "corners+centre";  // "centre" | "corners" | "corners+centre"
+  double samples_void_threshold = 0.005;  // stop adding samples when the worst candidate's void is below this fraction of the sphere
+  int samples_max = 12;                   // cap on samples per cell (initial set included)
+  double samples_redundancy_tolerance = 5e-5;  // relative inverse-depth agreement for "an ancestor already holds this pixel"
+
   // [depth_mesh]
   double skin_angle_deg = 3.0;   // edges within this angle of the eye ray are skins
   double depth_jump = 0.1;       // relative depth jump beyond which an edge is a skin
@@ -51,6 +57,9 @@ struct BakeConfig {
   std::string image_format = "jpeg";   // jpeg | webp | png
   int image_quality = 85;              // 1..100 (jpeg, webp)
   int position_bits = 16;              // mesh position quantisation per axis
+
+  // [view]: what a viewer (render, verify, cellbake-view) draws; not part of the bake hash
+  std::uint64_t far_budget = 150000;  // far-field triangles: nearest sample + ancestors, then more samples while under this
 
   // [output]
   std::filesystem::path database = "cells.db";

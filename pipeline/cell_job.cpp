@@ -5,7 +5,12 @@
 #include "stages/depth_mesh.h"
 #include "stages/encode.h"
 #include "stages/hashing.h"
+#include "stages/background_fill.h"
 #include "stages/sample.h"
+#include "stages/sample_candidates.h"
+#include "stages/sample_points.h"
+#include "stages/sample_redundancy.h"
+#include "stages/sample_void.h"
 #include "stages/simplify.h"
 
 namespace cellbake {
@@ -40,6 +45,9 @@ CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::str
   Hasher in;
   in.text(h.cull);
   in.text("sample").u64(StageVersions::sample).u64(c.face_size).u64(c.supersample).f64(c.near_plane);
+  in.text("samples").text(c.samples_initial).f64(c.samples_void_threshold).u64(c.samples_max);
+  in.f64(c.samples_redundancy_tolerance);
+  if (cell.region >= 0 && std::size_t(cell.region) < c.regions.size()) hash_box(in, c.regions[std::size_t(cell.region)]);
   in.text("depth_mesh").u64(StageVersions::depth_mesh).f64(c.skin_angle_deg).f64(c.depth_jump);
   in.text("simplify").u64(StageVersions::simplify).f64(c.depth_error_relative).f64(c.boundary_error_px).u64(c.max_face_triangles);
   in.text("encode").u64(StageVersions::encode).text(c.image_format).u64(c.image_quality).u64(c.position_bits);
@@ -56,6 +64,42 @@ void run_cull_box(CellWork& work, const BakeConfig& config, const ChunkSource& s
   work.cull = find_cull_box(work.cell.center(), p, source);
 }
 
+namespace {
+
+// The sample points the best-next-view search may add next (Wilson 2002 ch. 3):
+// Voronoi candidates in the navigable part's plane when it is flat along an
+// axis (a floor slab), else the 27 lattice points of the box (corners, edge
+// and face midpoints, centre) not sampled yet.
+std::vector<Vec3d> next_view_candidates(const Box3d& nav, const std::vector<SampleWork>& samples) {
+  const Vec3d e = nav.extent();
+  int flat = -1;
+  for (int a = 2; a >= 0; --a)
+    if (e[a] <= 1e-9 * (e.x + e.y + e.z + 1)) flat = a;
+  std::vector<Vec3d> out;
+  if (flat >= 0) {
+    const int u = flat == 0 ? 1 : 0, v = flat == 2 ? 1 : 2;
+    std::vector<Vec2d> points;
+    for (const SampleWork& s : samples) points.push_back({s.cube.eye[u], s.cube.eye[v]});
+    for (const Vec2d& c : voronoi_candidates(points, {{nav.lo[u], nav.lo[v]}, {nav.hi[u], nav.hi[v]}})) {
+      Vec3d p = nav.center();
+      p[u] = c.x;
+      p[v] = c.y;
+      out.push_back(p);
+    }
+    return out;
+  }
+  for (int k = 0; k < 27; ++k) {
+    const double f[3] = {0.5 * (k % 3), 0.5 * (k / 3 % 3), 0.5 * (k / 9)};
+    const Vec3d p{nav.lo.x + f[0] * e.x, nav.lo.y + f[1] * e.y, nav.lo.z + f[2] * e.z};
+    bool taken = false;
+    for (const SampleWork& s : samples) taken = taken || s.cube.eye == p;
+    if (!taken) out.push_back(p);
+  }
+  return out;
+}
+
+}  // namespace
+
 void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& source, ChunkRenderer& renderer) {
   StageTimer timer(work, "sample");
   SampleParams p;
@@ -63,15 +107,83 @@ void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& sou
   p.supersample = config.supersample;
   p.near_plane = config.near_plane;
   const Box3d cull_box = Box3d::cube(work.cell.center(), work.cull->half_size);
-  work.sample = sample_cube(work.cell.center(), cull_box, p, source, renderer);
+  Box3d nav = work.cell.bounds;
+  if (work.cell.region >= 0 && std::size_t(work.cell.region) < config.regions.size())
+    nav = navigable_part(work.cell.bounds, config.regions[std::size_t(work.cell.region)]);
+  if (nav.empty()) nav = Box3d::cube(work.cell.center(), 0);
+  std::vector<Vec3d> points = initial_sample_points(nav, parse_initial_samples(config.samples_initial));
+  if (points.size() > std::size_t(config.samples_max)) points.resize(std::size_t(config.samples_max));
+  work.samples.clear();
+  const auto take = [&](const Vec3d& eye) {
+    const auto t0 = Clock::now();
+    SampleWork s;
+    s.cube = sample_cube(eye, cull_box, p, source, renderer);
+    s.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    work.samples.push_back(std::move(s));
+  };
+  for (const Vec3d& eye : points) take(eye);
+  // Best next view: the candidate that sees the most void, while it sees enough.
+  VoidParams vp;
+  vp.max_distance = length(source.model_bounds().extent()) + length(cull_box.extent());
+  while (true) {
+    const auto t0 = Clock::now();
+    const std::vector<Vec3d> candidates = next_view_candidates(nav, work.samples);
+    std::vector<VoidSample> existing;
+    for (const SampleWork& s : work.samples) existing.push_back({&s.cube});
+    double worst = 0;
+    std::optional<Vec3d> next;
+    for (const Vec3d& c : candidates) {
+      const double v = void_fraction(c, existing, vp).fraction;
+      if (v > worst) worst = v, next = c;  // candidates come sorted: ties keep the first
+    }
+    const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    work.seconds["void"] += seconds;
+    work.samples.back().void_after = worst;
+    if (!next || worst < config.samples_void_threshold || work.samples.size() >= std::size_t(config.samples_max)) break;
+    take(*next);
+    work.samples.back().seconds += seconds;
+  }
 }
 
 void run_depth_mesh(CellWork& work, const BakeConfig& config) {
   StageTimer timer(work, "depth_mesh");
+  std::vector<Vec3d> eyes;
+  for (const SampleWork& s : work.samples) eyes.push_back(s.cube.eye);
+  const std::vector<int> parent = sample_dependency_tree(eyes);
+  // Delta scans lose what their ancestors hold. Ancestors are read unmodified,
+  // so samples are reduced deepest first (all of a sample's descendants are
+  // deeper than it).
+  std::vector<std::size_t> order(work.samples.size());
+  std::vector<std::size_t> depth(work.samples.size(), 0);
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    order[i] = i;
+    depth[i] = sample_ancestors(parent, int(i)).size();
+    work.samples[i].parent = parent[i];
+  }
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return depth[a] > depth[b]; });
+  RedundancyParams rp;
+  rp.tolerance = config.samples_redundancy_tolerance;
+  rp.jump = config.depth_jump;
+  {
+    StageTimer redundancy(work, "redundancy");
+    for (std::size_t i : order) {
+      const auto t0 = Clock::now();
+      std::vector<const CubeSample*> ancestors;
+      for (int a : sample_ancestors(parent, int(i))) ancestors.push_back(&work.samples[std::size_t(a)].cube);
+      const RedundancyStats st = remove_redundant_pixels(work.samples[i].cube, ancestors, rp);
+      work.samples[i].covered = st.covered;
+      work.samples[i].removed = st.removed;
+      work.samples[i].seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+    }
+  }
   DepthMeshParams p;
   p.skin_angle_degrees = config.skin_angle_deg;
   p.max_relative_depth_jump = config.depth_jump;
-  work.dense = build_depth_meshes(*work.sample, p);
+  for (SampleWork& s : work.samples) {
+    const auto t0 = Clock::now();
+    s.dense = build_depth_meshes(s.cube, p);
+    s.seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+  }
 }
 
 void run_simplify(CellWork& work, const BakeConfig& config) {
@@ -80,12 +192,16 @@ void run_simplify(CellWork& work, const BakeConfig& config) {
   p.depth_error_relative = config.depth_error_relative;
   p.boundary_error_px = config.boundary_error_px;
   p.max_triangles = static_cast<std::size_t>(config.max_face_triangles);
-  for (int f = 0; f < kCubeFaces; ++f) {
-    SimplifyResult r = simplify_face_mesh(work.dense[f], config.face_size, p);
-    work.simplified[f] = std::move(r.mesh);
-    work.boundary_error_px[f] = r.achieved.max_boundary_error_px;
-    work.depth_error[f] = r.achieved.max_depth_error_relative;
-    work.dense[f] = FaceMesh{};  // release the dense mesh early
+  for (SampleWork& s : work.samples) {
+    const auto t0 = Clock::now();
+    for (int f = 0; f < kCubeFaces; ++f) {
+      SimplifyResult r = simplify_face_mesh(s.dense[f], config.face_size, p);
+      s.simplified[f] = std::move(r.mesh);
+      s.boundary_error_px[f] = r.achieved.max_boundary_error_px;
+      s.depth_error[f] = r.achieved.max_depth_error_relative;
+      s.dense[f] = FaceMesh{};  // release the dense mesh early
+    }
+    s.seconds += std::chrono::duration<double>(Clock::now() - t0).count();
   }
 }
 
@@ -97,29 +213,40 @@ void run_encode(CellWork& work, const BakeConfig& config) {
   MeshEncodeParams mp;
   mp.position_bits = config.position_bits;
   CellRow& row = work.row;
-  SampleRow sample;
-  sample.index = 0;
-  sample.eye = work.sample->eye;
-  sample.parent = -1;
-  for (int f = 0; f < kCubeFaces; ++f) {
-    const CubeFace& face = work.sample->faces[f];
-    FaceRow fr;
-    fr.face = f;
-    fr.image_format = config.image_format;
-    fr.image = encode_image(face.color, face.size, face.size, ip);
-    fr.mesh = encode_face_mesh(work.simplified[f], mp);
-    fr.triangles = static_cast<std::uint32_t>(work.simplified[f].triangle_count());
-    fr.boundary_error_px = work.boundary_error_px[f];
-    fr.depth_error = work.depth_error[f];
-    row.far_triangles += fr.triangles;
-    row.bytes += fr.image.size() + fr.mesh.size();
-    row.max_boundary_error_px = std::max(row.max_boundary_error_px, fr.boundary_error_px);
-    row.max_depth_error = std::max(row.max_depth_error, fr.depth_error);
-    sample.faces.push_back(std::move(fr));
-  }
   row.samples.clear();
-  row.samples.push_back(std::move(sample));
-  work.sample.reset();
+  for (std::size_t i = 0; i < work.samples.size(); ++i) {
+    SampleWork& s = work.samples[i];
+    const auto t0 = Clock::now();
+    SampleRow sample;
+    sample.index = int(i);
+    sample.eye = s.cube.eye;
+    sample.parent = s.parent;
+    sample.void_after = s.void_after;
+    sample.covered_pixels = s.covered;
+    sample.removed_pixels = s.removed;
+    for (int f = 0; f < kCubeFaces; ++f) {
+      CubeFace& face = s.cube.faces[f];
+      fill_background_colors(face);
+      FaceRow fr;
+      fr.face = f;
+      fr.image_format = config.image_format;
+      fr.image = encode_image(face.color, face.size, face.size, ip);
+      fr.mesh = encode_face_mesh(s.simplified[f], mp);
+      fr.triangles = static_cast<std::uint32_t>(s.simplified[f].triangle_count());
+      fr.boundary_error_px = s.boundary_error_px[f];
+      fr.depth_error = s.depth_error[f];
+      row.far_triangles += fr.triangles;
+      row.bytes += fr.image.size() + fr.mesh.size();
+      row.max_boundary_error_px = std::max(row.max_boundary_error_px, fr.boundary_error_px);
+      row.max_depth_error = std::max(row.max_depth_error, fr.depth_error);
+      sample.faces.push_back(std::move(fr));
+      face = CubeFace{};
+    }
+    s.seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+    sample.seconds = s.seconds;
+    row.samples.push_back(std::move(sample));
+  }
+  work.samples.clear();
 }
 
 CellRow finish_cell_row(CellWork& work) {
@@ -154,6 +281,7 @@ CellRow finish_cell_row(CellWork& work) {
   for (const auto& n : row.near_chunks) h.u64(std::uint64_t(n.chunk_id)).u64(n.triangles).u64(n.whole);
   for (const auto& s : row.samples) {
     h.u64(s.index).f64(s.eye.x).f64(s.eye.y).f64(s.eye.z).u64(std::uint64_t(std::int64_t(s.parent)));
+    h.f64(s.void_after).u64(s.covered_pixels).u64(s.removed_pixels);
     for (const auto& f : s.faces) {
       h.u64(f.face).text(f.image_format).bytes(f.image.data(), f.image.size()).u64(f.image.size());
       h.bytes(f.mesh.data(), f.mesh.size()).u64(f.mesh.size());

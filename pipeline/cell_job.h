@@ -28,10 +28,10 @@ class ChunkRenderer;
 // cell that used it is then recomputed on the next bake.
 struct StageVersions {
   static constexpr int cull_box = 1;
-  static constexpr int sample = 2;
-  static constexpr int depth_mesh = 1;
+  static constexpr int sample = 3;      // 3: several samples per cell (initial set + best-next-view)
+  static constexpr int depth_mesh = 2;  // 2: delta scans lose the pixels their ancestors hold
   static constexpr int simplify = 3;
-  static constexpr int encode = 1;
+  static constexpr int encode = 2;      // 2: background texels filled from their covered neighbours
 };
 
 // The stage names, in order, as used in stage_seconds and error messages.
@@ -45,16 +45,26 @@ struct CellHashes {
 // Hashes of what determines a cell's rows (not thread count, shard or timing).
 CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& config, const std::string& store_hash);
 
+// One panoramic sample of a cell in flight: taken by run_sample, reduced to
+// its delta scan and meshed by run_depth_mesh, simplified, encoded.
+struct SampleWork {
+  CubeSample cube;
+  int parent = -1;                        // dependency tree (set by run_depth_mesh)
+  double void_after = -1;                 // worst candidate's void fraction once this sample was taken (-1: not measured)
+  std::uint64_t covered = 0, removed = 0; // pixels with a surface, and of those removed as redundant
+  double seconds = 0;                     // this sample's share of the bake (render + redundancy + mesh + simplify + encode)
+  std::array<FaceMesh, kCubeFaces> dense;
+  std::array<FaceMesh, kCubeFaces> simplified;
+  std::array<double, kCubeFaces> boundary_error_px{};
+  std::array<double, kCubeFaces> depth_error{};
+};
+
 // The work in flight for one cell, passed from stage to stage.
 struct CellWork {
   CellSpec cell;
   CellHashes hashes;
-  std::optional<CullBoxResult> cull;          // set by run_cull_box (or reused)
-  std::optional<CubeSample> sample;           // set by run_sample
-  std::array<FaceMesh, kCubeFaces> dense;     // set by run_depth_mesh
-  std::array<FaceMesh, kCubeFaces> simplified;
-  std::array<double, kCubeFaces> boundary_error_px{};
-  std::array<double, kCubeFaces> depth_error{};
+  std::optional<CullBoxResult> cull;  // set by run_cull_box (or reused)
+  std::vector<SampleWork> samples;    // set by run_sample, in the order taken
   std::map<std::string, double> seconds;
   std::string failed_stage, error;  // set when a stage threw
   CellRow row;                      // filled by run_encode / make_failed_row

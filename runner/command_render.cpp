@@ -11,6 +11,7 @@
 
 #include "runner/commands.h"
 #include "viewer/camera_path.h"
+#include "viewer/sample_selection.h"
 #include "viewer/png_file.h"
 #include "viewer/view_session.h"
 
@@ -77,6 +78,8 @@ void add_render_command(CLI::App& app) {
     double fov = 60, near = 0.05;
     std::int64_t cell = 0;
     bool json = false;
+    std::uint64_t far_budget = SampleSelectionParams{}.far_budget;
+    int max_samples = 0;
   };
   auto opt = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
@@ -94,6 +97,13 @@ void add_render_command(CLI::App& app) {
   cmd->add_option("--out", opt->out, "Output PNG (with --path: the base name of OUT_0000.png ... and OUT.csv)")
       ->required();
   cmd->add_flag("--json", opt->json, "Print the result as JSON");
+  cmd->add_option("--far-budget", opt->far_budget,
+                  "Far-field triangles: the nearest sample with its ancestors, then more samples while under this")
+      ->capture_default_str();
+  cmd->add_option("--max-samples", opt->max_samples,
+                  "At most this many samples (0 = no cap; 1 = the root sample alone: the single-sample far field)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_option("--path", opt->path, "Camera path file: one view per line, \"ex ey ez lx ly lz\"");
   cmd->callback([opt] {
     std::vector<PathView> views;
@@ -111,6 +121,8 @@ void add_render_command(CLI::App& app) {
     request.width = width;
     request.height = height;
     request.near_plane = opt->near;
+    request.samples.far_budget = opt->far_budget;
+    request.samples.max_samples = opt->max_samples;
     if (opt->cell != 0) request.cell = opt->cell;
 
     if (opt->path.empty()) {

@@ -108,7 +108,9 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
   nlohmann::json params{{"views_per_cell", options.views_per_cell}, {"width", options.width},
                         {"height", options.height},                 {"fov_y_deg", options.fov_y_deg},
                         {"near_plane", options.near_plane},         {"seed", options.seed},
-                        {"up", up_name},                            {"store_hash", db.meta("store_hash").value_or("")}};
+                        {"up", up_name},                            {"store_hash", db.meta("store_hash").value_or("")},
+                        {"far_budget", options.far_budget},         {"max_samples", options.max_samples},
+                        {"sample_views", options.sample_views}};
   const std::string params_key = params.dump();
 
   // Selected done cells, in id order.
@@ -163,24 +165,47 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
       const DecodedCell cell = decode_cell(*row);
       const bool flat = row->region >= 0 && row->region < int(regions.size()) &&
                         region_is_flat(regions[row->region], up, cell_size);
-      const auto plans = plan_verify_views(row->bounds, flat, up, options.views_per_cell,
-                                           options.seed * 0x9E3779B97F4A7C15ull + std::uint64_t(task.id));
+      auto plans = plan_verify_views(row->bounds, flat, up, options.views_per_cell,
+                                     options.seed * 0x9E3779B97F4A7C15ull + std::uint64_t(task.id));
+      for (const auto& s : row->samples) {
+        result.void_curve.push_back(s.void_after);
+        result.sample_seconds.push_back(s.seconds);
+      }
+      if (options.sample_views && row->samples.size() > 1) {
+        // Look from each sample point too, along the golden-angle directions the plans use after theirs.
+        const auto extra = plan_verify_views(row->bounds, flat, up, int(plans.size() + row->samples.size()),
+                                             options.seed * 0x9E3779B97F4A7C15ull + std::uint64_t(task.id));
+        for (std::size_t k = 0; k < row->samples.size(); ++k) {
+          VerifyViewPlan plan = extra[plans.size() + k];
+          plan.look = row->samples[k].eye + (plan.look - plan.eye);
+          plan.eye = row->samples[k].eye;
+          plan.kind = VerifyViewKind::sample;
+          plans.push_back(plan);
+        }
+      }
       if (!drawer) {
         SceneDrawerParams dp;
         dp.tdm_cache_bytes = std::size_t{256} << 20;
         drawer = std::make_unique<SceneDrawer>(std::shared_ptr<GlContext>(create_gl_context(GlBackend::osmesa, 1, 1)),
                                                store, dp);
       }
-      const SceneDrawOptions draw_options;
+      SceneDrawOptions draw_options;
+      draw_options.samples.far_budget = options.far_budget;
+      draw_options.samples.max_samples = options.max_samples;
+      SceneDrawOptions root_options = draw_options;
+      root_options.samples.max_samples = 1;
       ViewFrame worst_truth, worst_impostor;
       for (const auto& plan : plans) {
         const RenderCamera camera = look_at_camera(plan.eye, plan.look, up, options.fov_y_deg, options.width,
                                                    options.height, options.near_plane);
-        ViewFrame impostor, truth;
+        ViewFrame impostor, truth, root;
         VerifyViewResult v;
         try {
           drawer->draw_impostor(camera, options.width, options.height, cell, draw_options, impostor);  // uploads
           const SceneFrameStats is = drawer->draw_impostor(camera, options.width, options.height, cell, draw_options, impostor);
+          if (cell.samples.size() > 1)
+            drawer->draw_impostor(camera, options.width, options.height, cell, root_options, root);
+          v.samples_drawn = is.samples_drawn;
           drawer->draw_truth(camera, options.width, options.height, draw_options, truth);  // uploads
           const SceneFrameStats ts = drawer->draw_truth(camera, options.width, options.height, draw_options, truth);
           drawer->release_context();
@@ -193,6 +218,9 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
           throw;
         }
         const ImageMetrics m = compare_frames(impostor, truth);
+        const ImageMetrics mr = cell.samples.size() > 1 ? compare_frames(root, truth) : m;
+        v.psnr_db_root = mr.psnr_db;
+        v.hole_fraction_root = mr.hole_fraction;
         v.kind = plan.kind;
         v.eye = plan.eye;
         v.look = plan.look;

@@ -24,6 +24,11 @@ struct VerifyOptions {
   int worst_views = 8;             // triptychs shown in the report
   std::filesystem::path store;     // geometry store override ("" = the database's meta `store`)
   bool quiet = false;              // no progress output
+  // Far field drawn per view (viewer/sample_selection.h); every view is also
+  // drawn with the root sample alone for the 1-sample columns.
+  std::uint64_t far_budget = 150000;
+  int max_samples = 0;             // 0 = as many as the budget allows
+  bool sample_views = true;        // also look from every sample point of the cell
 };
 
 struct VerifySummary {

@@ -11,7 +11,8 @@
 namespace cellbake {
 namespace {
 
-constexpr int kCellDbSchemaVersion = 2;
+constexpr int kCellDbSchemaVersion = 3;
+constexpr int kOldestReadableSchemaVersion = 2;  // read-only opens of v2 databases (one sample per cell) still work
 
 // Migrations: entry i upgrades schema version i to i + 1.
 const char* kMigrations[] = {
@@ -40,6 +41,14 @@ CREATE TABLE faces(
     R"sql(
 ALTER TABLE cells RENAME COLUMN max_coverage_error TO max_boundary_error_px;
 ALTER TABLE faces RENAME COLUMN coverage_error TO boundary_error_px;
+)sql",
+    // v3: several samples per cell (incremental textured depth meshes): the
+    // void curve of the best-next-view search and the redundancy figures.
+    R"sql(
+ALTER TABLE samples ADD COLUMN void_after REAL NOT NULL DEFAULT -1;
+ALTER TABLE samples ADD COLUMN covered_pixels INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE samples ADD COLUMN removed_pixels INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE samples ADD COLUMN seconds REAL NOT NULL DEFAULT 0;
 )sql",
 };
 
@@ -83,8 +92,10 @@ CellDb::CellDb(const std::filesystem::path& path, Mode mode) {
       path, mode == Mode::read_only ? SqliteDb::Mode::read_only : SqliteDb::Mode::read_write_create);
   db_->exec("PRAGMA foreign_keys=ON");
   if (mode == Mode::read_only) {
-    if (user_version(*db_) != kCellDbSchemaVersion)
+    schema_version_ = user_version(*db_);
+    if (schema_version_ < kOldestReadableSchemaVersion || schema_version_ > kCellDbSchemaVersion)
       throw std::runtime_error(path.string() + ": not a cellbake cell database of schema version " +
+                               std::to_string(kOldestReadableSchemaVersion) + " to " +
                                std::to_string(kCellDbSchemaVersion));
     return;
   }
@@ -100,6 +111,7 @@ CellDb::CellDb(const std::filesystem::path& path, Mode mode) {
     db_->exec("PRAGMA user_version=" + std::to_string(version));
     tx.commit();
   }
+  schema_version_ = version;
   set_meta("kind", "cellbake-cell-database");
 }
 
@@ -142,11 +154,12 @@ void CellDb::put_cell(const CellRow& c) {
     s.bind(23, c.max_depth_error).bind(24, secs.dump());
     s.run();
   }
-  SqliteStatement ins_sample(*db_, "INSERT INTO samples VALUES(?,?,?,?,?,?)");
+  SqliteStatement ins_sample(*db_, "INSERT INTO samples VALUES(?,?,?,?,?,?,?,?,?,?)");
   SqliteStatement ins_face(*db_, "INSERT INTO faces VALUES(?,?,?,?,?,?,?,?,?)");
   for (const auto& sm : c.samples) {
     ins_sample.bind(1, c.id).bind(2, std::int64_t(sm.index)).bind(3, sm.eye.x).bind(4, sm.eye.y).bind(5, sm.eye.z);
-    ins_sample.bind(6, std::int64_t(sm.parent)).run();
+    ins_sample.bind(6, std::int64_t(sm.parent)).bind(7, sm.void_after).bind(8, std::int64_t(sm.covered_pixels));
+    ins_sample.bind(9, std::int64_t(sm.removed_pixels)).bind(10, sm.seconds).run();
     for (const auto& f : sm.faces) {
       ins_face.bind(1, c.id).bind(2, std::int64_t(sm.index)).bind(3, std::int64_t(f.face)).bind(4, f.image_format);
       ins_face.bind_blob(5, f.image.data(), f.image.size()).bind_blob(6, f.mesh.data(), f.mesh.size());
@@ -219,11 +232,23 @@ std::optional<CellRow> CellDb::get_cell(std::int64_t id, bool with_blobs) const 
     for (auto& [k, v] : secs.items())
       if (v.is_number()) c.stage_seconds[k] = v.get<double>();
 
-  SqliteStatement ss(*db_, "SELECT sample_index, eye_x, eye_y, eye_z, parent FROM samples WHERE cell_id=? ORDER BY sample_index");
+  SqliteStatement ss(*db_, schema_version_ >= 3
+                               ? "SELECT sample_index, eye_x, eye_y, eye_z, parent, void_after, covered_pixels, "
+                                 "removed_pixels, seconds FROM samples WHERE cell_id=? ORDER BY sample_index"
+                               : "SELECT sample_index, eye_x, eye_y, eye_z, parent, -1, 0, 0, 0 FROM samples "
+                                 "WHERE cell_id=? ORDER BY sample_index");
   ss.bind(1, id);
-  while (ss.step())
-    c.samples.push_back({int(ss.column_int(0)), {ss.column_double(1), ss.column_double(2), ss.column_double(3)},
-                         int(ss.column_int(4)), {}});
+  while (ss.step()) {
+    SampleRow sm;
+    sm.index = int(ss.column_int(0));
+    sm.eye = {ss.column_double(1), ss.column_double(2), ss.column_double(3)};
+    sm.parent = int(ss.column_int(4));
+    sm.void_after = ss.column_double(5);
+    sm.covered_pixels = std::uint64_t(ss.column_int(6));
+    sm.removed_pixels = std::uint64_t(ss.column_int(7));
+    sm.seconds = ss.column_double(8);
+    c.samples.push_back(std::move(sm));
+  }
   SqliteStatement fs(*db_,
                      std::string("SELECT sample_index, face, image_format, ") +
                          (with_blobs ? "image, mesh" : "x'', x''") +

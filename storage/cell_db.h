@@ -35,9 +35,13 @@ struct FaceRow {
 };
 
 struct SampleRow {
-  int index = 0;
+  int index = 0;    // the order the sample was taken in (0 = first of the initial set)
   Vec3d eye;
-  int parent = -1;  // dependency-tree parent sample (-1 = root)
+  int parent = -1;  // dependency-tree parent sample (-1 = root, the intra scan)
+  double void_after = -1;  // worst best-next-view candidate's void fraction once this sample was taken (-1: not measured)
+  std::uint64_t covered_pixels = 0;  // pixels with a surface before redundant-pixel removal
+  std::uint64_t removed_pixels = 0;  // of those, removed because an ancestor holds them
+  double seconds = 0;                // bake seconds spent on this sample (render, void search, mesh, simplify, encode)
   std::vector<FaceRow> faces;
 };
 
@@ -98,9 +102,12 @@ class CellDb {
   // PRAGMA integrity_check == "ok".
   bool integrity_ok() const;
   const std::filesystem::path& path() const;
+  // The schema version of the open file (read-only opens may see an older one).
+  int schema_version() const { return schema_version_; }
 
  private:
   std::unique_ptr<SqliteDb> db_;
+  int schema_version_ = 0;
 };
 
 // Packs / unpacks a near-field list (validated; throws std::runtime_error on bad bytes).

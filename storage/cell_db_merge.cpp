@@ -1,5 +1,7 @@
 #include "storage/cell_db_merge.h"
 
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "storage/sqlite_db.h"
@@ -22,6 +24,11 @@ CopyDecision decide(const CellStamp* existing, const CellStamp& incoming) {
 }  // namespace
 
 CellCopyCounts copy_cells(CellDb& target, const CellDb& source) {
+  if (source.schema_version() != target.schema_version())
+    throw std::runtime_error(source.path().string() + ": cell database schema version " +
+                             std::to_string(source.schema_version()) + " differs from " + target.path().string() +
+                             "'s " + std::to_string(target.schema_version()) +
+                             " (open it read-write once, e.g. with `cellbake bake`, to migrate it)");
   const auto have = target.stamps();
   const auto incoming = source.stamps();
   std::vector<std::int64_t> to_copy;

@@ -234,7 +234,10 @@ CellRow cell(std::int64_t id, bool done, const std::string& tag) {
   c.input_hash = "input-" + std::to_string(id);
   c.cull_hash = "cull-" + std::to_string(id);
   c.content_hash = done ? "content-" + tag : "";
-  c.samples = {SampleRow{0, {1, 2, 3}, -1, {FaceRow{0, "png", {1, 2, 3}, {4, 5}, 2, 0, 0}}}};
+  SampleRow sample;
+  sample.eye = {1, 2, 3};
+  sample.faces = {FaceRow{0, "png", {1, 2, 3}, {4, 5}, 2, 0, 0}};
+  c.samples = {sample};
   return c;
 }
 

@@ -23,6 +23,10 @@ DecodedCell decode_cell(const CellRow& row) {
   cell.near_triangles = row.near_triangles;
   for (const NearChunkRow& n : row.near_chunks) cell.near_ids.push_back(n.chunk_id);
   for (const SampleRow& s : row.samples) {
+    SampleNode node;
+    node.index = s.index;
+    node.eye = s.eye;
+    node.parent = s.parent;
     for (const FaceRow& f : s.faces) {
       const std::string face = where + " sample " + std::to_string(s.index) + " face " + std::to_string(f.face);
       if (f.face < 0 || f.face >= kCubeFaces) throw std::runtime_error(face + ": face index out of range");
@@ -39,9 +43,12 @@ DecodedCell decode_cell(const CellRow& row) {
       for (const Uv& uv : d.mesh.uvs)
         if (!(uv.u >= 0 && uv.u <= 1 && uv.v >= 0 && uv.v <= 1))
           throw std::runtime_error(face + ": texture coordinate outside [0, 1]");
+      for (const Vec3f& p : d.mesh.positions) d.bounds.expand(s.eye + Vec3d{p.x, p.y, p.z});
       cell.far_triangles += d.mesh.triangle_count();
+      node.triangles += d.mesh.triangle_count();
       cell.faces.push_back(std::move(d));
     }
+    cell.samples.push_back(node);
   }
   return cell;
 }

@@ -9,12 +9,14 @@
 #include "stages/encode.h"
 #include "stages/geometry.h"
 #include "storage/cell_db.h"
+#include "viewer/sample_selection.h"
 
 namespace cellbake {
 
 struct DecodedFace {
   int sample = 0, face = 0;
   Vec3d eye;  // the sample's eye; mesh positions are relative to it
+  Box3d bounds;  // world bounds of the mesh (empty for an empty mesh)
   FaceMesh mesh;
   DecodedImage image;
 };
@@ -27,6 +29,7 @@ struct DecodedCell {
   std::uint64_t near_triangles = 0;    // triangles of those chunks inside the cull box
   std::uint64_t far_triangles = 0;     // sum over the decoded faces
   std::vector<DecodedFace> faces;
+  std::vector<SampleNode> samples;  // eye, dependency-tree parent and triangles of every sample
   std::size_t bytes() const;  // decoded size in host memory
 };
 

@@ -1,5 +1,6 @@
 #include "viewer/scene_drawer.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -97,14 +98,27 @@ SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width
   set_wireframe(options.wireframe);
   SceneFrameStats stats;
   try {
+    // The near field whole: the sampler discarded exactly the box, so a
+    // near field clipped at the box would leave a band wherever the eye is
+    // not at the sample point; the overlap past the box is resolved by the
+    // depth test (the far field holds the same surfaces there).
     if (options.near_field)
-      chunks_.draw(camera, cell.cull_box, cell.near_ids, [this](std::int64_t id) { return source_.load(id); },
-                   BoxClip::keep_inside);
+      chunks_.draw(camera, Box3d{}, cell.near_ids, [this](std::int64_t id) { return source_.load(id); });
     if (options.far_field) {
       TdmDrawOptions tdm_options;
       tdm_options.wireframe = options.wireframe;
       if (options.tint_by_cell) cell_tint(cell.id, tdm_options.tint);
-      stats.far_triangles = tdm_.draw(camera, chunks_.reversed_z(), cells_.at(cell.id).handles, tdm_options);
+      const std::vector<int> chosen = select_samples(cell.samples, camera.eye, options.samples);
+      const std::vector<std::uint64_t>& all = cells_.at(cell.id).handles;
+      std::vector<std::uint64_t> handles;
+      for (std::size_t k = 0; k < cell.faces.size() && k < all.size(); ++k) {
+        const DecodedFace& f = cell.faces[k];
+        if (std::find(chosen.begin(), chosen.end(), f.sample) == chosen.end()) continue;
+        if (!box_in_view(camera, f.bounds)) continue;
+        handles.push_back(all[k]);
+      }
+      stats.samples_drawn = chosen.size();
+      stats.far_triangles = tdm_.draw(camera, chunks_.reversed_z(), handles, tdm_options);
     }
   } catch (...) {
     set_wireframe(false);

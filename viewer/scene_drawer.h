@@ -1,8 +1,10 @@
 // The drawing shared by `cellbake render` and the interactive viewer: a view
-// cell's impostor (near field = its chunk list drawn with only fragments
-// strictly inside the cull box kept, plus its textured depth meshes,
-// depth-tested together; Wilson 2002, ch. 2 and 7) and the ground truth (every
-// chunk in the view frustum, nothing discarded), on one GL context.
+// cell's impostor (near field = its chunk list drawn whole, so that triangles
+// crossing the cull box reach past it and meet the far field without a seam
+// from anywhere in the cell (Wilson 2002, Fig. 1.6); plus the textured depth
+// meshes of the samples chosen for the eye; depth-tested together; ch. 2, 5
+// and 7) and the ground truth (every chunk in the view frustum, nothing
+// discarded), on one GL context.
 #pragma once
 
 #include <cstdint>
@@ -32,11 +34,16 @@ struct SceneDrawOptions {
   bool far_field = true;
   bool wireframe = false;
   bool tint_by_cell = false;  // mix a colour derived from the cell id into its far field
+  // Which samples' textured depth meshes to draw (viewer/sample_selection.h):
+  // the nearest sample to the camera with its ancestors, then more while the
+  // far-field triangle budget allows; max_samples = 1 draws the root alone.
+  SampleSelectionParams samples;
 };
 
 struct SceneFrameStats {
   std::uint64_t chunk_triangles = 0;  // chunk triangles submitted (whole chunks, before discard)
   std::uint64_t far_triangles = 0;    // textured depth mesh triangles submitted
+  std::uint64_t samples_drawn = 0;    // samples whose faces were considered (before per-face culling)
   std::uint64_t chunks_drawn = 0;
   double milliseconds = 0;  // begin_frame to read-back, wall clock
 };

@@ -49,6 +49,7 @@ const char* kind_color(VerifyViewKind k) {
     case VerifyViewKind::centre: return "#1f77b4";
     case VerifyViewKind::corner: return "#d62728";
     case VerifyViewKind::interior: return "#2ca02c";
+    case VerifyViewKind::sample: return "#9467bd";
   }
   return "#000";
 }
@@ -57,7 +58,8 @@ const char* kind_color(VerifyViewKind k) {
 template <class X, class Y>
 std::vector<PlotSeries> per_view_series(const std::vector<VerifyCellResult>& cells, X x, Y y) {
   std::vector<PlotSeries> series;
-  for (VerifyViewKind k : {VerifyViewKind::centre, VerifyViewKind::corner, VerifyViewKind::interior}) {
+  for (VerifyViewKind k :
+       {VerifyViewKind::centre, VerifyViewKind::corner, VerifyViewKind::interior, VerifyViewKind::sample}) {
     PlotSeries s{std::string(view_kind_name(k)) + " views", kind_color(k), {}};
     for (const auto& c : cells)
       for (std::size_t i = 0; i < c.views.size(); ++i)
@@ -93,6 +95,8 @@ const std::vector<MetricInfo>& verify_metrics() {
       {"psnr_db", true, &VerifyViewResult::psnr_db},
       {"ssim", true, &VerifyViewResult::ssim},
       {"hole_fraction", false, &VerifyViewResult::hole_fraction},
+      {"psnr_db_root", true, &VerifyViewResult::psnr_db_root},
+      {"hole_fraction_root", false, &VerifyViewResult::hole_fraction_root},
       {"skin_fraction", false, &VerifyViewResult::skin_fraction},
       {"extra_fraction", false, &VerifyViewResult::extra_fraction},
       {"depth_error_median", false, &VerifyViewResult::depth_error_median},
@@ -104,7 +108,7 @@ const std::vector<MetricInfo>& verify_metrics() {
 
 MetricStats metric_stats(const std::vector<VerifyCellResult>& cells, const MetricInfo& metric) {
   MetricStats s;
-  std::vector<double> all, centre, corner;
+  std::vector<double> all, centre, corner, interior, sample;
   for (const auto& c : cells)
     for (std::size_t i = 0; i < c.views.size(); ++i) {
       const double v = c.views[i].*metric.field;
@@ -112,6 +116,8 @@ MetricStats metric_stats(const std::vector<VerifyCellResult>& cells, const Metri
       all.push_back(v);
       if (c.views[i].kind == VerifyViewKind::centre) centre.push_back(v);
       if (c.views[i].kind == VerifyViewKind::corner) corner.push_back(v);
+      if (c.views[i].kind == VerifyViewKind::interior) interior.push_back(v);
+      if (c.views[i].kind == VerifyViewKind::sample) sample.push_back(v);
       if (s.count++ == 0 || (metric.higher_is_better ? v < s.worst : v > s.worst)) {
         s.worst = v;
         s.worst_cell = c.id;
@@ -121,6 +127,8 @@ MetricStats metric_stats(const std::vector<VerifyCellResult>& cells, const Metri
   s.median = median_of(all);
   s.median_centre = median_of(centre);
   s.median_corner = median_of(corner);
+  s.median_interior = median_of(interior);
+  s.median_sample = median_of(sample);
   return s;
 }
 
@@ -148,6 +156,9 @@ nlohmann::json to_json(const VerifyViewResult& v) {
           {"skin_fraction", number_or_null(v.skin_fraction)},
           {"extra_fraction", number_or_null(v.extra_fraction)},
           {"depth_error_median", number_or_null(v.depth_error_median)},
+          {"psnr_db_root", number_or_null(v.psnr_db_root)},
+          {"hole_fraction_root", number_or_null(v.hole_fraction_root)},
+          {"samples_drawn", v.samples_drawn},
           {"triangles_impostor", v.triangles_impostor},
           {"triangles_truth", v.triangles_truth},
           {"ms_impostor", number_or_null(v.ms_impostor)},
@@ -165,6 +176,8 @@ nlohmann::json to_json(const VerifyCellResult& c) {
                    {"bytes", c.bytes},
                    {"near_triangles", c.near_triangles},
                    {"far_triangles", c.far_triangles},
+                   {"void_curve", c.void_curve},
+                   {"sample_seconds", c.sample_seconds},
                    {"views", views},
                    {"triptych", c.triptych},
                    {"worst_view", c.worst_view}};
@@ -181,6 +194,8 @@ VerifyCellResult cell_from_json(const nlohmann::json& j) {
   c.bytes = j.at("bytes").get<std::uint64_t>();
   c.near_triangles = j.at("near_triangles").get<std::uint64_t>();
   c.far_triangles = j.at("far_triangles").get<std::uint64_t>();
+  c.void_curve = j.value("void_curve", std::vector<double>{});
+  c.sample_seconds = j.value("sample_seconds", std::vector<double>{});
   c.triptych = j.at("triptych").get<std::string>();
   c.worst_view = j.at("worst_view").get<int>();
   c.error = j.value("error", std::string());
@@ -196,6 +211,10 @@ VerifyCellResult cell_from_json(const nlohmann::json& j) {
     r.skin_fraction = number_from(v, "skin_fraction", kNaN);
     r.extra_fraction = number_from(v, "extra_fraction", kNaN);
     r.depth_error_median = number_from(v, "depth_error_median", kNaN);
+    // Absent in reports of older versions.
+    r.psnr_db_root = v.contains("psnr_db_root") ? number_from(v, "psnr_db_root", std::numeric_limits<double>::infinity()) : kNaN;
+    r.hole_fraction_root = v.contains("hole_fraction_root") ? number_from(v, "hole_fraction_root", kNaN) : kNaN;
+    r.samples_drawn = v.value("samples_drawn", std::uint64_t{0});
     r.triangles_impostor = v.at("triangles_impostor").get<std::uint64_t>();
     r.triangles_truth = v.at("triangles_truth").get<std::uint64_t>();
     r.ms_impostor = number_from(v, "ms_impostor", kNaN);
@@ -232,6 +251,8 @@ nlohmann::json summary_json(const std::vector<VerifyCellResult>& cells) {
                  {"worst_view", st.worst_view},
                  {"median_centre", number_or_null(st.median_centre)},
                  {"median_corner", number_or_null(st.median_corner)},
+                 {"median_interior", number_or_null(st.median_interior)},
+                 {"median_sample", number_or_null(st.median_sample)},
                  {"higher_is_better", m.higher_is_better}};
   }
   s["bake_seconds_median"] = number_or_null(median_of(bake));
@@ -341,12 +362,14 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
        "(fractions, lower is better); depth error = median relative depth error; ms = warm frame time of the "
        "software renderer while other views render in parallel.</p>\n";
   h << "<h2>Summary</h2>\n<table><tr><th class=\"l\">metric</th><th>median</th><th>worst</th><th>worst cell</th>"
-       "<th>median, centre views</th><th>median, corner views</th></tr>\n";
+       "<th>median, centre views</th><th>median, corner views</th><th>median, interior views</th>"
+       "<th>median, views at sample points</th></tr>\n";
   for (const auto& m : verify_metrics()) {
     const MetricStats st = metric_stats(cells, m);
     h << "<tr><td class=\"l\">" << m.name << "</td><td>" << fmt(st.median) << "</td><td>" << fmt(st.worst)
       << "</td><td>" << (st.count ? std::to_string(st.worst_cell) : "&ndash;") << "</td><td>" << fmt(st.median_centre)
-      << "</td><td>" << fmt(st.median_corner) << "</td></tr>\n";
+      << "</td><td>" << fmt(st.median_corner) << "</td><td>" << fmt(st.median_interior) << "</td><td>"
+      << fmt(st.median_sample) << "</td></tr>\n";
   }
   h << "</table>\n<p>Median per cell: bake " << fmt(summary["bake_seconds_median"].is_null() ? kNaN : summary["bake_seconds_median"].get<double>())
     << " s, " << fmt(summary["bytes_median"].is_null() ? kNaN : summary["bytes_median"].get<double>(), "%.0f")

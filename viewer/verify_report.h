@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -23,6 +24,11 @@ struct VerifyViewResult {
   double distance_from_sample = 0;  // eye to the nearest panoramic sample point of the cell, model units
   double psnr_db = 0;               // +infinity when the images are identical
   double ssim = 0, hole_fraction = 0, skin_fraction = 0, extra_fraction = 0, depth_error_median = 0;
+  // The same view drawn with the root sample alone (the single-sample far
+  // field, `render --max-samples 1`), for the 1-sample vs all-samples columns.
+  double psnr_db_root = std::numeric_limits<double>::quiet_NaN();
+  double hole_fraction_root = std::numeric_limits<double>::quiet_NaN();
+  std::uint64_t samples_drawn = 0;  // samples whose far field the impostor drew
   std::uint64_t triangles_impostor = 0, triangles_truth = 0;
   double ms_impostor = 0, ms_truth = 0;  // warm frame, wall clock
 };
@@ -33,6 +39,8 @@ struct VerifyCellResult {
   std::string key;  // content hash + verify parameters: equal keys need no re-render
   std::map<std::string, double> bake_seconds;  // per stage, from the cell database
   std::uint64_t bytes = 0, near_triangles = 0, far_triangles = 0;
+  std::vector<double> void_curve;  // per sample in the order taken: worst candidate's void fraction after it (-1: not measured)
+  std::vector<double> sample_seconds;  // bake seconds per sample, same order
   std::string error;     // non-empty when the cell could not be verified (views then empty)
   std::string triptych;  // its worst view as truth | impostor | error image, path relative to the report folder
   int worst_view = -1;   // index into views of that view
@@ -52,6 +60,8 @@ struct MetricStats {
   int worst_view = -1;          // its index in that cell's views
   double median_centre = std::numeric_limits<double>::quiet_NaN();  // over centre views only
   double median_corner = std::numeric_limits<double>::quiet_NaN();  // over corner views only
+  double median_interior = std::numeric_limits<double>::quiet_NaN();  // over interior views only
+  double median_sample = std::numeric_limits<double>::quiet_NaN();  // over views at sample points only
 };
 
 // The metrics summarised, each with whether higher is better.

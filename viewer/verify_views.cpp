@@ -32,6 +32,7 @@ const char* view_kind_name(VerifyViewKind kind) {
     case VerifyViewKind::centre: return "centre";
     case VerifyViewKind::corner: return "corner";
     case VerifyViewKind::interior: return "interior";
+    case VerifyViewKind::sample: return "sample";
   }
   return "centre";
 }
@@ -40,6 +41,7 @@ VerifyViewKind parse_view_kind(const std::string& name) {
   if (name == "centre") return VerifyViewKind::centre;
   if (name == "corner") return VerifyViewKind::corner;
   if (name == "interior") return VerifyViewKind::interior;
+  if (name == "sample") return VerifyViewKind::sample;
   throw std::invalid_argument("verify views: unknown view kind \"" + name + "\"");
 }
 

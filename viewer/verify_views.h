@@ -11,9 +11,11 @@
 
 namespace cellbake {
 
-enum class VerifyViewKind { centre, corner, interior };
+// `sample` views stand at a cell's panoramic sample points (the runner adds
+// them; plan_verify_views does not).
+enum class VerifyViewKind { centre, corner, interior, sample };
 
-// "centre" | "corner" | "interior", and back (throws std::invalid_argument).
+// "centre" | "corner" | "interior" | "sample", and back (throws std::invalid_argument).
 const char* view_kind_name(VerifyViewKind kind);
 VerifyViewKind parse_view_kind(const std::string& name);
 

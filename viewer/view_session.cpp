@@ -62,7 +62,8 @@ ViewResult ViewSession::render(const ViewRequest& r, ViewMode mode, std::FILE* w
   ViewResult result;
   const CellEntry* entry = r.cell ? index_.find(*r.cell) : index_.nearest(r.eye);
   if (r.cell && !entry) throw std::invalid_argument("view: cell " + std::to_string(*r.cell) + " is not in the database");
-  const SceneDrawOptions options;
+  SceneDrawOptions options;
+  options.samples = r.samples;
   const bool want_impostor = mode != ViewMode::truth, want_truth = mode != ViewMode::impostor;
 
   if (entry) result.cell_id = entry->id;

@@ -31,6 +31,7 @@ struct ViewRequest {
   int width = 512, height = 512;
   double near_plane = 0.05;
   std::optional<std::int64_t> cell;  // force this cell instead of the eye's
+  SampleSelectionParams samples;      // which samples' far field to draw (viewer/sample_selection.h)
 };
 
 struct ViewResult {

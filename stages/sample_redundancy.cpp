@@ -1,0 +1,172 @@
+// Redundant-point removal for incremental textured depth meshes, Wilson 2002
+// §5.2.1 ("each delta scan contains only those surfaces not present in any scan
+// on which it depends") and Appendix A (unlike the pseudocode there, the root
+// is tested like every other ancestor and the loop is bounded).
+#include "stages/sample_redundancy.h"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace cellbake {
+namespace {
+
+struct Projection {
+  int face = 0;
+  double x = 0, y = 0;  // continuous pixel coordinates: pixel (i, j) centre is (i, j)
+  double depth = 0;     // planar depth along the face's forward axis
+};
+
+// The cube face and pixel position of direction v (relative to the eye).
+Projection project(const Vec3d& v, int size) {
+  const double ax = std::abs(v.x), ay = std::abs(v.y), az = std::abs(v.z);
+  int face;
+  if (ax >= ay && ax >= az) face = v.x >= 0 ? 0 : 1;
+  else if (ay >= az) face = v.y >= 0 ? 2 : 3;
+  else face = v.z >= 0 ? 4 : 5;
+  const FaceBasis b = cube_face_basis(face);
+  Projection p;
+  p.face = face;
+  p.depth = dot(v, b.forward);
+  const double s = dot(v, b.right) / p.depth, t = dot(v, b.up) / p.depth;
+  p.x = (s + 1) * 0.5 * size - 0.5;
+  p.y = (1 - t) * 0.5 * size - 0.5;
+  return p;
+}
+
+double inverse_at(const CubeFace& f, int i, int j) {
+  const float d = f.depth[static_cast<std::size_t>(j) * f.size + i];
+  return std::isfinite(d) ? 1.0 / d : 0.0;  // 0 = background
+}
+
+}  // namespace
+
+bool sample_holds_point(const CubeSample& a, const Vec3d& point, const RedundancyParams& prm) {
+  const int n = a.faces[0].size;
+  const Projection p = project(point - a.eye, n);
+  if (!(p.depth > 0)) return false;
+  const CubeFace& f = a.faces[static_cast<std::size_t>(p.face)];
+  const double x = std::clamp(p.x, 0.0, n - 1.0), y = std::clamp(p.y, 0.0, n - 1.0);
+  const int i0 = std::min(static_cast<int>(x), std::max(0, n - 2)), j0 = std::min(static_cast<int>(y), std::max(0, n - 2));
+  const int i1 = std::min(i0 + 1, n - 1), j1 = std::min(j0 + 1, n - 1);
+  const double fx = x - i0, fy = y - j0;
+  const double w = 1.0 / p.depth;
+  const double w00 = inverse_at(f, i0, j0), w10 = inverse_at(f, i1, j0), w01 = inverse_at(f, i0, j1),
+               w11 = inverse_at(f, i1, j1);
+  const double lo = std::min({w00, w10, w01, w11}), hi = std::max({w00, w10, w01, w11});
+  if (lo > 0 && hi <= lo * (1 + prm.jump)) {
+    // One surface: bilinear in inverse depth (exact on a plane), with an error
+    // allowance from the local second differences where the neighbours exist.
+    const double interpolated = (w00 * (1 - fx) + w10 * fx) * (1 - fy) + (w01 * (1 - fx) + w11 * fx) * fy;
+    double curvature = std::abs(w00 + w11 - w10 - w01);
+    const auto second = [&](int ia, int ja, int ib, int jb, int ic, int jc) {
+      if (ia < 0 || ja < 0 || ic >= n || jc >= n) return;
+      const double a0 = inverse_at(f, ia, ja), b0 = inverse_at(f, ib, jb), c0 = inverse_at(f, ic, jc);
+      if (a0 <= 0 || c0 <= 0 || std::max(a0, c0) > std::min(a0, c0) * (1 + prm.jump)) return;
+      curvature = std::max(curvature, std::abs(a0 - 2 * b0 + c0));
+    };
+    for (int j : {j0, j1}) second(i0 - 1, j, i0, j, i1, j), second(i0, j, i1, j, i1 + 1, j);
+    for (int i : {i0, i1}) second(i, j0 - 1, i, j0, i, j1), second(i, j0, i, j1, i, j1 + 1);
+    return std::abs(interpolated - w) <= prm.tolerance * w + 0.5 * curvature;
+  }
+  // Across a depth jump: extrapolate each neighbour's own surface (a plane
+  // through it and its same-surface neighbours) to the point. A neighbour
+  // without a same-surface neighbour along an axis the point is offset along
+  // (a feature one pixel thin) says nothing, so the point is kept.
+  const int ni[4] = {i0, i1, i0, i1}, nj[4] = {j0, j0, j1, j1};
+  const double nw[4] = {w00, w10, w01, w11};
+  for (int k = 0; k < 4; ++k) {
+    if (nw[k] <= 0) continue;
+    const auto same = [&](int i, int j) {
+      if (i < 0 || j < 0 || i >= n || j >= n) return 0.0;
+      const double v = inverse_at(f, i, j);
+      return v > 0 && std::max(v, nw[k]) <= std::min(v, nw[k]) * (1 + prm.jump) ? v : 0.0;
+    };
+    const double dx = x - ni[k], dy = y - nj[k];
+    const auto slope = [&](double offset, int di, int dj) -> std::optional<double> {
+      const double ahead = same(ni[k] + di, nj[k] + dj), behind = same(ni[k] - di, nj[k] - dj);
+      if (offset >= 0 ? ahead > 0 : behind > 0) return offset >= 0 ? ahead - nw[k] : nw[k] - behind;
+      if (ahead > 0) return ahead - nw[k];
+      if (behind > 0) return nw[k] - behind;
+      if (std::abs(offset) < 1e-3) return 0.0;
+      return std::nullopt;
+    };
+    const std::optional<double> gx = slope(dx, 1, 0), gy = slope(dy, 0, 1);
+    if (!gx || !gy) continue;
+    const double predicted = nw[k] + *gx * dx + *gy * dy;
+    if (std::abs(predicted - w) <= prm.tolerance * w + prm.edge_tolerance * (std::abs(*gx * dx) + std::abs(*gy * dy)))
+      return true;
+  }
+  return false;
+}
+
+RedundancyStats remove_redundant_pixels(CubeSample& delta, std::span<const CubeSample* const> ancestors,
+                                        const RedundancyParams& prm) {
+  const int n = delta.faces[0].size;
+  for (const CubeFace& f : delta.faces)
+    if (f.size != n || f.depth.size() != std::size_t(n) * n || f.color.size() != f.depth.size())
+      throw std::invalid_argument("redundancy: delta sample faces differ in size");
+  for (const CubeSample* a : ancestors)
+    for (const CubeFace& f : a->faces)
+      if (f.size != n || f.depth.size() != std::size_t(n) * n)
+        throw std::invalid_argument("redundancy: ancestor faces differ from the delta sample's size " +
+                                    std::to_string(n));
+  if (!(prm.tolerance >= 0) || !(prm.jump > 0) || !(prm.edge_tolerance >= 0) || prm.keep_margin < 0)
+    throw std::invalid_argument("redundancy: bad parameters");
+  RedundancyStats stats;
+  if (ancestors.empty()) {
+    for (const CubeFace& f : delta.faces)
+      for (float d : f.depth) stats.covered += std::isfinite(d) ? 1 : 0;
+    return stats;
+  }
+  std::vector<std::uint8_t> state;  // 0 background, 1 kept, 2 redundant
+  for (int face = 0; face < kCubeFaces; ++face) {
+    CubeFace& f = delta.faces[static_cast<std::size_t>(face)];
+    const FaceBasis b = cube_face_basis(face);
+    state.assign(f.depth.size(), 0);
+    for (int j = 0; j < n; ++j) {
+      const double t = 1 - 2 * (j + 0.5) / n;
+      for (int i = 0; i < n; ++i) {
+        const std::size_t k = static_cast<std::size_t>(j) * n + i;
+        const float d = f.depth[k];
+        if (!std::isfinite(d)) continue;
+        ++stats.covered;
+        const double s = 2 * (i + 0.5) / n - 1;
+        const Vec3d point = delta.eye + cube_face_direction(b, s, t) * static_cast<double>(d);
+        bool held = false;
+        for (const CubeSample* a : ancestors)
+          if ((held = sample_holds_point(*a, point, prm))) break;
+        state[k] = held ? 2 : 1;
+      }
+    }
+    // Grow the kept pixels back over removed ones by keep_margin rings.
+    for (int ring = 0; ring < prm.keep_margin; ++ring) {
+      std::vector<std::uint8_t> grown = state;
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+          const std::size_t k = static_cast<std::size_t>(j) * n + i;
+          if (state[k] != 2) continue;
+          bool near_kept = false;
+          for (int dj = -1; dj <= 1 && !near_kept; ++dj)
+            for (int di = -1; di <= 1 && !near_kept; ++di) {
+              const int ii = i + di, jj = j + dj;
+              near_kept = ii >= 0 && jj >= 0 && ii < n && jj < n && state[static_cast<std::size_t>(jj) * n + ii] == 1;
+            }
+          if (near_kept) grown[k] = 1;
+        }
+      state.swap(grown);
+    }
+    for (std::size_t k = 0; k < state.size(); ++k)
+      if (state[k] == 2) {
+        f.depth[k] = kBackgroundDepth;
+        f.color[k] = Rgba8{0, 0, 0, 0};
+        ++stats.removed;
+      }
+  }
+  return stats;
+}
+
+}  // namespace cellbake

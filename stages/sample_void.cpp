@@ -1,0 +1,316 @@
+// Void-surface objective for Voronoi best-next-view sampling (Wilson 2002,
+// ch. 3, §3.4.2: "the solid angle subtended by the void surface" at a
+// candidate). The thesis builds each sample's void surface from its skin
+// triangles and counts, per pixel of a panorama rendered at the candidate,
+// whether every sample's void surface is visible there (stencil; note that
+// the Appendix A pseudocode swaps the stencil arguments). Equivalently, a
+// view ray sees the global void surface when it leaves the union of the
+// samples' free space (the visible volume, §3.1.2) somewhere other than at a
+// sampled surface; this file marches each ray through that union, testing
+// points against the samples' depth cube maps (space carving), and sums the
+// exact solid angles of the void rays' pixels instead of the spherical-polygon
+// formula (19). See sample_void.h for the contract.
+#include "stages/sample_void.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace cellbake {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Face f's basis as coordinate axes: forward = fwd_sign * e[fwd_axis], etc.
+struct FaceAxes {
+  int fwd_axis = 0, right_axis = 0, up_axis = 0;
+  double fwd_sign = 0, right_sign = 0, up_sign = 0;
+};
+
+void axis_of(const Vec3d& v, int& axis, double& sign) {
+  for (int a = 0; a < 3; ++a)
+    if (v[a] != 0) {
+      axis = a;
+      sign = v[a] > 0 ? 1 : -1;
+    }
+}
+
+std::array<FaceAxes, kCubeFaces> face_axes() {
+  std::array<FaceAxes, kCubeFaces> out;
+  for (int f = 0; f < kCubeFaces; ++f) {
+    const FaceBasis b = cube_face_basis(f);
+    axis_of(b.forward, out[f].fwd_axis, out[f].fwd_sign);
+    axis_of(b.right, out[f].right_axis, out[f].right_sign);
+    axis_of(b.up, out[f].up_axis, out[f].up_sign);
+  }
+  return out;
+}
+
+// The face a direction falls on: dominant axis, ties to x then y.
+int face_of(const double v[3], double& z) {
+  const double ax = std::fabs(v[0]), ay = std::fabs(v[1]), az = std::fabs(v[2]);
+  if (ax >= ay && ax >= az) {
+    z = ax;
+    return v[0] >= 0 ? 0 : 1;
+  }
+  if (ay >= az) {
+    z = ay;
+    return v[1] >= 0 ? 2 : 3;
+  }
+  z = az;
+  return v[2] >= 0 ? 4 : 5;
+}
+
+struct PreparedSample {
+  Vec3d eye;
+  int n = 0;
+  double half_n = 0;
+  std::array<const float*, kCubeFaces> depth{};
+};
+
+// Where a point falls in one sample: planar depth z and the stored depth.
+struct Projection {
+  double z = 0, depth = kInf;
+  bool certified = true;
+};
+
+class Marcher {
+ public:
+  Marcher(std::span<const VoidSample> samples, const VoidParams& params) : params_(params), axes_(face_axes()) {
+    prepared_.reserve(samples.size());
+    for (const VoidSample& s : samples) {
+      PreparedSample p;
+      p.eye = s.cube->eye;
+      p.n = s.cube->faces[0].size;
+      p.half_n = 0.5 * p.n;
+      for (int f = 0; f < kCubeFaces; ++f) p.depth[f] = s.cube->faces[f].depth.data();
+      prepared_.push_back(p);
+    }
+    prev_certified_.resize(samples.size());
+    prev_depth_.resize(samples.size());
+    tried_background_.resize(samples.size());
+  }
+
+  // True when the ray from `origin` along unit `dir` sees the void surface.
+  bool is_void(const Vec3d& origin, const Vec3d& dir, double max_distance) {
+    std::fill(prev_certified_.begin(), prev_certified_.end(), 0);
+    std::fill(tried_background_.begin(), tried_background_.end(), 0);
+    const double grow = 1 + params_.step_ratio;
+    const double tol = params_.surface_tolerance;
+    const double jump = params_.jump;
+    for (double t = params_.start_distance;; t = std::min(t * grow, max_distance)) {
+      const Vec3d x = origin + dir * t;
+      bool any_certified = false;
+      int background_sample = -1;
+      for (std::size_t k = 0; k < prepared_.size(); ++k) {
+        const Projection p = project(prepared_[k], x);
+        if (p.depth < kInf) {
+          if (std::fabs(p.z - p.depth) <= tol * p.z) return false;  // on a sampled surface
+          if (!p.certified && prev_certified_[k] &&
+              std::fabs(p.depth - prev_depth_[k]) <= jump * std::min(p.depth, prev_depth_[k]))
+            return false;  // stepped through a sampled surface
+        } else if (!tried_background_[k] && background_sample < 0) {
+          background_sample = static_cast<int>(k);
+        }
+        prev_certified_[k] = p.certified;
+        prev_depth_[k] = p.depth;
+        any_certified = any_certified || p.certified;
+      }
+      if (!any_certified) return true;
+      if (t >= max_distance) return false;
+      if (background_sample >= 0) {
+        tried_background_[background_sample] = 1;
+        if (rest_is_background(prepared_[background_sample], x, dir)) return false;
+      }
+    }
+  }
+
+ private:
+  Projection project(const PreparedSample& s, const Vec3d& x) const {
+    const double v[3] = {x.x - s.eye.x, x.y - s.eye.y, x.z - s.eye.z};
+    Projection p;
+    const int face = face_of(v, p.z);
+    if (!(p.z > 0)) return p;  // at the eye: free
+    const FaceAxes& a = axes_[face];
+    const double scale = s.half_n / p.z;
+    const double fi = s.half_n + a.right_sign * v[a.right_axis] * scale;
+    const double fj = s.half_n - a.up_sign * v[a.up_axis] * scale;
+    const int i = std::clamp(static_cast<int>(fi), 0, s.n - 1);
+    const int j = std::clamp(static_cast<int>(fj), 0, s.n - 1);
+    p.depth = s.depth[face][static_cast<std::size_t>(j) * s.n + i];
+    p.certified = p.z < p.depth;
+    return p;
+  }
+
+  // True when every pixel of sample s that the ray x + u dir (u >= 0) passes
+  // through is background. Per face, the ray clipped to the face's frustum
+  // projects to a segment in pixel coordinates, walked cell by cell
+  // (Amanatides & Woo 1987). A ray passing (nearly) through the eye fails.
+  bool rest_is_background(const PreparedSample& s, const Vec3d& x, const Vec3d& dir) const {
+    const Vec3d v0 = x - s.eye;
+    const double along = dot(v0, dir);
+    const double closest = along >= 0 ? length(v0) : length(v0 - dir * along);
+    if (!(closest > 1e-9 * (length(v0) + 1))) return false;
+    for (int f = 0; f < kCubeFaces; ++f) {
+      const FaceAxes& a = axes_[f];
+      const double fw0 = a.fwd_sign * v0[a.fwd_axis], fwd = a.fwd_sign * dir[a.fwd_axis];
+      const double r0 = a.right_sign * v0[a.right_axis], rd = a.right_sign * dir[a.right_axis];
+      const double u0 = a.up_sign * v0[a.up_axis], ud = a.up_sign * dir[a.up_axis];
+      // Inside the frustum: fw - r >= 0, fw + r >= 0, fw - up >= 0, fw + up >= 0 (so fw >= 0).
+      double lo = 0, hi = kInf;
+      const double c[4] = {fw0 - r0, fw0 + r0, fw0 - u0, fw0 + u0};
+      const double g[4] = {fwd - rd, fwd + rd, fwd - ud, fwd + ud};
+      for (int h = 0; h < 4 && lo <= hi; ++h) {
+        if (g[h] > 0) {
+          lo = std::max(lo, -c[h] / g[h]);
+        } else if (g[h] < 0) {
+          hi = std::min(hi, -c[h] / g[h]);
+        } else if (c[h] < 0) {
+          hi = -1;
+        }
+      }
+      if (!(lo <= hi)) continue;
+      // Pixel coordinates (continuous, [0, n]) of both ends.
+      auto pixel_of = [&](double fw, double r, double up, double& pi, double& pj) {
+        pi = s.half_n * (1 + r / fw);
+        pj = s.half_n * (1 - up / fw);
+      };
+      double pi0, pj0, pi1, pj1;
+      const double fw_lo = fw0 + lo * fwd;
+      if (!(fw_lo > 0)) return false;
+      pixel_of(fw_lo, r0 + lo * rd, u0 + lo * ud, pi0, pj0);
+      if (hi == kInf) {
+        pixel_of(fwd, rd, ud, pi1, pj1);  // the vanishing point
+      } else {
+        const double fw_hi = fw0 + hi * fwd;
+        if (!(fw_hi > 0)) return false;
+        pixel_of(fw_hi, r0 + hi * rd, u0 + hi * ud, pi1, pj1);
+      }
+      if (!segment_is_background(s, f, pi0, pj0, pi1, pj1)) return false;
+    }
+    return true;
+  }
+
+  // Walks the pixels of face f crossed by the segment (pi0, pj0)-(pi1, pj1)
+  // in continuous pixel coordinates; false at the first finite depth.
+  static bool segment_is_background(const PreparedSample& s, int f, double pi0, double pj0, double pi1, double pj1) {
+    const int n = s.n;
+    auto cell = [n](double p) { return std::clamp(static_cast<int>(std::floor(p)), 0, n - 1); };
+    int i = cell(pi0), j = cell(pj0);
+    const int i_end = cell(pi1), j_end = cell(pj1);
+    const double di = pi1 - pi0, dj = pj1 - pj0;
+    const int step_i = di > 0 ? 1 : -1, step_j = dj > 0 ? 1 : -1;
+    // Parameter (0..1 along the segment) of the next vertical / horizontal pixel border.
+    const double inv_i = di != 0 ? 1 / std::fabs(di) : kInf, inv_j = dj != 0 ? 1 / std::fabs(dj) : kInf;
+    double next_i = di != 0 ? (di > 0 ? (i + 1 - pi0) : (pi0 - i)) * inv_i : kInf;
+    double next_j = dj != 0 ? (dj > 0 ? (j + 1 - pj0) : (pj0 - j)) * inv_j : kInf;
+    const float* depth = s.depth[f];
+    // At most |i_end - i| + |j_end - j| steps; an axis that has reached its
+    // end cell no longer steps (rounding near a pixel corner).
+    while (true) {
+      if (depth[static_cast<std::size_t>(j) * n + i] < kBackgroundDepth) return false;
+      if (i == i_end && j == j_end) return true;
+      if (j == j_end || (i != i_end && next_i < next_j)) {
+        i += step_i;
+        next_i += inv_i;
+      } else {
+        j += step_j;
+        next_j += inv_j;
+      }
+    }
+  }
+
+  const VoidParams& params_;
+  std::array<FaceAxes, kCubeFaces> axes_;
+  std::vector<PreparedSample> prepared_;
+  std::vector<char> prev_certified_;
+  std::vector<double> prev_depth_;
+  std::vector<char> tried_background_;
+};
+
+void validate(const Vec3d& candidate, std::span<const VoidSample> samples, const VoidParams& p) {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("void_fraction: " + what); };
+  if (samples.empty()) fail("no samples");
+  if (!is_finite(candidate)) fail("candidate is not finite");
+  if (p.face_size < 1) fail("face_size must be >= 1");
+  if (!(std::isfinite(p.step_ratio) && p.step_ratio > 0)) fail("step_ratio must be finite and > 0");
+  if (!(std::isfinite(p.start_distance) && p.start_distance > 0)) fail("start_distance must be finite and > 0");
+  if (!(std::isfinite(p.max_distance) && p.max_distance >= 0)) fail("max_distance must be finite and >= 0");
+  if (!(std::isfinite(p.surface_tolerance) && p.surface_tolerance >= 0)) fail("surface_tolerance must be finite and >= 0");
+  if (!(std::isfinite(p.jump) && p.jump >= 0)) fail("jump must be finite and >= 0");
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    const CubeSample* cube = samples[k].cube;
+    const std::string name = "sample " + std::to_string(k);
+    if (!cube) fail(name + " has no cube");
+    if (!is_finite(cube->eye)) fail(name + " has a non-finite eye");
+    const int n = cube->faces[0].size;
+    if (n < 1) fail(name + " has empty faces");
+    for (const CubeFace& face : cube->faces) {
+      if (face.size != n) fail(name + " has faces of differing sizes");
+      if (face.depth.size() != static_cast<std::size_t>(n) * n) fail(name + " has a depth array of the wrong length");
+    }
+  }
+}
+
+// The largest finite depth of a sample (0 when it sees only background).
+double largest_finite_depth(const CubeSample& cube) {
+  float largest = 0;
+  for (const CubeFace& face : cube.faces)
+    for (float d : face.depth)
+      if (d < kBackgroundDepth) largest = std::max(largest, d);
+  return largest;
+}
+
+// Solid angle of the part of a cube face (forward component 1) over [s0, s1] x [t0, t1].
+double face_solid_angle(double s0, double s1, double t0, double t1) {
+  auto f = [](double s, double t) { return std::atan2(s * t, std::sqrt(1 + s * s + t * t)); };
+  return f(s1, t1) - f(s0, t1) - f(s1, t0) + f(s0, t0);
+}
+
+}  // namespace
+
+VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> samples, const VoidParams& params) {
+  validate(candidate, samples, params);
+
+  double max_distance = params.max_distance;
+  if (max_distance == 0) {
+    for (const VoidSample& s : samples)
+      max_distance = std::max(max_distance, length(candidate - s.cube->eye) + 2 * largest_finite_depth(*s.cube));
+  }
+
+  const int n = params.face_size;
+  std::vector<double> weight(static_cast<std::size_t>(n) * n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double s0 = 2.0 * i / n - 1, s1 = 2.0 * (i + 1) / n - 1;
+      const double t0 = 1 - 2.0 * (j + 1) / n, t1 = 1 - 2.0 * j / n;
+      weight[static_cast<std::size_t>(j) * n + i] = face_solid_angle(s0, s1, t0, t1);
+    }
+
+  Marcher marcher(samples, params);
+  VoidResult result;
+  double void_weight = 0, total_weight = 0;
+  for (int f = 0; f < kCubeFaces; ++f) {
+    const FaceBasis basis = cube_face_basis(f);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const double s = 2 * (i + 0.5) / n - 1, t = 1 - 2 * (j + 0.5) / n;
+        const Vec3d d = cube_face_direction(basis, s, t);
+        const double w = weight[static_cast<std::size_t>(j) * n + i];
+        total_weight += w;
+        ++result.rays;
+        if (marcher.is_void(candidate, d * (1 / length(d)), max_distance)) {
+          ++result.void_rays;
+          void_weight += w;
+        }
+      }
+  }
+  result.fraction = std::clamp(void_weight / total_weight, 0.0, 1.0);
+  return result;
+}
+
+}  // namespace cellbake

@@ -1,0 +1,70 @@
+// Runtime sample selection for incremental textured depth meshes, Wilson 2002
+// §5.3 ("we choose the scan cube whose sample location is closest to the
+// user's viewpoint ... we also include the ancestors of S up to and including
+// the intra scan"), with a triangle budget for further samples.
+#include "viewer/sample_selection.h"
+
+#include <algorithm>
+#include <array>
+#include <map>
+
+namespace cellbake {
+
+std::vector<int> select_samples(const std::vector<SampleNode>& samples, const Vec3d& eye,
+                                const SampleSelectionParams& params) {
+  std::map<int, const SampleNode*> by_index;
+  for (const SampleNode& s : samples) by_index[s.index] = &s;
+  std::vector<const SampleNode*> nearest;
+  for (const SampleNode& s : samples) nearest.push_back(&s);
+  std::stable_sort(nearest.begin(), nearest.end(), [&](const SampleNode* a, const SampleNode* b) {
+    const double da = length(a->eye - eye), db = length(b->eye - eye);
+    return da < db || (da == db && a->index < b->index);
+  });
+  std::vector<int> chosen;
+  std::uint64_t triangles = 0;
+  int chains = 0;
+  for (const SampleNode* s : nearest) {
+    if (std::find(chosen.begin(), chosen.end(), s->index) != chosen.end()) continue;
+    // The chain: the sample and every ancestor not chosen yet.
+    std::vector<int> chain;
+    std::uint64_t cost = 0;
+    for (const SampleNode* n = s; n && chain.size() <= samples.size();) {
+      if (std::find(chosen.begin(), chosen.end(), n->index) == chosen.end()) {
+        chain.push_back(n->index);
+        cost += n->triangles;
+      }
+      auto it = by_index.find(n->parent);
+      n = n->parent >= 0 && it != by_index.end() ? it->second : nullptr;
+    }
+    // A chain that does not fit is skipped: a shorter or cheaper one further away may.
+    if (params.max_samples > 0 && chosen.size() + chain.size() > std::size_t(params.max_samples)) continue;
+    if (chains > 0 && triangles + cost > params.far_budget) continue;
+    chosen.insert(chosen.end(), chain.begin(), chain.end());
+    triangles += cost;
+    ++chains;
+  }
+  return chosen;
+}
+
+namespace {
+
+double max_dot(const Vec3d& n, const Vec3d& lo, const Vec3d& hi) {
+  double s = 0;
+  for (int k = 0; k < 3; ++k) s += n[k] * (n[k] >= 0 ? hi[k] : lo[k]);
+  return s;
+}
+
+}  // namespace
+
+bool box_in_view(const RenderCamera& c, const Box3d& box) {
+  if (box.empty()) return false;
+  const Vec3d lo = box.lo - c.eye, hi = box.hi - c.eye;
+  if (max_dot(c.forward, lo, hi) < c.near_plane) return false;
+  const std::array<Vec3d, 4> sides = {c.right - c.forward * c.tan_left, c.forward * c.tan_right - c.right,
+                                      c.up - c.forward * c.tan_bottom, c.forward * c.tan_top - c.up};
+  for (const Vec3d& n : sides)
+    if (max_dot(n, lo, hi) < 0) return false;
+  return true;
+}
+
+}  // namespace cellbake
