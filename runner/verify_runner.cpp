@@ -173,10 +173,11 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
       }
       if (options.sample_views && row->samples.size() > 1) {
         // Look from each sample point too, along the golden-angle directions the plans use after theirs.
-        const auto extra = plan_verify_views(row->bounds, flat, up, int(plans.size() + row->samples.size()),
+        const std::size_t planned = plans.size();
+        const auto extra = plan_verify_views(row->bounds, flat, up, int(planned + row->samples.size()),
                                              options.seed * 0x9E3779B97F4A7C15ull + std::uint64_t(task.id));
         for (std::size_t k = 0; k < row->samples.size(); ++k) {
-          VerifyViewPlan plan = extra[plans.size() + k];
+          VerifyViewPlan plan = extra[planned + k];
           plan.look = row->samples[k].eye + (plan.look - plan.eye);
           plan.eye = row->samples[k].eye;
           plan.kind = VerifyViewKind::sample;

@@ -42,6 +42,39 @@ double inverse_at(const CubeFace& f, int i, int j) {
   return std::isfinite(d) ? 1.0 / d : 0.0;  // 0 = background
 }
 
+// Turns kept (1) components of fewer than `min_size` pixels that touch no
+// background (0) pixel into redundant (2).
+void drop_specks(std::vector<std::uint8_t>& state, int n, int min_size) {
+  std::vector<int> stack, members;
+  std::vector<std::uint8_t> seen(state.size(), 0);
+  for (std::size_t start = 0; start < state.size(); ++start) {
+    if (state[start] != 1 || seen[start]) continue;
+    stack.assign(1, int(start));
+    members.clear();
+    seen[start] = 1;
+    bool touches_background = false;
+    while (!stack.empty()) {
+      const int k = stack.back();
+      stack.pop_back();
+      members.push_back(k);
+      const int i = k % n, j = k / n;
+      for (int dj = -1; dj <= 1; ++dj)
+        for (int di = -1; di <= 1; ++di) {
+          const int ii = i + di, jj = j + dj;
+          if ((di == 0 && dj == 0) || ii < 0 || jj < 0 || ii >= n || jj >= n) continue;
+          const int q = jj * n + ii;
+          if (state[q] == 0) touches_background = true;
+          if (state[q] == 1 && !seen[q]) {
+            seen[q] = 1;
+            stack.push_back(q);
+          }
+        }
+    }
+    if (!touches_background && int(members.size()) < min_size)
+      for (int k : members) state[std::size_t(k)] = 2;
+  }
+}
+
 }  // namespace
 
 bool sample_holds_point(const CubeSample& a, const Vec3d& point, const RedundancyParams& prm) {
@@ -72,10 +105,11 @@ bool sample_holds_point(const CubeSample& a, const Vec3d& point, const Redundanc
     for (int i : {i0, i1}) second(i, j0 - 1, i, j0, i, j1), second(i, j0, i, j1, i, j1 + 1);
     return std::abs(interpolated - w) <= prm.tolerance * w + 0.5 * curvature;
   }
-  // Across a depth jump: extrapolate each neighbour's own surface (a plane
-  // through it and its same-surface neighbours) to the point. A neighbour
-  // without a same-surface neighbour along an axis the point is offset along
-  // (a feature one pixel thin) says nothing, so the point is kept.
+  // Across a depth jump: extrapolate each neighbour's own surface to the
+  // point, along each axis from its same-surface neighbour ahead (towards the
+  // point) when there is one; from the one behind, or flat when the pixel has
+  // none along that axis (a feature one pixel thin, or the last pixel before a
+  // silhouette), with an allowance of `unknown_slope` per pixel of offset.
   const int ni[4] = {i0, i1, i0, i1}, nj[4] = {j0, j0, j1, j1};
   const double nw[4] = {w00, w10, w01, w11};
   for (int k = 0; k < 4; ++k) {
@@ -85,20 +119,22 @@ bool sample_holds_point(const CubeSample& a, const Vec3d& point, const Redundanc
       const double v = inverse_at(f, i, j);
       return v > 0 && std::max(v, nw[k]) <= std::min(v, nw[k]) * (1 + prm.jump) ? v : 0.0;
     };
-    const double dx = x - ni[k], dy = y - nj[k];
-    const auto slope = [&](double offset, int di, int dj) -> std::optional<double> {
-      const double ahead = same(ni[k] + di, nj[k] + dj), behind = same(ni[k] - di, nj[k] - dj);
-      if (offset >= 0 ? ahead > 0 : behind > 0) return offset >= 0 ? ahead - nw[k] : nw[k] - behind;
-      if (ahead > 0) return ahead - nw[k];
-      if (behind > 0) return nw[k] - behind;
-      if (std::abs(offset) < 1e-3) return 0.0;
-      return std::nullopt;
+    double predicted = nw[k], allowance = prm.tolerance * w;
+    const auto extrapolate = [&](double offset, int di, int dj) {
+      const double ahead = offset >= 0 ? same(ni[k] + di, nj[k] + dj) : same(ni[k] - di, nj[k] - dj);
+      const double behind = offset >= 0 ? same(ni[k] - di, nj[k] - dj) : same(ni[k] + di, nj[k] + dj);
+      const double step = std::abs(offset);
+      if (ahead > 0) {
+        predicted += (ahead - nw[k]) * step;
+        allowance += prm.edge_tolerance * std::abs(ahead - nw[k]) * step;
+      } else {
+        if (behind > 0) predicted += (nw[k] - behind) * step;
+        allowance += prm.unknown_slope * w * step;
+      }
     };
-    const std::optional<double> gx = slope(dx, 1, 0), gy = slope(dy, 0, 1);
-    if (!gx || !gy) continue;
-    const double predicted = nw[k] + *gx * dx + *gy * dy;
-    if (std::abs(predicted - w) <= prm.tolerance * w + prm.edge_tolerance * (std::abs(*gx * dx) + std::abs(*gy * dy)))
-      return true;
+    extrapolate(x - ni[k], 1, 0);
+    extrapolate(y - nj[k], 0, 1);
+    if (std::abs(predicted - w) <= allowance) return true;
   }
   return false;
 }
@@ -114,7 +150,7 @@ RedundancyStats remove_redundant_pixels(CubeSample& delta, std::span<const CubeS
       if (f.size != n || f.depth.size() != std::size_t(n) * n)
         throw std::invalid_argument("redundancy: ancestor faces differ from the delta sample's size " +
                                     std::to_string(n));
-  if (!(prm.tolerance >= 0) || !(prm.jump > 0) || !(prm.edge_tolerance >= 0) || prm.keep_margin < 0)
+  if (!(prm.tolerance >= 0) || !(prm.jump > 0) || !(prm.edge_tolerance >= 0) || prm.keep_margin < 0 || !(prm.unknown_slope >= 0))
     throw std::invalid_argument("redundancy: bad parameters");
   RedundancyStats stats;
   if (ancestors.empty()) {
@@ -142,6 +178,9 @@ RedundancyStats remove_redundant_pixels(CubeSample& delta, std::span<const CubeS
         state[k] = held ? 2 : 1;
       }
     }
+    // Drop kept specks smaller than min_island pixels (8-connected) that touch
+    // no background: noise of the test, not disocclusions worth a mesh.
+    if (prm.min_island > 1) drop_specks(state, n, prm.min_island);
     // Grow the kept pixels back over removed ones by keep_margin rings.
     for (int ring = 0; ring < prm.keep_margin; ++ring) {
       std::vector<std::uint8_t> grown = state;

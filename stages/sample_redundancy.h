@@ -22,11 +22,20 @@ struct RedundancyParams {
   // Where the ancestor's 2x2 neighbourhood spans a depth jump larger than this
   // (relative), it is not interpolated; the point then matches one of the four
   // pixels' own surfaces, extrapolated linearly from that pixel and its
-  // same-surface neighbours, within `tolerance` plus `edge_tolerance` times
-  // the extrapolated change (a pixel without same-surface neighbours matches
-  // nothing: the point is kept).
+  // same-surface neighbour towards the point, within `tolerance` plus
+  // `edge_tolerance` times the extrapolated change; along an axis without
+  // such a neighbour (a feature one pixel thin, or the last pixel before a
+  // silhouette) the surface is unknown and `unknown_slope` (relative depth per
+  // pixel of offset; 0.02 is a surface at ~80 degrees incidence at 512^2) is
+  // allowed instead. The pixel quad an ancestor's depth mesh draws reaches
+  // half a pixel past its centre, so this is what that mesh shows there.
   double jump = 0.1;
   double edge_tolerance = 0.25;
+  double unknown_slope = 0.02;
+  // Kept specks of fewer pixels than this (8-connected, not touching the
+  // background) are removed too: a delta mesh for them costs more than the
+  // pixel of parallax it would fix.
+  int min_island = 4;
   // Kept pixels grow by this many pixels (8-neighbourhood) back into the
   // removed ones, so that a delta mesh overlaps its ancestors' meshes along
   // the seam instead of leaving a crack there (the depth test resolves it).

@@ -1,15 +1,16 @@
 // Void-surface objective for Voronoi best-next-view sampling (Wilson 2002,
-// ch. 3, §3.4.2: "the solid angle subtended by the void surface" at a
+// ch. 3, §3.4.2: the solid angle subtended by the void surface at a
 // candidate). The thesis builds each sample's void surface from its skin
-// triangles and counts, per pixel of a panorama rendered at the candidate,
-// whether every sample's void surface is visible there (stencil; note that
-// the Appendix A pseudocode swaps the stencil arguments). Equivalently, a
-// view ray sees the global void surface when it leaves the union of the
-// samples' free space (the visible volume, §3.1.2) somewhere other than at a
-// sampled surface; this file marches each ray through that union, testing
-// points against the samples' depth cube maps (space carving), and sums the
-// exact solid angles of the void rays' pixels instead of the spherical-polygon
-// formula (19). See sample_void.h for the contract.
+// triangles and marks a pixel of a panorama rendered at the candidate as void
+// when every sample's void surface is visible there (a stencil count; the
+// Appendix A pseudocode has the stencil arguments swapped). Here the same idea
+// is carried out by space carving, without triangles: a view ray sees the
+// global void surface when it leaves the union of the samples' free space
+// (the visible volume, §3.1.2) other than through a sampled surface. Each
+// ray is marched against the samples' depth cube maps, and the void rays'
+// pixels are summed by their solid angles in closed form (equal to the
+// spherical-polygon area of equation (19)). See sample_void.h for the
+// contract.
 #include "stages/sample_void.h"
 
 #include <algorithm>
@@ -78,9 +79,19 @@ struct Projection {
   bool certified = true;
 };
 
+// The candidate's neighbourhood as one sample sees it: every point of the ball
+// of `radius` around the candidate is certified free by the sample and off its
+// surfaces (free), or uncertified and off its surfaces (blocked), so marching
+// can skip the sample while t < radius. radius 0: not known.
+struct NearBall {
+  double radius = 0;
+  bool free = false;
+};
+
 class Marcher {
  public:
-  Marcher(std::span<const VoidSample> samples, const VoidParams& params) : params_(params), axes_(face_axes()) {
+  Marcher(const Vec3d& candidate, std::span<const VoidSample> samples, const VoidParams& params, double max_distance)
+      : candidate_(candidate), params_(params), max_distance_(max_distance), axes_(face_axes()) {
     prepared_.reserve(samples.size());
     for (const VoidSample& s : samples) {
       PreparedSample p;
@@ -90,46 +101,82 @@ class Marcher {
       for (int f = 0; f < kCubeFaces; ++f) p.depth[f] = s.cube->faces[f].depth.data();
       prepared_.push_back(p);
     }
+    // Skip, on every ray, the steps inside the balls where no sample can change its verdict.
+    double common = kInf;
+    bool any_free = false;
+    near_.resize(prepared_.size());
+    for (std::size_t k = 0; k < prepared_.size(); ++k) {
+      near_[k] = near_ball(prepared_[k], max_distance);
+      common = std::min(common, near_[k].radius);
+      any_free = any_free || near_[k].free;
+    }
+    if (common > 0 && !any_free) all_void_ = true;  // every sample blocked at the first step
+    // The marching distances are the same on every ray: find the first one
+    // outside every ball (and the one before it).
+    first_t_ = params.start_distance;
+    while (first_t_ < common && first_t_ < max_distance) {
+      before_first_t_ = first_t_;
+      first_t_ = next_t(first_t_);
+    }
     prev_certified_.resize(samples.size());
     prev_depth_.resize(samples.size());
     tried_background_.resize(samples.size());
   }
 
-  // True when the ray from `origin` along unit `dir` sees the void surface.
-  bool is_void(const Vec3d& origin, const Vec3d& dir, double max_distance) {
-    std::fill(prev_certified_.begin(), prev_certified_.end(), 0);
-    std::fill(tried_background_.begin(), tried_background_.end(), 0);
-    const double grow = 1 + params_.step_ratio;
+  // True when the ray from the candidate along unit `dir` sees the void surface.
+  bool is_void(const Vec3d& dir) {
+    if (all_void_) return true;
     const double tol = params_.surface_tolerance;
     const double jump = params_.jump;
-    for (double t = params_.start_distance;; t = std::min(t * grow, max_distance)) {
-      const Vec3d x = origin + dir * t;
-      bool any_certified = false;
-      int background_sample = -1;
+    const double unknown = std::numeric_limits<double>::quiet_NaN();
+    const bool skipped = before_first_t_ > 0;  // the steps before first_t_ lie in every ball
+    for (std::size_t k = 0; k < prepared_.size(); ++k) {
+      prev_certified_[k] = skipped && near_[k].free;
+      prev_depth_[k] = unknown;
+      tried_background_[k] = 0;
+    }
+    Vec3d prev_x = candidate_ + dir * before_first_t_;
+    for (double t = first_t_;; t = next_t(t)) {
+      const Vec3d x = candidate_ + dir * t;
+      bool any_certified = false, all_background = true;
+      int untried_background = -1;
       for (std::size_t k = 0; k < prepared_.size(); ++k) {
+        if (t < near_[k].radius) {
+          prev_certified_[k] = near_[k].free;
+          prev_depth_[k] = unknown;
+          any_certified = any_certified || near_[k].free;
+          continue;
+        }
         const Projection p = project(prepared_[k], x);
         if (p.depth < kInf) {
+          all_background = false;
           if (std::fabs(p.z - p.depth) <= tol * p.z) return false;  // on a sampled surface
-          if (!p.certified && prev_certified_[k] &&
-              std::fabs(p.depth - prev_depth_[k]) <= jump * std::min(p.depth, prev_depth_[k]))
-            return false;  // stepped through a sampled surface
-        } else if (!tried_background_[k] && background_sample < 0) {
-          background_sample = static_cast<int>(k);
+          if (!p.certified && prev_certified_[k]) {
+            const double before = std::isnan(prev_depth_[k]) ? project(prepared_[k], prev_x).depth : prev_depth_[k];
+            if (std::fabs(p.depth - before) <= jump * std::min(p.depth, before)) return false;  // through a surface
+          }
+        } else if (!tried_background_[k] && untried_background < 0) {
+          untried_background = static_cast<int>(k);
         }
         prev_certified_[k] = p.certified;
         prev_depth_[k] = p.depth;
         any_certified = any_certified || p.certified;
       }
       if (!any_certified) return true;
-      if (t >= max_distance) return false;
-      if (background_sample >= 0) {
-        tried_background_[background_sample] = 1;
-        if (rest_is_background(prepared_[background_sample], x, dir)) return false;
+      if (t >= max_distance_) return false;
+      // Every sample sees background here: if one of them sees only
+      // background along the rest of the ray, it certifies all of it.
+      if (all_background && untried_background >= 0) {
+        tried_background_[untried_background] = 1;
+        if (rest_is_background(prepared_[untried_background], x, dir)) return false;
       }
+      prev_x = x;
     }
   }
 
  private:
+  double next_t(double t) const { return std::min(t * (1 + params_.step_ratio), max_distance_); }
+
   Projection project(const PreparedSample& s, const Vec3d& x) const {
     const double v[3] = {x.x - s.eye.x, x.y - s.eye.y, x.z - s.eye.z};
     Projection p;
@@ -144,6 +191,73 @@ class Marcher {
     p.depth = s.depth[face][static_cast<std::size_t>(j) * s.n + i];
     p.certified = p.z < p.depth;
     return p;
+  }
+
+  // The largest ball around the candidate (radius |candidate - eye| / 4,
+  // halved until it works or stops being useful) that sample s sees as wholly
+  // free or wholly blocked, judged from the depth range over the pixels the
+  // ball can project to. Planar depths of ball points lie in
+  // |c|_inf -+ radius (c = candidate - eye).
+  NearBall near_ball(const PreparedSample& s, double max_distance) const {
+    const Vec3d c = candidate_ - s.eye;
+    const double c_inf = std::max({std::fabs(c.x), std::fabs(c.y), std::fabs(c.z)});
+    const double tol = params_.surface_tolerance;
+    for (double r = std::min(0.25 * length(c), max_distance); r >= 2 * params_.start_distance; r *= 0.5) {
+      const double free_below = (c_inf + r) * (1 + tol), blocked_above = (c_inf - r) * (1 - tol);
+      float lo = 0, hi = 0;
+      footprint_depth_range(s, c, r, free_below, blocked_above, lo, hi);
+      if (free_below < lo) return {r, true};
+      if (hi < blocked_above) return {r, false};
+    }
+    return {};
+  }
+
+  // The smallest and largest stored depth over a set of pixels of s that
+  // holds every pixel a point of the ball (centre c relative to the eye,
+  // radius r < |c|) projects to: per face, the ball's (s, t) bounds, from
+  // its tangent planes through the eye when it lies wholly in front of the
+  // face, else from interval bounds on the ball's points inside the face's
+  // frustum (forward component >= (|c| - r) / sqrt(3) there), plus one pixel.
+  // Stops early, with a partial range, once lo <= free_below and hi >= blocked_above.
+  void footprint_depth_range(const PreparedSample& s, const Vec3d& c, double r, double free_below,
+                             double blocked_above, float& lo, float& hi) const {
+    lo = kBackgroundDepth;
+    hi = 0;
+    const double min_forward = (length(c) - r) / std::sqrt(3.0);
+    for (int f = 0; f < kCubeFaces; ++f) {
+      const FaceAxes& a = axes_[f];
+      const double fc = a.fwd_sign * c[a.fwd_axis];
+      if (fc + r < min_forward) continue;  // no ball point in this face's frustum
+      auto range = [&](double oc, double& from, double& to) {  // bounds of (o . v) / (f . v)
+        if (fc > r) {
+          const double root = r * std::sqrt(fc * fc + oc * oc - r * r), den = fc * fc - r * r;
+          from = (oc * fc - root) / den;
+          to = (oc * fc + root) / den;
+        } else {
+          const double d0 = std::max(min_forward, fc - r), d1 = fc + r;
+          from = std::min((oc - r) / d0, (oc - r) / d1);
+          to = std::max((oc + r) / d0, (oc + r) / d1);
+        }
+      };
+      double s0, s1, t0, t1;
+      range(a.right_sign * c[a.right_axis], s0, s1);
+      range(a.up_sign * c[a.up_axis], t0, t1);
+      if (s0 > 1 || s1 < -1 || t0 > 1 || t1 < -1) continue;
+      auto pixel = [&](double p) {
+        return static_cast<int>(std::clamp(std::floor(s.half_n * (1 + std::clamp(p, -1.0, 1.0))), 0.0, s.n - 1.0));
+      };
+      const int i0 = std::max(pixel(s0) - 1, 0), i1 = std::min(pixel(s1) + 1, s.n - 1);
+      const int j0 = std::max(pixel(-t1) - 1, 0), j1 = std::min(pixel(-t0) + 1, s.n - 1);
+      const float* depth = s.depth[f];
+      for (int j = j0; j <= j1; ++j) {
+        const float* row = depth + static_cast<std::size_t>(j) * s.n;
+        for (int i = i0; i <= i1; ++i) {
+          lo = std::min(lo, row[i]);
+          hi = std::max(hi, row[i]);
+        }
+        if (lo <= free_below && hi >= blocked_above) return;
+      }
+    }
   }
 
   // True when every pixel of sample s that the ray x + u dir (u >= 0) passes
@@ -224,9 +338,15 @@ class Marcher {
     }
   }
 
+  Vec3d candidate_;
   const VoidParams& params_;
+  double max_distance_;
   std::array<FaceAxes, kCubeFaces> axes_;
   std::vector<PreparedSample> prepared_;
+  std::vector<NearBall> near_;
+  double first_t_ = 0;         // the first marching distance outside every sample's near ball
+  double before_first_t_ = 0;  // the one before it, 0 when first_t_ = start_distance
+  bool all_void_ = false;      // every sample's near ball is blocked
   std::vector<char> prev_certified_;
   std::vector<double> prev_depth_;
   std::vector<char> tried_background_;
@@ -237,7 +357,7 @@ void validate(const Vec3d& candidate, std::span<const VoidSample> samples, const
   if (samples.empty()) fail("no samples");
   if (!is_finite(candidate)) fail("candidate is not finite");
   if (p.face_size < 1) fail("face_size must be >= 1");
-  if (!(std::isfinite(p.step_ratio) && p.step_ratio > 0)) fail("step_ratio must be finite and > 0");
+  if (!(std::isfinite(p.step_ratio) && 1 + p.step_ratio > 1)) fail("step_ratio must be finite and > 0 (and 1 + step_ratio > 1)");
   if (!(std::isfinite(p.start_distance) && p.start_distance > 0)) fail("start_distance must be finite and > 0");
   if (!(std::isfinite(p.max_distance) && p.max_distance >= 0)) fail("max_distance must be finite and >= 0");
   if (!(std::isfinite(p.surface_tolerance) && p.surface_tolerance >= 0)) fail("surface_tolerance must be finite and >= 0");
@@ -291,7 +411,7 @@ VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> sam
       weight[static_cast<std::size_t>(j) * n + i] = face_solid_angle(s0, s1, t0, t1);
     }
 
-  Marcher marcher(samples, params);
+  Marcher marcher(candidate, samples, params, max_distance);
   VoidResult result;
   double void_weight = 0, total_weight = 0;
   for (int f = 0; f < kCubeFaces; ++f) {
@@ -303,7 +423,7 @@ VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> sam
         const double w = weight[static_cast<std::size_t>(j) * n + i];
         total_weight += w;
         ++result.rays;
-        if (marcher.is_void(candidate, d * (1 / length(d)), max_distance)) {
+        if (marcher.is_void(d * (1 / length(d)))) {
           ++result.void_rays;
           void_weight += w;
         }

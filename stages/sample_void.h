@@ -43,9 +43,8 @@ struct VoidResult {
 //
 // Rays: the pixel centres of a cube map of face_size^2 pixels per face at the
 // candidate (rays = 6 * face_size^2), each weighted by the exact solid angle of
-// its pixel (the pixels tile the sphere; near the face centre the weight is
-// proportional to 1 / (1 + s^2 + t^2)^(3/2)), so `fraction` is the void solid
-// angle over 4 pi.
+// its pixel (about (2 / face_size)^2 / (1 + s^2 + t^2)^(3/2); the pixels tile
+// the sphere), so `fraction` is the void solid angle over 4 pi.
 //
 // Marching: points X at distances t_0 = start_distance, t_{k+1} = t_k (1 +
 // step_ratio), clamped to the last distance max_distance. X projects into
@@ -62,17 +61,24 @@ struct VoidResult {
 //  3. VOID if no sample certifies X (the ray is behind every sample's surfaces
 //     without having met a sampled surface; this includes a ray that starts,
 //     at start_distance, uncertified and not on a surface);
-//  4. SEEN once X is at max_distance, or when some sample certifies the whole
-//     rest of the ray: the ray's remaining projection into that sample's cube
-//     map (a segment on each face it crosses) covers only background pixels, so
-//     the ray can no longer become void.
+//  4. SEEN once X is at max_distance, or when every sample sees background at
+//     X and one of them (each tried at most once per ray) sees only
+//     background along the rest of the ray (its projection, a segment on each
+//     face it crosses, walked pixel by pixel): that sample certifies every
+//     later point, so the ray can no longer become void (a shortcut for rays
+//     into the sky; it does not change the outcome).
 // max_distance = 0 means max_k (|candidate - eye_k| + 2 * largest finite depth
 // of sample k), beyond which no sampled geometry lies (Euclidean distance <=
 // sqrt(3) * planar depth); samples with only background contribute
 // |candidate - eye_k|.
 //
 // Faces of one sample must have one size (samples may differ). Deterministic;
-// O(rays * steps * samples) in time, O(samples + face_size^2) in memory.
+// the order of `samples` does not matter (up to pixel rounding in the walk of
+// rule 4). O(rays * steps * samples) in
+// time, O(samples + face_size^2) in memory; steps near the candidate that no
+// sample can decide (a ball around it, per sample, seen as wholly free or
+// wholly hidden by that sample's depths) are skipped without changing the
+// outcome. With max_distance = 0 every depth of every sample is read once.
 // Throws std::invalid_argument for no samples, a null cube, faces of differing
 // sizes or with depth arrays of the wrong length, a non-finite candidate or
 // eye, or bad params (face_size < 1, step_ratio, start_distance not finite
