@@ -94,6 +94,8 @@ int run(int argc, char** argv) {
   if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", "1", 1);
   BakeConfig config = load_bake_config(args.config);
   if (!args.store.empty()) config.store = args.store;
+  config.samples_initial = "centre";  // the cell-centre sample alone: whole faces, no delta scans
+  config.samples_max = 1;
   GeometryStore store(config.store);
   ChunkRenderer renderer(create_gl_context(GlBackend::osmesa, 1, 1));
   SimplifyParams params;
@@ -112,7 +114,7 @@ int run(int argc, char** argv) {
     run_sample(work, config, store, renderer);
     run_depth_mesh(work, config);
     for (int f = 0; f < kCubeFaces; ++f) {
-      const FaceMesh& dense = work.dense[f];
+      const FaceMesh& dense = work.samples.at(0).dense[f];
       if (dense.indices.empty()) continue;
       std::vector<double> ours_s, mopt_s;
       SimplifyResult r;

@@ -99,6 +99,9 @@ const std::map<std::string, Setter>& setters() {
       {"sample.near_plane", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.near_plane = number(n, w, "sample.near_plane", 1e-6, 1e3);
        }},
+      {"sample.seam_shell_px", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.seam_shell_px = number(n, w, "sample.seam_shell_px", 0, 64);
+       }},
       {"samples.initial", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.samples_initial = text(n, w, "samples.initial", {"centre", "corners", "corners+centre"});
        }},
@@ -255,7 +258,7 @@ std::string describe_bake_config(const BakeConfig& c) {
   o.precision(17);
   o << "up=" << c.up << "\ncells.size=" << c.cell_size << "\nnear.budget=" << c.near_budget
     << "\nsample.face_size=" << c.face_size << "\nsample.supersample=" << c.supersample
-    << "\nsample.near_plane=" << c.near_plane << "\nsamples.initial=" << c.samples_initial
+    << "\nsample.near_plane=" << c.near_plane << "\nsample.seam_shell_px=" << c.seam_shell_px << "\nsamples.initial=" << c.samples_initial
     << "\nsamples.void_threshold=" << c.samples_void_threshold << "\nsamples.max=" << c.samples_max
     << "\nsamples.redundancy_tolerance=" << c.samples_redundancy_tolerance << "\nview.far_budget=" << c.far_budget
     << "\ndepth_mesh.skin_angle_deg=" << c.skin_angle_deg

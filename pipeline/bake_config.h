@@ -34,6 +34,10 @@ struct BakeConfig {
   int face_size = 512;           // stored cube-face resolution, pixels
   int supersample = 1;           // render at face_size * supersample, box-filter down
   double near_plane = 0.01;      // model units
+  // The far field reaches this many pixel footprints (at the cull box's
+  // distance) inside the cull box, so that from anywhere in the cell it
+  // overlaps the near field instead of leaving a seam along the box.
+  double seam_shell_px = 2.0;
 
   // [samples]: where a cell's panoramic samples go (Wilson 2002 ch. 3, ch. 5)
   std::string samples_initial = "corners+centre";  // "centre" | "corners" | "corners+centre"

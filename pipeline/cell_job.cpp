@@ -1,5 +1,6 @@
 #include "pipeline/cell_job.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include "stages/depth_mesh.h"
@@ -45,6 +46,7 @@ CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::str
   Hasher in;
   in.text(h.cull);
   in.text("sample").u64(StageVersions::sample).u64(c.face_size).u64(c.supersample).f64(c.near_plane);
+  in.f64(c.seam_shell_px);
   in.text("samples").text(c.samples_initial).f64(c.samples_void_threshold).u64(c.samples_max);
   in.f64(c.samples_redundancy_tolerance);
   if (cell.region >= 0 && std::size_t(cell.region) < c.regions.size()) hash_box(in, c.regions[std::size_t(cell.region)]);
@@ -106,7 +108,12 @@ void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& sou
   p.face_size = config.face_size;
   p.supersample = config.supersample;
   p.near_plane = config.near_plane;
-  const Box3d cull_box = Box3d::cube(work.cell.center(), work.cull->half_size);
+  // The far field keeps a shell seam_shell_px pixel footprints deep inside the
+  // box (never reaching into the cell): it overlaps the near field there.
+  const double footprint = 2.0 * work.cull->half_size / config.face_size;
+  const double shell = std::clamp(config.seam_shell_px * footprint, 0.0,
+                                  std::max(0.0, work.cull->half_size - work.cell.half_size()));
+  const Box3d discard_box = Box3d::cube(work.cell.center(), work.cull->half_size - shell);
   Box3d nav = work.cell.bounds;
   if (work.cell.region >= 0 && std::size_t(work.cell.region) < config.regions.size())
     nav = navigable_part(work.cell.bounds, config.regions[std::size_t(work.cell.region)]);
@@ -117,14 +124,14 @@ void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& sou
   const auto take = [&](const Vec3d& eye) {
     const auto t0 = Clock::now();
     SampleWork s;
-    s.cube = sample_cube(eye, cull_box, p, source, renderer);
+    s.cube = sample_cube(eye, discard_box, p, source, renderer);
     s.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     work.samples.push_back(std::move(s));
   };
   for (const Vec3d& eye : points) take(eye);
   // Best next view: the candidate that sees the most void, while it sees enough.
   VoidParams vp;
-  vp.max_distance = length(source.model_bounds().extent()) + length(cull_box.extent());
+  vp.max_distance = length(source.model_bounds().extent()) + length(discard_box.extent());
   while (true) {
     const auto t0 = Clock::now();
     const std::vector<Vec3d> candidates = next_view_candidates(nav, work.samples);

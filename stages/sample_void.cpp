@@ -16,6 +16,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -377,12 +379,21 @@ void validate(const Vec3d& candidate, std::span<const VoidSample> samples, const
 }
 
 // The largest finite depth of a sample (0 when it sees only background).
+// Non-negative floats order as their bit patterns; +inf is 0x7f800000 and
+// NaNs lie above it, negative values below 0. (Integer max vectorises.)
 double largest_finite_depth(const CubeSample& cube) {
-  float largest = 0;
-  for (const CubeFace& face : cube.faces)
-    for (float d : face.depth)
-      if (d < kBackgroundDepth) largest = std::max(largest, d);
-  return largest;
+  std::int32_t largest = 0;
+  for (const CubeFace& face : cube.faces) {
+    const float* depth = face.depth.data();
+    for (std::size_t i = 0; i < face.depth.size(); ++i) {
+      std::int32_t bits;
+      std::memcpy(&bits, depth + i, sizeof bits);
+      largest = std::max(largest, bits < 0x7f800000 ? bits : 0);
+    }
+  }
+  float out;
+  std::memcpy(&out, &largest, sizeof out);
+  return out;
 }
 
 // Solid angle of the part of a cube face (forward component 1) over [s0, s1] x [t0, t1].

@@ -21,6 +21,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -79,38 +82,76 @@ void add_box(std::vector<Triangle>& out, const Vec3d& c, const std::array<Vec3d,
   }
 }
 
-struct Bar {
-  int color = 0;        // index into kBarColors
-  bool vertical = true;  // measured along image rows (vertical) or columns (horizontal)
-};
-
 struct Scene {
-  InMemoryChunkSource source;
-  std::vector<Bar> bars;  // bar k is chunk id k + 2 (the room is chunk 1)
+  InMemoryChunkSource source;  // chunk 1: the room; 2...: one bar each
 };
 
-// The room and the bars (see the file comment).
-std::unique_ptr<Scene> make_scene() {
+// A plane o + h h_axis + v v_axis (|h| <= half_h, |v| <= half_v) painted with
+// stripes along v_axis, tilted by tilt_deg towards h_axis, `spacing` apart, in
+// the bar colours from `first_color` on, grey between (plain grey when spacing is 0): coplanar quads, so the
+// depth mesh sees one plane and the simplifier turns it into a few large
+// triangles; the stripes then live only in the texture.
+void add_painted_plane(std::vector<Triangle>& out, const Vec3d& o, const Vec3d& h_axis, const Vec3d& v_axis,
+                       double half_h, double half_v, double spacing, double tilt_deg, int first_color) {
+  const double slope = std::tan(tilt_deg * kDegree), shift = half_v * std::abs(slope);
+  const double widths[3] = {0.12, 0.2, 0.28};
+  // Boundary lines between bands, as their h at v = -half_v and at v = +half_v.
+  std::vector<std::pair<double, double>> lines = {{-half_h, -half_h}};
+  int k = 0;
+  for (double h = -half_h + shift + 1; spacing > 0 && h + 0.3 + shift + 1 < half_h; h += spacing, ++k)
+    for (double edge : {h, h + widths[k % 3]}) lines.push_back({edge - half_v * slope, edge + half_v * slope});
+  lines.push_back({half_h, half_h});
+  const auto at = [&](double h, double v) { return o + h_axis * h + v_axis * v; };
+  for (std::size_t i = 0; i + 1 < lines.size(); ++i) {
+    const Rgba8 color = i % 2 ? kBarColors[(first_color + i / 2) % 6].rgba : kWall;
+    const Vec3d a = at(lines[i].first, -half_v), b = at(lines[i + 1].first, -half_v);
+    const Vec3d c = at(lines[i + 1].second, half_v), d = at(lines[i].second, half_v);
+    out.push_back(flat_triangle(a, b, c, color));
+    out.push_back(flat_triangle(a, c, d, color));
+  }
+}
+
+// The room (plain, or with stripes painted on its walls and floor) and, in the
+// plain room, the bars (see the file comment).
+std::unique_ptr<Scene> make_scene(bool painted) {
   auto scene = std::make_unique<Scene>();
   std::vector<Triangle> room;
   const double turn = 17 * kDegree;
-  add_box(room, kEye + Vec3d{1.3, -0.9, 2.4}, {Vec3d{std::cos(turn), std::sin(turn), 0}, Vec3d{-std::sin(turn), std::cos(turn), 0}, Vec3d{0, 0, 1}},
-          {30, 30, 10}, kWall);
-  scene->source.add(chunk_from_triangles(1, room));
+  const Vec3d centre = kEye + Vec3d{1.3, -0.9, 2.4}, z{0, 0, 1};
+  const Vec3d ex{std::cos(turn), std::sin(turn), 0}, ey{-std::sin(turn), std::cos(turn), 0};
+  if (!painted) {
+    add_box(room, centre, {ex, ey, z}, {30, 30, 10}, kWall);
+    scene->source.add(chunk_from_triangles(1, room));
+  } else {
+    // Walls (near-vertical stripes 3.3 m apart), floor (stripes 1.7 m apart), plain ceiling.
+    add_painted_plane(room, centre + ex * 30, ey, z, 30, 10, 3.3, 4, 0);
+    add_painted_plane(room, centre - ex * 30, ey, z, 30, 10, 3.3, -5, 1);
+    add_painted_plane(room, centre + ey * 30, ex, z, 30, 10, 3.3, 6, 2);
+    add_painted_plane(room, centre - ey * 30, ex, z, 30, 10, 3.3, -3.5, 3);
+    add_painted_plane(room, centre - z * 10, ex, ey, 30, 30, 1.7, 8, 4);
+    add_painted_plane(room, centre + z * 10, ex, ey, 30, 30, 0, 0, 0);
+    scene->source.add(chunk_from_triangles(1, room));
+    return scene;
+  }
   const double floor = kEye.z + 2.4 - 10, ceiling = kEye.z + 2.4 + 10;
   const double distances[5] = {5, 7.5, 11, 15, 20};
   const double widths[5] = {0.03, 0.05, 0.04, 0.07, 0.09};  // metres: about 1.5 to 2.3 px of a 512 face
   std::int64_t id = 2;
-  // Vertical bars every 30 degrees of azimuth, floor to ceiling.
+  // Vertical bars every 30 degrees of azimuth, floor to ceiling (and through both).
   for (int k = 0; k < 12; ++k) {
     const double azimuth = (11 + 30 * k) * kDegree, d = distances[k % 5], w = widths[(k + 2) % 5];
     const Vec3d radial{std::cos(azimuth), std::sin(azimuth), 0}, tangent{-std::sin(azimuth), std::cos(azimuth), 0};
     const Vec3d centre{kEye.x + d * radial.x, kEye.y + d * radial.y, 0.5 * (floor + ceiling)};
+    // Tilted a few degrees sideways (the slanted-edge method): along the bar
+    // its edges cross the pixel grid at every phase, so the scanline average
+    // measures placement rather than one phase's rounding.
+    const double tilt = (k % 2 ? 3.0 + 0.7 * k : -2.5 - 0.6 * k) * kDegree;
+    const Vec3d axis = Vec3d{0, 0, std::cos(tilt)} + tangent * std::sin(tilt);
+    const Vec3d across = tangent * std::cos(tilt) - Vec3d{0, 0, std::sin(tilt)};
     std::vector<Triangle> t;
-    add_box(t, centre, {tangent, radial, Vec3d{0, 0, 1}}, {w / 2, w / 2, 0.5 * (ceiling - floor) - 0.01},
+    add_box(t, centre, {across, radial, axis}, {w / 2, w / 2, 0.5 * (ceiling - floor) / std::cos(tilt)},
             kBarColors[k % 6].rgba);
     scene->source.add(chunk_from_triangles(id++, t));
-    scene->bars.push_back({k % 6, true});
   }
   // Horizontal bars along the tangent, spanning +-40 degrees of azimuth, at
   // elevations between 13 and 20 degrees above and below the eye.
@@ -124,7 +165,6 @@ std::unique_ptr<Scene> make_scene() {
     add_box(t, centre, {tangent, radial, Vec3d{0, 0, 1}}, {d * std::tan(40 * kDegree), w / 2, w / 2},
             kBarColors[(k + 3) % 6].rgba);
     scene->source.add(chunk_from_triangles(id++, t));
-    scene->bars.push_back({(k + 3) % 6, false});
   }
   return scene;
 }
@@ -168,13 +208,33 @@ struct Frame {
   const Rgba8& at(int x, int y) const { return color[std::size_t(y) * width + x]; }
 };
 
+// The ground truth, antialiased: drawn at kTruthSupersample times the
+// resolution and box-filtered, so a pixel's colour is the coverage-weighted
+// blend and a bar's centroid and width are exact to ~1/kTruthSupersample px
+// even where its edges are parallel to the pixel grid.
+constexpr int kTruthSupersample = 8;
+
 Frame draw_truth(Pipeline& gl, const Scene& scene, const RenderCamera& camera, int width, int height) {
-  Frame f{width, height, {}, {}};
+  const int f = kTruthSupersample, big_width = width * f;
+  std::vector<Rgba8> color;
+  std::vector<float> depth;
   const std::vector<std::int64_t> ids = chunks_in_view(camera, scene.source);
-  gl.chunks.begin_frame(width, height);
+  gl.chunks.begin_frame(big_width, height * f);
   gl.chunks.draw(camera, Box3d{}, ids, [&](std::int64_t id) { return scene.source.load(id); });
-  gl.chunks.read_frame(f.color, f.depth);
-  return f;
+  gl.chunks.read_frame(color, depth);
+  Frame out{width, height, std::vector<Rgba8>(std::size_t(width) * height), {}};
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      unsigned sum[3] = {0, 0, 0};
+      for (int dy = 0; dy < f; ++dy)
+        for (int dx = 0; dx < f; ++dx) {
+          const Rgba8& c = color[std::size_t(y * f + dy) * big_width + std::size_t(x * f + dx)];
+          sum[0] += c.r, sum[1] += c.g, sum[2] += c.b;
+        }
+      const auto average = [&](unsigned s) { return std::uint8_t((s + f * f / 2) / (f * f)); };
+      out.color[std::size_t(y) * width + x] = {average(sum[0]), average(sum[1]), average(sum[2]), 255};
+    }
+  return out;
 }
 
 Frame draw_impostor(Pipeline& gl, const std::vector<std::uint64_t>& handles, const RenderCamera& camera, int width,
@@ -186,11 +246,12 @@ Frame draw_impostor(Pipeline& gl, const std::vector<std::uint64_t>& handles, con
   return f;
 }
 
-// Per bar and view: the mean over its clean scanlines of the impostor's
-// centroid minus the truth's (pixels, along +x for vertical bars, +y for
-// horizontal ones) and of the width difference.
+// One bar seen in one view: the mean over its clean scanlines of the
+// impostor's centroid minus the truth's (pixels, along +x across a vertical
+// bar, +y across a horizontal one) and of the width difference.
 struct BarMeasure {
-  int bar = 0, view = 0, lines = 0;
+  int view = 0, color = 0, lines = 0;
+  bool vertical = true;
   double offset = 0, width_difference = 0, truth_width = 0;
 };
 
@@ -201,77 +262,81 @@ struct Measures {
   double psnr_db() const { return samples ? 10 * std::log10(255.0 * 255.0 / (squared_error / samples)) : 0; }
 };
 
-constexpr int kWindowMargin = 5;  // pixels each side of the truth's run of bar pixels
+constexpr int kWindowMargin = 5;     // pixels each side of the truth's run of bar pixels
+constexpr int kMaxBarWidth = 16;     // longer runs are bars seen lengthwise, not across
 constexpr int kCleanNeighbours = 3;  // scanlines each side that must be clean too (away from bar ends and crossings)
 
-// Measures every bar of `scene` in one view.
-void measure_view(const Scene& scene, const Frame& truth, const Frame& impostor, int view, Measures& out) {
-  for (std::size_t b = 0; b < scene.bars.size(); ++b) {
-    const Bar& bar = scene.bars[b];
-    const BarColor& color = kBarColors[bar.color];
-    // Scanlines run along x for a vertical bar; `along` indexes pixels in a scanline, `line` the scanlines.
-    const int lines = bar.vertical ? truth.height : truth.width, along = bar.vertical ? truth.width : truth.height;
-    const auto pixel = [&](const Frame& f, int line, int k) -> const Rgba8& {
-      return bar.vertical ? f.at(k, line) : f.at(line, k);
-    };
-    struct Window {
-      bool clean = false;
-      int lo = 0, hi = 0;
-    };
-    std::vector<Window> windows(lines);
-    for (int line = 0; line < lines; ++line) {
-      int first = -1, last = -1, runs = 0;
-      for (int k = 0; k < along; ++k)
-        if (pixel(truth, line, k) == color.rgba) {
-          if (last != k - 1 || first < 0) ++runs;
-          if (first < 0) first = k;
-          last = k;
-        }
-      if (runs != 1) continue;
-      Window w{true, first - kWindowMargin, last + kWindowMargin};
-      if (w.lo < 0 || w.hi >= along) continue;
-      for (int k = w.lo; k <= w.hi && w.clean; ++k) {
-        const Rgba8& c = pixel(truth, line, k);
-        w.clean = c == kWall || c == color.rgba;
+// Whether truth pixel `c` is a blend of the wall and bar colour `b` only.
+bool wall_or_bar(const BarColor& b, const Rgba8& c) {
+  const int v[3] = {c.r, c.g, c.b};
+  for (int ch = 0; ch < 3; ++ch)
+    if (ch != b.channel && v[ch] != 128) return false;
+  return b.sign * (v[b.channel] - 128) >= 0;
+}
+
+// Measures every bar crossing of one view. A bar is found by its colour in the
+// (antialiased) truth: along each scanline one run of at most kMaxBarWidth
+// pixels with that colour's weight, inside a window of wall and bar blends.
+void measure_view(const Frame& truth, const Frame& impostor, int view, Measures& out) {
+  for (int color_index = 0; color_index < int(kBarColors.size()); ++color_index)
+    for (bool vertical : {true, false}) {
+      const BarColor& color = kBarColors[color_index];
+      // Scanlines run along x across a vertical bar; `along` indexes pixels in a scanline.
+      const int lines = vertical ? truth.height : truth.width, along = vertical ? truth.width : truth.height;
+      const auto pixel = [&](const Frame& f, int line, int k) -> const Rgba8& {
+        return vertical ? f.at(k, line) : f.at(line, k);
+      };
+      struct Window {
+        bool clean = false;
+        int lo = 0, hi = 0;
+      };
+      std::vector<Window> windows(lines);
+      for (int line = 0; line < lines; ++line) {
+        int first = -1, last = -1, runs = 0;
+        for (int k = 0; k < along; ++k)
+          if (bar_weight(color, pixel(truth, line, k)) > 0) {
+            if (first < 0 || last != k - 1) ++runs;
+            if (first < 0) first = k;
+            last = k;
+          }
+        if (runs != 1 || last - first + 1 > kMaxBarWidth) continue;
+        Window w{true, first - kWindowMargin, last + kWindowMargin};
+        if (w.lo < 0 || w.hi >= along) continue;
+        for (int k = w.lo; k <= w.hi && w.clean; ++k) w.clean = wall_or_bar(color, pixel(truth, line, k));
+        windows[line] = w;
       }
-      windows[line] = w;
-    }
-    BarMeasure m;
-    m.bar = static_cast<int>(b);
-    m.view = view;
-    for (int line = kCleanNeighbours; line < lines - kCleanNeighbours; ++line) {
-      bool clean = true;
-      for (int d = -kCleanNeighbours; d <= kCleanNeighbours; ++d) clean = clean && windows[line + d].clean;
-      if (!clean) continue;
-      const Window& w = windows[line];
-      double tw = 0, tx = 0, iw = 0, ix = 0;
-      for (int k = w.lo; k <= w.hi; ++k) {
-        const Rgba8 &t = pixel(truth, line, k), &i = pixel(impostor, line, k);
-        const double a = bar_weight(color, t), c = bar_weight(color, i);
-        tw += a, tx += a * k, iw += c, ix += c * k;
-        for (int ch = 0; ch < 3; ++ch) {
-          const double e = double((&t.r)[ch]) - double((&i.r)[ch]);
-          out.squared_error += e * e;
+      BarMeasure m;
+      m.view = view;
+      m.color = color_index;
+      m.vertical = vertical;
+      for (int line = kCleanNeighbours; line < lines - kCleanNeighbours; ++line) {
+        bool clean = true;
+        for (int d = -kCleanNeighbours; d <= kCleanNeighbours; ++d) clean = clean && windows[line + d].clean;
+        if (!clean) continue;
+        const Window& w = windows[line];
+        double tw = 0, tx = 0, iw = 0, ix = 0;
+        for (int k = w.lo; k <= w.hi; ++k) {
+          const Rgba8 &t = pixel(truth, line, k), &i = pixel(impostor, line, k);
+          const double a = bar_weight(color, t), c = bar_weight(color, i);
+          tw += a, tx += a * k, iw += c, ix += c * k;
+          for (int ch = 0; ch < 3; ++ch) {
+            const double e = double((&t.r)[ch]) - double((&i.r)[ch]);
+            out.squared_error += e * e;
+          }
+          out.samples += 3;
         }
-        out.samples += 3;
-      }
-      if (!(iw > 0.25)) {  // the bar is missing from the impostor here: count it as its full width missing
-        m.width_difference -= tw;
-        m.truth_width += tw;
         ++m.lines;
-        continue;
+        m.truth_width += tw;
+        m.width_difference += iw - tw;
+        // A bar missing from the impostor counts as missing width, not as an offset.
+        if (iw > 0.25) m.offset += ix / iw - tx / tw;
       }
-      m.offset += ix / iw - tx / tw;
-      m.width_difference += iw - tw;
-      m.truth_width += tw;
-      ++m.lines;
+      if (m.lines == 0) continue;
+      m.offset /= m.lines;
+      m.width_difference /= m.lines;
+      m.truth_width /= m.lines;
+      out.bars.push_back(m);
     }
-    if (m.lines == 0) continue;
-    m.offset /= m.lines;
-    m.width_difference /= m.lines;
-    m.truth_width /= m.lines;
-    out.bars.push_back(m);
-  }
 }
 
 struct View {
@@ -287,8 +352,17 @@ struct Summary {
   double psnr_db = 0;
 };
 
+// Writes `f` as a PNG (for a person looking at a failure; see run_views).
+void write_png(const Frame& f, const std::filesystem::path& file) {
+  ImageEncodeParams png;
+  png.format = "png";
+  const std::vector<std::uint8_t> bytes = encode_image(f.color, f.width, f.height, png);
+  std::ofstream(file, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+}
+
+// With CELLBAKE_KEEP_TEST_DIRS set, the frames are written into `dir` as well.
 Summary run_views(Pipeline& gl, const Scene& scene, const std::vector<std::uint64_t>& handles, int width, int height,
-                  double fov_y_deg, const char* label) {
+                  double fov_y_deg, const char* label, const test::TempDir& dir) {
   Measures all;
   for (std::size_t v = 0; v < kViews.size(); ++v) {
     const double a = kViews[v].azimuth_deg * kDegree, e = kViews[v].elevation_deg * kDegree;
@@ -296,7 +370,11 @@ Summary run_views(Pipeline& gl, const Scene& scene, const std::vector<std::uint6
     const RenderCamera camera = look_at_camera(kEye, look, {0, 0, 1}, fov_y_deg, width, height);
     const Frame truth = draw_truth(gl, scene, camera, width, height);
     const Frame impostor = draw_impostor(gl, handles, camera, width, height);
-    measure_view(scene, truth, impostor, static_cast<int>(v), all);
+    measure_view(truth, impostor, static_cast<int>(v), all);
+    if (std::getenv("CELLBAKE_KEEP_TEST_DIRS")) {
+      write_png(truth, dir / ("view" + std::to_string(v) + "_truth.png"));
+      write_png(impostor, dir / ("view" + std::to_string(v) + "_impostor.png"));
+    }
   }
   Summary s;
   for (const BarMeasure& m : all.bars) {
@@ -307,8 +385,8 @@ Summary run_views(Pipeline& gl, const Scene& scene, const std::vector<std::uint6
     s.max_abs_width = std::max(s.max_abs_width, std::abs(m.width_difference));
     s.lines += static_cast<std::size_t>(m.lines);
     if (std::getenv("CELLBAKE_REGISTRATION_VERBOSE"))
-      std::printf("  %s bar %2d (%s) view %2d: %4d lines, width %.2f px, offset %+.3f px, width diff %+.3f px\n", label,
-                  m.bar, scene.bars[m.bar].vertical ? "v" : "h", m.view, m.lines, m.truth_width, m.offset,
+      std::printf("  %s view %2d colour %d (%s): %4d lines, width %.2f px, offset %+.3f px, width diff %+.3f px\n",
+                  label, m.view, m.color, m.vertical ? "v" : "h", m.lines, m.truth_width, m.offset,
                   m.width_difference);
   }
   s.bars = all.bars.size();
@@ -326,45 +404,51 @@ Summary run_views(Pipeline& gl, const Scene& scene, const std::vector<std::uint6
 struct Case {
   int face_size, supersample;
   Stage stage;
+  bool painted;  // stripes painted on the room instead of bars in front of it
 };
 
 std::string stage_name(Stage s) {
   return s == Stage::dense ? "dense" : (s == Stage::simplified ? "simplified" : "encoded");
 }
 
+std::string case_name(const Case& c) {
+  return std::string(c.painted ? "painted" : "bars") + "_face" + std::to_string(c.face_size) + "_ss" +
+         std::to_string(c.supersample) + "_" + stage_name(c.stage);
+}
+
 class Registration : public ::testing::TestWithParam<Case> {};
 
-TEST_P(Registration, ImpostorAtTheSamplePointPutsBarEdgesWhereTheTruthDoes) {
-  test::TempDir dir;  // nothing is written; kept for the house rule (and CELLBAKE_KEEP_TEST_DIRS)
+TEST_P(Registration, ImpostorAtTheSamplePointPutsEdgesWhereTheTruthDoes) {
+  test::TempDir dir;  // frames go here with CELLBAKE_KEEP_TEST_DIRS
   const Case c = GetParam();
-  const auto scene = make_scene();
+  const auto scene = make_scene(c.painted);
   Pipeline gl;
   SampleParams sp;
   sp.face_size = c.face_size;
   sp.supersample = c.supersample;
   const CubeSample sample = sample_cube(kEye, Box3d::cube(kEye, 0.5), sp, scene->source, gl.chunks);
   const std::vector<std::uint64_t> handles = upload_impostor(gl, sample, c.stage);
-  const std::string label = "face " + std::to_string(c.face_size) + " ss " + std::to_string(c.supersample) + " " +
-                            stage_name(c.stage);
+  const std::string label = case_name(c);
   // About the faces' angular resolution at the image centre (90 degrees over
   // face_size pixels), but not equal, and not square.
   const int height = c.face_size * 3 / 5 + 7, width = height * 4 / 3 + 3;
-  const Summary s = run_views(gl, *scene, handles, width, height, 56.0, label.c_str());
+  const Summary s = run_views(gl, *scene, handles, width, height, 56.0, label.c_str(), dir);
   ASSERT_GT(s.bars, 30u);
   EXPECT_LT(std::abs(s.mean_offset), 0.1) << label;
   EXPECT_LT(std::abs(s.mean_width_difference), 0.2) << label;
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Faces, Registration,
-    ::testing::Values(Case{256, 1, Stage::dense}, Case{256, 2, Stage::dense}, Case{512, 1, Stage::dense},
-                      Case{512, 2, Stage::dense}, Case{256, 2, Stage::simplified}, Case{512, 1, Stage::simplified},
-                      Case{512, 2, Stage::simplified}, Case{256, 2, Stage::encoded}, Case{512, 1, Stage::encoded},
-                      Case{512, 2, Stage::encoded}),
-    [](const ::testing::TestParamInfo<Case>& info) {
-      return "face" + std::to_string(info.param.face_size) + "_ss" + std::to_string(info.param.supersample) + "_" +
-             stage_name(info.param.stage);
-    });
+std::vector<Case> all_cases() {
+  std::vector<Case> cases;
+  for (bool painted : {false, true})
+    for (Stage stage : {Stage::dense, Stage::simplified, Stage::encoded})
+      for (int face_size : {256, 512})
+        for (int supersample : {1, 2}) cases.push_back({face_size, supersample, stage, painted});
+  return cases;
+}
+
+INSTANTIATE_TEST_SUITE_P(Faces, Registration, ::testing::ValuesIn(all_cases()),
+                         [](const ::testing::TestParamInfo<Case>& info) { return case_name(info.param); });
 
 }  // namespace
 }  // namespace cellbake

@@ -5,6 +5,8 @@
 #include "viewer/tdm_renderer.h"
 
 #include <array>
+#include <cmath>
+#include <cstddef>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -14,39 +16,63 @@
 namespace cellbake {
 namespace {
 
+// Texture coordinates are projective (the face image is projected from the
+// sample's eye onto the mesh, Segal et al. 1992): a vertex carries (u q, v q, q)
+// with q its planar depth in its cube face's frame, the rasteriser interpolates
+// them linearly over the triangle in 3D (perspective-correct), and the fragment
+// divides. That gives every point of a triangle the texel on the sample ray
+// through it, as the cube-face camera saw it. Plain (u, v) interpolated
+// perspective-correctly would instead be linear in 3D over the triangle, which
+// differs from the projection wherever a triangle's corners lie at different
+// depths from the sample eye: nothing in a dense one-pixel mesh, but pixels to
+// tens of pixels inside the large triangles the simplifier leaves on slanted
+// planes, so textures slid about under their geometry even at the sample point.
 constexpr const char* kVertexShader = R"(#version 330 core
 layout(location = 0) in vec3 a_position;  // relative to the sample's eye
-layout(location = 1) in vec2 a_uv;
+layout(location = 1) in vec3 a_uvq;       // (u q, v q, q), q = planar depth in the face's frame
 uniform vec3 u_offset;                    // sample eye - camera eye, world axes
 uniform mat4 u_view_projection;
 uniform vec3 u_forward;
-out vec2 v_uv;
+out vec3 v_uvq;
 out float v_view_depth;
 void main() {
   vec3 relative = a_position + u_offset;
-  v_uv = a_uv;
+  v_uvq = a_uvq;
   v_view_depth = dot(relative, u_forward);
   gl_Position = u_view_projection * vec4(relative, 1.0);
 }
 )";
 
 constexpr const char* kFragmentShader = R"(#version 330 core
-in vec2 v_uv;
+in vec3 v_uvq;
 in float v_view_depth;
 uniform sampler2D u_image;
 uniform vec4 u_tint;
 layout(location = 0) out vec4 o_color;
 layout(location = 1) out float o_view_depth;
 void main() {
-  vec4 c = texture(u_image, v_uv);
+  vec4 c = textureProj(u_image, v_uvq);  // texture at v_uvq.xy / v_uvq.z
   o_color = vec4(mix(c.rgb, u_tint.rgb, u_tint.a), 1.0);
   o_view_depth = v_view_depth;
 }
 )";
 
 struct Vertex {
-  float x, y, z, u, v;
+  float x, y, z;
+  float uq, vq, q;  // projective texture coordinates (see kVertexShader)
 };
+
+// The planar depth of a face-mesh vertex in its cube face's frame: the vertex
+// lies on the sample ray through face coordinates s = 2 u - 1, t = 1 - 2 v
+// (stages/cube_map.h), i.e. at q (forward + s right + t up), so q is its
+// distance over |(1, s, t)|. Needs no face index; any common scale of q would
+// do (it cancels in the divide), but not a per-vertex error, and this is exact
+// up to the encoder's quantisation of the position.
+float planar_depth(const Vec3f& p, const Uv& uv) {
+  const double s = 2.0 * uv.u - 1.0, t = 1.0 - 2.0 * uv.v;
+  const double distance = std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z);
+  return static_cast<float>(distance / std::sqrt(1.0 + s * s + t * t));
+}
 
 std::unique_ptr<GlFunctions> load_for(GlContext* context) {
   if (!context) throw std::invalid_argument("tdm_renderer: null GL context");
@@ -96,8 +122,15 @@ std::uint64_t TdmRenderer::upload(const FaceMesh& mesh, const DecodedImage& imag
   for (std::uint32_t i : mesh.indices)
     if (i >= n) throw std::runtime_error("tdm_renderer: index " + std::to_string(i) + " out of range");
   std::vector<Vertex> vertices(n);
-  for (std::size_t i = 0; i < n; ++i)
-    vertices[i] = {mesh.positions[i].x, mesh.positions[i].y, mesh.positions[i].z, mesh.uvs[i].u, mesh.uvs[i].v};
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3f& p = mesh.positions[i];
+    const Uv& uv = mesh.uvs[i];
+    // A vertex at the sample eye itself (never made by build_depth_meshes)
+    // would divide by zero: keep q positive.
+    float q = planar_depth(p, uv);
+    if (!(q > 1e-20f)) q = 1e-20f;
+    vertices[i] = {p.x, p.y, p.z, uv.u * q, uv.v * q, q};
+  }
 
   context_->make_current();
   const GlFunctions& gl = *gl_;
@@ -114,8 +147,8 @@ std::uint64_t TdmRenderer::upload(const FaceMesh& mesh, const DecodedImage& imag
   gl.EnableVertexAttribArray(0);
   gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex), reinterpret_cast<const void*>(0));
   gl.EnableVertexAttribArray(1);
-  gl.VertexAttribPointer(1, 2, GL_FLOAT, GL_FALSE, sizeof(Vertex),
-                         reinterpret_cast<const void*>(offsetof(Vertex, u)));
+  gl.VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex),
+                         reinterpret_cast<const void*>(offsetof(Vertex, uq)));
   gl.GenBuffers(1, &u.index_buffer);
   gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, u.index_buffer);
   gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(mesh.indices.size() * 4), mesh.indices.data(),
