@@ -111,6 +111,9 @@ const std::map<std::string, Setter>& setters() {
       {"samples.max", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.samples_max = int(integer(n, w, "samples.max", 1, 64));
        }},
+      {"samples.void_resolution", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.samples_void_resolution = int(integer(n, w, "samples.void_resolution", 4, 256));
+       }},
       {"samples.redundancy_tolerance", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.samples_redundancy_tolerance = number(n, w, "samples.redundancy_tolerance", 0, 0.1);
        }},
@@ -259,7 +262,7 @@ std::string describe_bake_config(const BakeConfig& c) {
   o << "up=" << c.up << "\ncells.size=" << c.cell_size << "\nnear.budget=" << c.near_budget
     << "\nsample.face_size=" << c.face_size << "\nsample.supersample=" << c.supersample
     << "\nsample.near_plane=" << c.near_plane << "\nsample.seam_shell_px=" << c.seam_shell_px << "\nsamples.initial=" << c.samples_initial
-    << "\nsamples.void_threshold=" << c.samples_void_threshold << "\nsamples.max=" << c.samples_max
+    << "\nsamples.void_threshold=" << c.samples_void_threshold << "\nsamples.max=" << c.samples_max << "\nsamples.void_resolution=" << c.samples_void_resolution
     << "\nsamples.redundancy_tolerance=" << c.samples_redundancy_tolerance << "\nview.far_budget=" << c.far_budget
     << "\ndepth_mesh.skin_angle_deg=" << c.skin_angle_deg
     << "\ndepth_mesh.depth_jump=" << c.depth_jump

@@ -43,6 +43,7 @@ struct BakeConfig {
   std::string samples_initial = "corners+centre";  // "centre" | "corners" | "corners+centre"
   double samples_void_threshold = 0.005;  // stop adding samples when the worst candidate's void is below this fraction of the sphere
   int samples_max = 12;                   // cap on samples per cell (initial set included)
+  int samples_void_resolution = 16;       // void rays per candidate: this^2 per cube face
   double samples_redundancy_tolerance = 5e-5;  // relative inverse-depth agreement for "an ancestor already holds this pixel"
 
   // [depth_mesh]

@@ -48,8 +48,12 @@ CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::str
   in.text("sample").u64(StageVersions::sample).u64(c.face_size).u64(c.supersample).f64(c.near_plane);
   in.f64(c.seam_shell_px);
   in.text("samples").text(c.samples_initial).f64(c.samples_void_threshold).u64(c.samples_max);
+  in.u64(c.samples_void_resolution);
   in.f64(c.samples_redundancy_tolerance);
-  if (cell.region >= 0 && std::size_t(cell.region) < c.regions.size()) hash_box(in, c.regions[std::size_t(cell.region)]);
+  // Where the samples may go: the cell's navigable part (not the whole region,
+  // so growing a region leaves its existing cells up to date).
+  if (cell.region >= 0 && std::size_t(cell.region) < c.regions.size())
+    hash_box(in, navigable_part(cell.bounds, c.regions[std::size_t(cell.region)]));
   in.text("depth_mesh").u64(StageVersions::depth_mesh).f64(c.skin_angle_deg).f64(c.depth_jump);
   in.text("simplify").u64(StageVersions::simplify).f64(c.depth_error_relative).f64(c.boundary_error_px).u64(c.max_face_triangles);
   in.text("encode").u64(StageVersions::encode).text(c.image_format).u64(c.image_quality).u64(c.position_bits);
@@ -131,6 +135,7 @@ void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& sou
   for (const Vec3d& eye : points) take(eye);
   // Best next view: the candidate that sees the most void, while it sees enough.
   VoidParams vp;
+  vp.face_size = config.samples_void_resolution;
   vp.max_distance = length(source.model_bounds().extent()) + length(discard_box.extent());
   while (true) {
     const auto t0 = Clock::now();

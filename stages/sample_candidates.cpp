@@ -127,8 +127,7 @@ std::vector<Vec2d> voronoi_candidates(const std::vector<Vec2d>& samples, const R
 
   if (sites.empty()) return {{0.5 * (rect.lo.x + rect.hi.x), 0.5 * (rect.lo.y + rect.hi.y)}};
   if (rect.lo == rect.hi) return finish({rect.lo});
-  if (sites.size() == 1)
-    return finish({rect.lo, {rect.hi.x, rect.lo.y}, {rect.lo.x, rect.hi.y}, rect.hi});
+  if (sites.size() == 1) return finish({rect.lo, {rect.hi.x, rect.lo.y}, {rect.lo.x, rect.hi.y}, rect.hi});
 
   std::vector<Vec2d> raw;
   const bool segment_rect = rect.lo.x == rect.hi.x || rect.lo.y == rect.hi.y;
@@ -138,7 +137,8 @@ std::vector<Vec2d> voronoi_candidates(const std::vector<Vec2d>& samples, const R
   }
   auto add_vertex = [&](const Vec2d& v) {
     if (!finite(v)) return;
-    if (v.x < rect.lo.x - eps || v.x > rect.hi.x + eps || v.y < rect.lo.y - eps || v.y > rect.hi.y + eps) return;
+    if (v.x < rect.lo.x - eps || v.x > rect.hi.x + eps || v.y < rect.lo.y - eps || v.y > rect.hi.y + eps)
+      return;
     raw.push_back({std::clamp(v.x, rect.lo.x, rect.hi.x), std::clamp(v.y, rect.lo.y, rect.hi.y)});
   };
 
@@ -147,7 +147,8 @@ std::vector<Vec2d> voronoi_candidates(const std::vector<Vec2d>& samples, const R
   Delaunay dt;
   Delaunay::Vertex_handle hint;
   for (const Vec2d& s : sites) {
-    hint = dt.insert(Kernel::Point_2(s.x, s.y), hint == Delaunay::Vertex_handle() ? Delaunay::Face_handle() : hint->face());
+    hint = dt.insert(Kernel::Point_2(s.x, s.y),
+                     hint == Delaunay::Vertex_handle() ? Delaunay::Face_handle() : hint->face());
   }
 
   LinePiece piece;
@@ -159,19 +160,20 @@ std::vector<Vec2d> voronoi_candidates(const std::vector<Vec2d>& samples, const R
   }
 
   for (auto f = dt.finite_faces_begin(); f != dt.finite_faces_end(); ++f) add_vertex(to_vec(dt.dual(f)));
+  auto to_direction = [](const Kernel::Vector_2& v) -> Vec2d {
+    return {CGAL::to_double(v.x()), CGAL::to_double(v.y())};
+  };
   for (auto e = dt.finite_edges_begin(); e != dt.finite_edges_end(); ++e) {
     const CGAL::Object dual = dt.dual(*e);
     bool ok = false;
     if (const auto* seg = CGAL::object_cast<Kernel::Segment_2>(&dual)) {
+      // Zero length (cocircular sites): a vertex, added above.
       const Vec2d a = to_vec(seg->source()), b = to_vec(seg->target());
-      const double len = distance(a, b);
-      ok = piece_from(a, {b.x - a.x, b.y - a.y}, 0, len, piece);  // zero length: a vertex, already added
+      ok = piece_from(a, {b.x - a.x, b.y - a.y}, 0, distance(a, b), piece);
     } else if (const auto* ray = CGAL::object_cast<Kernel::Ray_2>(&dual)) {
-      const Kernel::Vector_2 v = ray->to_vector();
-      ok = piece_from(to_vec(ray->source()), {CGAL::to_double(v.x()), CGAL::to_double(v.y())}, 0, kInf, piece);
+      ok = piece_from(to_vec(ray->source()), to_direction(ray->to_vector()), 0, kInf, piece);
     } else if (const auto* line = CGAL::object_cast<Kernel::Line_2>(&dual)) {
-      const Kernel::Vector_2 v = line->to_vector();
-      ok = piece_from(to_vec(line->point(0)), {CGAL::to_double(v.x()), CGAL::to_double(v.y())}, -kInf, kInf, piece);
+      ok = piece_from(to_vec(line->point(0)), to_direction(line->to_vector()), -kInf, kInf, piece);
     }
     if (ok) meet_boundary(piece, rect, eps, raw);
   }

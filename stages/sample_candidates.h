@@ -31,7 +31,7 @@ struct Rect2d {
 //
 // With eps = 1e-9 * (diagonal of rect + 1), in model units:
 //  * 0 samples: the centre of rect.
-//  * samples closer than eps to an earlier one (in x-then-y order) are
+//  * samples closer than eps to an earlier kept one (in x-then-y order) are
 //    duplicates and count once.
 //  * 1 distinct sample (no Voronoi edges): the corners of rect.
 //  * all samples collinear (CGAL's dimension 1): the perpendicular bisectors

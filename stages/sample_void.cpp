@@ -92,7 +92,8 @@ struct NearBall {
 
 class Marcher {
  public:
-  Marcher(const Vec3d& candidate, std::span<const VoidSample> samples, const VoidParams& params, double max_distance)
+  Marcher(const Vec3d& candidate, std::span<const VoidSample> samples, const VoidParams& params,
+          double max_distance)
       : candidate_(candidate), params_(params), max_distance_(max_distance), axes_(face_axes()) {
     prepared_.reserve(samples.size());
     for (const VoidSample& s : samples) {
@@ -154,8 +155,10 @@ class Marcher {
           all_background = false;
           if (std::fabs(p.z - p.depth) <= tol * p.z) return false;  // on a sampled surface
           if (!p.certified && prev_certified_[k]) {
-            const double before = std::isnan(prev_depth_[k]) ? project(prepared_[k], prev_x).depth : prev_depth_[k];
-            if (std::fabs(p.depth - before) <= jump * std::min(p.depth, before)) return false;  // through a surface
+            const double before =
+                std::isnan(prev_depth_[k]) ? project(prepared_[k], prev_x).depth : prev_depth_[k];
+            if (std::fabs(p.depth - before) <= jump * std::min(p.depth, before))
+              return false;  // through a surface
           }
         } else if (!tried_background_[k] && untried_background < 0) {
           untried_background = static_cast<int>(k);
@@ -230,7 +233,8 @@ class Marcher {
       const FaceAxes& a = axes_[f];
       const double fc = a.fwd_sign * c[a.fwd_axis];
       if (fc + r < min_forward) continue;  // no ball point in this face's frustum
-      auto range = [&](double oc, double& from, double& to) {  // bounds of (o . v) / (f . v)
+      // Bounds of (o . v) / (f . v) over the ball, o = right or up.
+      auto range = [&](double oc, double& from, double& to) {
         if (fc > r) {
           const double root = r * std::sqrt(fc * fc + oc * oc - r * r), den = fc * fc - r * r;
           from = (oc * fc - root) / den;
@@ -246,7 +250,8 @@ class Marcher {
       range(a.up_sign * c[a.up_axis], t0, t1);
       if (s0 > 1 || s1 < -1 || t0 > 1 || t1 < -1) continue;
       auto pixel = [&](double p) {
-        return static_cast<int>(std::clamp(std::floor(s.half_n * (1 + std::clamp(p, -1.0, 1.0))), 0.0, s.n - 1.0));
+        return static_cast<int>(
+            std::clamp(std::floor(s.half_n * (1 + std::clamp(p, -1.0, 1.0))), 0.0, s.n - 1.0));
       };
       const int i0 = std::max(pixel(s0) - 1, 0), i1 = std::min(pixel(s1) + 1, s.n - 1);
       const int j0 = std::max(pixel(-t1) - 1, 0), j1 = std::min(pixel(-t0) + 1, s.n - 1);
@@ -313,7 +318,8 @@ class Marcher {
 
   // Walks the pixels of face f crossed by the segment (pi0, pj0)-(pi1, pj1)
   // in continuous pixel coordinates; false at the first finite depth.
-  static bool segment_is_background(const PreparedSample& s, int f, double pi0, double pj0, double pi1, double pj1) {
+  static bool segment_is_background(const PreparedSample& s, int f, double pi0, double pj0, double pi1,
+                                    double pj1) {
     const int n = s.n;
     auto cell = [n](double p) { return std::clamp(static_cast<int>(std::floor(p)), 0, n - 1); };
     int i = cell(pi0), j = cell(pj0);
@@ -359,10 +365,13 @@ void validate(const Vec3d& candidate, std::span<const VoidSample> samples, const
   if (samples.empty()) fail("no samples");
   if (!is_finite(candidate)) fail("candidate is not finite");
   if (p.face_size < 1) fail("face_size must be >= 1");
-  if (!(std::isfinite(p.step_ratio) && 1 + p.step_ratio > 1)) fail("step_ratio must be finite and > 0 (and 1 + step_ratio > 1)");
-  if (!(std::isfinite(p.start_distance) && p.start_distance > 0)) fail("start_distance must be finite and > 0");
+  if (!(std::isfinite(p.step_ratio) && 1 + p.step_ratio > 1))
+    fail("step_ratio must be finite and > 0 (and 1 + step_ratio > 1)");
+  if (!(std::isfinite(p.start_distance) && p.start_distance > 0))
+    fail("start_distance must be finite and > 0");
   if (!(std::isfinite(p.max_distance) && p.max_distance >= 0)) fail("max_distance must be finite and >= 0");
-  if (!(std::isfinite(p.surface_tolerance) && p.surface_tolerance >= 0)) fail("surface_tolerance must be finite and >= 0");
+  if (!(std::isfinite(p.surface_tolerance) && p.surface_tolerance >= 0))
+    fail("surface_tolerance must be finite and >= 0");
   if (!(std::isfinite(p.jump) && p.jump >= 0)) fail("jump must be finite and >= 0");
   for (std::size_t k = 0; k < samples.size(); ++k) {
     const CubeSample* cube = samples[k].cube;
@@ -373,7 +382,8 @@ void validate(const Vec3d& candidate, std::span<const VoidSample> samples, const
     if (n < 1) fail(name + " has empty faces");
     for (const CubeFace& face : cube->faces) {
       if (face.size != n) fail(name + " has faces of differing sizes");
-      if (face.depth.size() != static_cast<std::size_t>(n) * n) fail(name + " has a depth array of the wrong length");
+      if (face.depth.size() != static_cast<std::size_t>(n) * n)
+        fail(name + " has a depth array of the wrong length");
     }
   }
 }
@@ -404,13 +414,15 @@ double face_solid_angle(double s0, double s1, double t0, double t1) {
 
 }  // namespace
 
-VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> samples, const VoidParams& params) {
+VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> samples,
+                         const VoidParams& params) {
   validate(candidate, samples, params);
 
   double max_distance = params.max_distance;
   if (max_distance == 0) {
     for (const VoidSample& s : samples)
-      max_distance = std::max(max_distance, length(candidate - s.cube->eye) + 2 * largest_finite_depth(*s.cube));
+      max_distance =
+          std::max(max_distance, length(candidate - s.cube->eye) + 2 * largest_finite_depth(*s.cube));
   }
 
   const int n = params.face_size;

@@ -25,12 +25,21 @@ struct VoidSample {
 };
 
 struct VoidParams {
-  int face_size = 24;               // rays per candidate: face_size^2 per cube face, through the pixel centres of a cube map at the candidate
-  double step_ratio = 0.03;         // geometric marching: t_{k+1} = t_k * (1 + step_ratio)
-  double start_distance = 0.05;     // first marching distance from the candidate (model units)
-  double max_distance = 0;          // rays still undecided this far are seen (background); 0 = the samples' own extent (see void_fraction)
-  double surface_tolerance = 0.03;  // relative: a point whose planar depth z in a sample is within surface_tolerance * z of that sample's depth lies on its surface
-  double jump = 0.1;                // relative: depths of the two pixels a step crosses between that differ by more than jump * (the smaller) are a discontinuity (skin), not a surface
+  // Rays per candidate: face_size^2 per cube face, through the pixel centres
+  // of a cube map at the candidate.
+  int face_size = 24;
+  double step_ratio = 0.03;      // geometric marching: t_{k+1} = t_k * (1 + step_ratio)
+  double start_distance = 0.05;  // first marching distance from the candidate (model units)
+  // Rays still undecided this far are seen (background). 0 = the samples'
+  // own extent (see void_fraction).
+  double max_distance = 0;
+  // Relative: a point whose planar depth z in a sample is within
+  // surface_tolerance * z of that sample's stored depth lies on its surface.
+  double surface_tolerance = 0.03;
+  // Relative: stored depths at the two ends of a step through a sample's
+  // surface that differ by more than jump * (the smaller) are a depth
+  // discontinuity (a skin), not a surface.
+  double jump = 0.1;
 };
 
 struct VoidResult {
@@ -83,6 +92,7 @@ struct VoidResult {
 // sizes or with depth arrays of the wrong length, a non-finite candidate or
 // eye, or bad params (face_size < 1, step_ratio, start_distance not finite
 // and > 0, max_distance, surface_tolerance, jump not finite and >= 0).
-VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> samples, const VoidParams& params);
+VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> samples,
+                         const VoidParams& params);
 
 }  // namespace cellbake

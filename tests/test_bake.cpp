@@ -63,10 +63,13 @@ TEST(Bake, BakesEveryCellAndSkipsThemOnRerun) {
   EXPECT_EQ(cell->status, "done");
   EXPECT_GE(cell->cull_half_size, 1.0);
   EXPECT_LE(cell->near_triangles, 600u);
-  ASSERT_EQ(cell->samples.size(), 1u);
-  ASSERT_EQ(cell->samples[0].faces.size(), 6u);
+  // Corners + centre of the flat cell, maybe more by best-next-view.
+  ASSERT_GE(cell->samples.size(), 5u);
+  ASSERT_LE(cell->samples.size(), std::size_t(c.samples_max));
+  for (const SampleRow& sample : cell->samples) ASSERT_EQ(sample.faces.size(), 6u);
+  EXPECT_EQ(cell->samples[0].parent, -1);
   EXPECT_GT(cell->far_triangles, 0u);
-  for (const char* stage : {"cull_box", "sample", "depth_mesh", "simplify", "encode"})
+  for (const char* stage : {"cull_box", "sample", "void", "depth_mesh", "redundancy", "simplify", "encode"})
     EXPECT_TRUE(cell->stage_seconds.count(stage)) << stage;
 
   s = run_bake(c, quiet());
@@ -90,6 +93,15 @@ TEST(Bake, ChangedParametersRecomputeOnlyWhatTheyAffect) {
 
   // Back to the original: the same content as the first bake.
   c.image_format = "png";
+  run_bake(c, quiet());
+  EXPECT_EQ(CellDb(c.database, CellDb::Mode::read_only).totals().content_hash, before);
+
+  // Only the sample placement: every cell re-sampled, cull boxes kept.
+  c.samples_initial = "centre";
+  s = run_bake(c, quiet());
+  EXPECT_EQ(s.cells_baked, 15u);
+  EXPECT_EQ(s.cull_reused, 15u);
+  c.samples_initial = "corners+centre";
   run_bake(c, quiet());
   EXPECT_EQ(CellDb(c.database, CellDb::Mode::read_only).totals().content_hash, before);
 

@@ -63,11 +63,14 @@ BakedRoom& room() {
   return baked;
 }
 
+// The root sample alone (the cell-centre sample): what these tests measure is
+// one sample's far field; test_incremental_tdm.cpp covers several.
 ViewRequest request(Vec3d eye, Vec3d look, int size = 96) {
   ViewRequest r;
   r.eye = eye;
   r.look = look;
   r.width = r.height = size;
+  r.samples.max_samples = 1;
   return r;
 }
 
@@ -92,7 +95,10 @@ TEST(Render, ImpostorAtTheSamplePointMatchesTheTruth) {
   // far corners, leaving thin cracks a few screen pixels wide when a face pixel
   // is magnified ~3x. A disocclusion (next test) is many times that.
   EXPECT_LT(m.hole_fraction, 0.04) << m.hole_fraction;
-  EXPECT_LT(m.skin_fraction, 0.01) << m.skin_fraction;
+  // Measured 0.0106 (0.006 before the far field kept a shell inside the cull
+  // box, sample.seam_shell_px): with 64-pixel faces the shell's outline sits
+  // a few screen pixels off the near field's edges.
+  EXPECT_LT(m.skin_fraction, 0.015) << m.skin_fraction;
   EXPECT_LT(m.depth_error_median, 0.01) << m.depth_error_median;
   EXPECT_GT(m.psnr_db, 22.0) << m.psnr_db;
   EXPECT_GT(m.ssim, 0.5) << m.ssim;

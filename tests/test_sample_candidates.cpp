@@ -88,11 +88,14 @@ TEST(VoronoiCandidates, DuplicateSamplesCountOnce) {
   expect_points(voronoi_candidates({{0.2, 0.3}, {0.6, 0.5}, {0.2, 0.3}, {0.6, 0.5}, {0.6, 0.5}}, kUnit),
                 {{0.1, 1}, {0.6, 0}});
   // Closer than 1e-9 * (diagonal + 1) counts as the same sample.
-  expect_points(voronoi_candidates({{0.2, 0.3}, {0.6, 0.5}, {0.2 + 1e-12, 0.3}}, kUnit), {{0.1, 1}, {0.6, 0}});
+  expect_points(voronoi_candidates({{0.2, 0.3}, {0.6, 0.5}, {0.2 + 1e-12, 0.3}}, kUnit),
+                {{0.1, 1}, {0.6, 0}});
   // One distinct sample, several times: the corners.
-  expect_points(voronoi_candidates({{0.3, 0.6}, {0.3, 0.6}, {0.3, 0.6}}, kUnit), {{0, 0}, {0, 1}, {1, 0}, {1, 1}});
-  expect_points(voronoi_candidates({{0.25, 0.25}, {0.75, 0.25}, {0.5, 0.75}, {0.5, 0.75}, {0.25, 0.25}}, kUnit),
-                {{0, 0.6875}, {0.5, 0}, {0.5, 0.4375}, {1, 0.6875}});
+  expect_points(voronoi_candidates({{0.3, 0.6}, {0.3, 0.6}, {0.3, 0.6}}, kUnit),
+                {{0, 0}, {0, 1}, {1, 0}, {1, 1}});
+  expect_points(
+      voronoi_candidates({{0.25, 0.25}, {0.75, 0.25}, {0.5, 0.75}, {0.5, 0.75}, {0.25, 0.25}}, kUnit),
+      {{0, 0.6875}, {0.5, 0}, {0.5, 0.4375}, {1, 0.6875}});
 }
 
 TEST(VoronoiCandidates, SegmentRect) {

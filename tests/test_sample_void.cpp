@@ -37,8 +37,9 @@ const std::vector<Box3d> kPillarScene{
 // a ray is void when, before it meets the true scene, it passes a point that
 // no sample's eye sees (the segment eye -> point meets a box first). Marched
 // in steps of at most 0.01.
-double reference_void_fraction(const Vec3d& candidate, const std::vector<Vec3d>& eyes, const std::vector<Box3d>& boxes,
-                               const VoidParams& params, double max_distance) {
+double reference_void_fraction(const Vec3d& candidate, const std::vector<Vec3d>& eyes,
+                               const std::vector<Box3d>& boxes, const VoidParams& params,
+                               double max_distance) {
   const int n = params.face_size;
   double void_weight = 0, total = 0;
   for (int f = 0; f < kCubeFaces; ++f) {
@@ -76,7 +77,8 @@ TEST(VoidFraction, ClosedRoomSeenFromItsCentreHasNoVoid) {
   const VoidParams params;
   // Every ray from inside stays in the sample's free space until it reaches a
   // wall the sample sees.
-  for (const Vec3d& c : {Vec3d{0, 0, 0}, Vec3d{1, 2, -1}, Vec3d{3, 3, 3}, Vec3d{-4.5, 0.2, 0}, Vec3d{4.9, 4.9, -4.9}}) {
+  for (const Vec3d& c :
+       {Vec3d{0, 0, 0}, Vec3d{1, 2, -1}, Vec3d{3, 3, 3}, Vec3d{-4.5, 0.2, 0}, Vec3d{4.9, 4.9, -4.9}}) {
     const VoidResult r = void_fraction(c, samples, params);
     EXPECT_EQ(r.rays, 6u * params.face_size * params.face_size);
     EXPECT_EQ(r.void_rays, 0u) << c.x << " " << c.y << " " << c.z;
@@ -222,15 +224,22 @@ TEST(VoidFraction, BadInputThrows) {
     change(p);
     return p;
   };
-  EXPECT_THROW(void_fraction({0, 1, 0}, samples, with([](VoidParams& p) { p.face_size = 0; })), std::invalid_argument);
-  EXPECT_THROW(void_fraction({0, 1, 0}, samples, with([](VoidParams& p) { p.step_ratio = 0; })), std::invalid_argument);
-  EXPECT_THROW(void_fraction({0, 1, 0}, samples, with([&](VoidParams& p) { p.step_ratio = nan; })), std::invalid_argument);
-  EXPECT_THROW(void_fraction({0, 1, 0}, samples, with([](VoidParams& p) { p.start_distance = 0; })), std::invalid_argument);
-  EXPECT_THROW(void_fraction({0, 1, 0}, samples, with([](VoidParams& p) { p.max_distance = -1; })), std::invalid_argument);
-  EXPECT_THROW(void_fraction({0, 1, 0}, samples, with([&](VoidParams& p) { p.max_distance = inf; })), std::invalid_argument);
+  EXPECT_THROW(void_fraction({0, 1, 0}, samples, with([](VoidParams& p) { p.face_size = 0; })),
+               std::invalid_argument);
+  EXPECT_THROW(void_fraction({0, 1, 0}, samples, with([](VoidParams& p) { p.step_ratio = 0; })),
+               std::invalid_argument);
+  EXPECT_THROW(void_fraction({0, 1, 0}, samples, with([&](VoidParams& p) { p.step_ratio = nan; })),
+               std::invalid_argument);
+  EXPECT_THROW(void_fraction({0, 1, 0}, samples, with([](VoidParams& p) { p.start_distance = 0; })),
+               std::invalid_argument);
+  EXPECT_THROW(void_fraction({0, 1, 0}, samples, with([](VoidParams& p) { p.max_distance = -1; })),
+               std::invalid_argument);
+  EXPECT_THROW(void_fraction({0, 1, 0}, samples, with([&](VoidParams& p) { p.max_distance = inf; })),
+               std::invalid_argument);
   EXPECT_THROW(void_fraction({0, 1, 0}, samples, with([](VoidParams& p) { p.surface_tolerance = -0.1; })),
                std::invalid_argument);
-  EXPECT_THROW(void_fraction({0, 1, 0}, samples, with([&](VoidParams& p) { p.jump = nan; })), std::invalid_argument);
+  EXPECT_THROW(void_fraction({0, 1, 0}, samples, with([&](VoidParams& p) { p.jump = nan; })),
+               std::invalid_argument);
 }
 
 TEST(VoidFraction, MaxDistanceEndsRaysIntoTheUnknown) {

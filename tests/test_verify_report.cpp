@@ -16,6 +16,7 @@
 #include "runner/bake_runner.h"
 #include "runner/parallel.h"
 #include "runner/verify_runner.h"
+#include "storage/cell_db.h"
 #include "test_support.h"
 #include "viewer/svg_plot.h"
 #include "viewer/verify_report.h"
@@ -225,6 +226,7 @@ TEST(VerifyRun, TinyBakeReportIsCompleteAndResumable) {
   vo.height = 48;
   vo.threads = 2;
   vo.quiet = true;
+  vo.sample_views = false;  // planned views only here; views at the sample points are checked below
   const std::filesystem::path report = dir / "report";
   const VerifySummary s = run_verify(c.database, report, vo);
   EXPECT_EQ(s.cells_selected, 2u);
@@ -279,6 +281,30 @@ TEST(VerifyRun, TinyBakeReportIsCompleteAndResumable) {
   const VerifySummary changed = run_verify(c.database, report, vo);
   EXPECT_EQ(changed.cells_rendered, 2u);
   EXPECT_EQ(changed.views_rendered, 6u);
+
+  // Views at every sample point too, each with the root-alone columns, and
+  // the void curve and seconds per sample.
+  vo.sample_views = true;
+  run_verify(c.database, report, vo);
+  const nlohmann::json k = nlohmann::json::parse(read_text(report / "report.json"));
+  CellDb db(c.database, CellDb::Mode::read_only);
+  for (const auto& cell : k["cells"]) {
+    const auto row = db.get_cell(cell["id"].get<std::int64_t>(), false);
+    ASSERT_TRUE(row);
+    const std::size_t samples = row->samples.size();
+    ASSERT_GE(samples, 5u);
+    ASSERT_EQ(cell["views"].size(), 3u + samples);
+    ASSERT_EQ(cell["void_curve"].size(), samples);
+    ASSERT_EQ(cell["sample_seconds"].size(), samples);
+    for (std::size_t i = 3; i < 3 + samples; ++i) {
+      const auto& v = cell["views"][i];
+      EXPECT_EQ(v["kind"], "sample");
+      EXPECT_NEAR(v["distance_from_sample"].get<double>(), 0.0, 1e-9);
+      EXPECT_TRUE(v.contains("psnr_db_root") && v.contains("hole_fraction_root"));
+      EXPECT_GE(v["samples_drawn"].get<int>(), 1);
+    }
+  }
+  EXPECT_TRUE(k["summary"]["psnr_db_root"].contains("median_sample"));
 }
 
 }  // namespace

@@ -4,9 +4,11 @@
 // fragment shader writes the texture colour and the exact planar view depth.
 #include "viewer/tdm_renderer.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -62,16 +64,44 @@ struct Vertex {
   float uq, vq, q;  // projective texture coordinates (see kVertexShader)
 };
 
-// The planar depth of a face-mesh vertex in its cube face's frame: the vertex
-// lies on the sample ray through face coordinates s = 2 u - 1, t = 1 - 2 v
-// (stages/cube_map.h), i.e. at q (forward + s right + t up), so q is its
-// distance over |(1, s, t)|. Needs no face index; any common scale of q would
-// do (it cancels in the divide), but not a per-vertex error, and this is exact
-// up to the encoder's quantisation of the position.
-float planar_depth(const Vec3f& p, const Uv& uv) {
+// The direction (forward component 1) of face b's sample ray through texture
+// coordinates (u, v): face coordinates s = 2 u - 1, t = 1 - 2 v (stages/cube_map.h).
+Vec3d face_direction(const FaceBasis& b, const Uv& uv) {
+  return cube_face_direction(b, 2.0 * uv.u - 1.0, 1.0 - 2.0 * uv.v);
+}
+
+Vec3d to_double(const Vec3f& p) { return {p.x, p.y, p.z}; }
+
+// The cube face (0..5) whose sample rays through the vertices' texture
+// coordinates pass closest to the vertices: every vertex in front of the face
+// and, for the face chosen, the largest distance of a vertex off its ray,
+// relative to the vertex's distance from the eye, below 1/4 and smallest over
+// the faces. -1 when no face fits (not a face mesh of build_depth_meshes).
+// Any other face misses most vertices by far more than 1/4: the right face
+// misses them only by the encoder's quantisation.
+int fitted_cube_face(const FaceMesh& mesh) {
+  int best = -1;
+  double best_miss = 0.25;
+  for (int f = 0; f < kCubeFaces; ++f) {
+    const FaceBasis b = cube_face_basis(f);
+    double worst = 0;
+    for (std::size_t i = 0; i < mesh.positions.size() && worst < best_miss; ++i) {
+      const Vec3d p = to_double(mesh.positions[i]);
+      const double z = dot(p, b.forward);
+      worst = z > 0 ? std::max(worst, length(p - face_direction(b, mesh.uvs[i]) * z) / length(p))
+                    : std::numeric_limits<double>::infinity();
+    }
+    if (worst < best_miss) best = f, best_miss = worst;
+  }
+  return best;
+}
+
+// The planar depth of a face-mesh vertex in its face's frame when the face is
+// unknown: the vertex is at q (forward + s right + t up), so q is its distance
+// over |(1, s, t)|.
+double planar_depth(const Vec3d& p, const Uv& uv) {
   const double s = 2.0 * uv.u - 1.0, t = 1.0 - 2.0 * uv.v;
-  const double distance = std::sqrt(double(p.x) * p.x + double(p.y) * p.y + double(p.z) * p.z);
-  return static_cast<float>(distance / std::sqrt(1.0 + s * s + t * t));
+  return length(p) / std::sqrt(1.0 + s * s + t * t);
 }
 
 std::unique_ptr<GlFunctions> load_for(GlContext* context) {
@@ -121,15 +151,41 @@ std::uint64_t TdmRenderer::upload(const FaceMesh& mesh, const DecodedImage& imag
   if (mesh.indices.size() % 3 != 0) throw std::runtime_error("tdm_renderer: index count is not a multiple of 3");
   for (std::uint32_t i : mesh.indices)
     if (i >= n) throw std::runtime_error("tdm_renderer: index " + std::to_string(i) + " out of range");
+  // Every vertex of a face mesh lies on the sample ray through its texture
+  // coordinates (a pixel corner), and where two surfaces meet on a silhouette
+  // both sides have a vertex on the same corner ray, so that the outline they
+  // share is one line seen from the sample eye. encode_face_mesh quantises
+  // positions per axis over the mesh's bounds, which moves each vertex off its
+  // ray by up to half a step, independently for the two depths of a
+  // silhouette corner: the shared outline opened into cracks showing the
+  // background (black) and slivers of overlap along every far-field edge, even
+  // at the sample point (0.05 px at 5 m for a 60 m model at 16 bits, whole
+  // pixels for kilometre-scale models or fewer bits), and likewise along cube
+  // edges. The ray is known exactly from the texture coordinates, so vertices
+  // found off it are put back on it at their planar depth (which is all the
+  // quantisation leaves of them). Vertices already on their ray to float
+  // rounding (meshes that were not encoded) are kept bit for bit, which keeps
+  // the faces' shared border vertices identical.
+  const int face = fitted_cube_face(mesh);
+  const FaceBasis basis = cube_face_basis(std::max(face, 0));
   std::vector<Vertex> vertices(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec3f& p = mesh.positions[i];
+    Vec3f p = mesh.positions[i];
     const Uv& uv = mesh.uvs[i];
+    double q;
+    if (face >= 0) {
+      const Vec3d position = to_double(p), direction = face_direction(basis, uv);
+      q = dot(position, basis.forward);
+      const Vec3d on_ray = direction * q;
+      if (length(position - on_ray) > 1e-6 * length(position))
+        p = {static_cast<float>(on_ray.x), static_cast<float>(on_ray.y), static_cast<float>(on_ray.z)};
+    } else {
+      q = planar_depth(to_double(p), uv);
+    }
     // A vertex at the sample eye itself (never made by build_depth_meshes)
     // would divide by zero: keep q positive.
-    float q = planar_depth(p, uv);
-    if (!(q > 1e-20f)) q = 1e-20f;
-    vertices[i] = {p.x, p.y, p.z, uv.u * q, uv.v * q, q};
+    const float qf = q > 1e-20 ? static_cast<float>(q) : 1e-20f;
+    vertices[i] = {p.x, p.y, p.z, uv.u * qf, uv.v * qf, qf};
   }
 
   context_->make_current();
