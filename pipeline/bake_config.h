@@ -64,7 +64,7 @@ struct BakeConfig {
   int position_bits = 16;              // mesh position quantisation per axis
 
   // [view]: what a viewer (render, verify, cellbake-view) draws; not part of the bake hash
-  std::uint64_t far_budget = 150000;  // far-field triangles: nearest sample + ancestors, then more samples while under this
+  std::uint64_t far_budget = 100000;  // far-field triangles: nearest sample + ancestors, then more samples while under this
 
   // [output]
   std::filesystem::path database = "cells.db";

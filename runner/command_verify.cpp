@@ -44,8 +44,8 @@ void add_verify_command(CLI::App& app) {
   cmd->add_option("--store", opt->verify.store, "Geometry store (default: the one the database names)");
   cmd->add_flag("--quiet", opt->verify.quiet, "No progress output");
   cmd->add_option("--far-budget", opt->verify.far_budget,
-                  "Far-field triangles per view: the nearest sample with its ancestors, then more while under this")
-      ->capture_default_str();
+                  "Far-field triangles per view: the nearest sample with its ancestors, then more while under this "
+                  "(default: the bake's view.far_budget)");
   cmd->add_option("--max-samples", opt->verify.max_samples,
                   "At most this many samples per view (0 = no cap; 1 = the root sample alone, the single-sample far field)")
       ->check(CLI::NonNegativeNumber)

@@ -104,12 +104,14 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
   const Vec3d up = up_axis(up_name);
   const double cell_size = std::stod(db.meta("cell_size").value_or("0"));
   const std::vector<Box3d> regions = regions_of_config_text(db.meta("config").value_or(""));
+  const std::uint64_t far_budget = options.far_budget.value_or(
+      far_budget_of_config_text(db.meta("config").value_or("")).value_or(SampleSelectionParams{}.far_budget));
 
   nlohmann::json params{{"views_per_cell", options.views_per_cell}, {"width", options.width},
                         {"height", options.height},                 {"fov_y_deg", options.fov_y_deg},
                         {"near_plane", options.near_plane},         {"seed", options.seed},
                         {"up", up_name},                            {"store_hash", db.meta("store_hash").value_or("")},
-                        {"far_budget", options.far_budget},         {"max_samples", options.max_samples},
+                        {"far_budget", far_budget},         {"max_samples", options.max_samples},
                         {"sample_views", options.sample_views}};
   const std::string params_key = params.dump();
 
@@ -191,7 +193,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
                                                store, dp);
       }
       SceneDrawOptions draw_options;
-      draw_options.samples.far_budget = options.far_budget;
+      draw_options.samples.far_budget = far_budget;
       draw_options.samples.max_samples = options.max_samples;
       SceneDrawOptions root_options = draw_options;
       root_options.samples.max_samples = 1;

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 
 namespace cellbake {
@@ -26,7 +27,7 @@ struct VerifyOptions {
   bool quiet = false;              // no progress output
   // Far field drawn per view (viewer/sample_selection.h); every view is also
   // drawn with the root sample alone for the 1-sample columns.
-  std::uint64_t far_budget = 150000;
+  std::optional<std::uint64_t> far_budget;  // unset: the database's view.far_budget
   int max_samples = 0;             // 0 = as many as the budget allows
   bool sample_views = true;        // also look from every sample point of the cell
 };

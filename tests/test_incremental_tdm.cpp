@@ -68,8 +68,8 @@ ViewRequest request(Vec3d eye, Vec3d look, int max_samples = 0) {
   r.height = 120;
   r.fov_y_deg = 70;
   r.cell = 1;
-  r.samples.max_samples = max_samples;
-  r.samples.far_budget = 1u << 30;
+  r.max_samples = max_samples;
+  r.far_budget = std::uint64_t{1} << 30;
   return r;
 }
 

@@ -70,7 +70,7 @@ ViewRequest request(Vec3d eye, Vec3d look, int size = 96) {
   r.eye = eye;
   r.look = look;
   r.width = r.height = size;
-  r.samples.max_samples = 1;
+  r.max_samples = 1;
   return r;
 }
 

@@ -17,11 +17,11 @@ struct SampleNode {
   int index = 0;            // the sample's index in its cell
   Vec3d eye;                // world
   int parent = -1;          // index of the parent sample, -1 for the root
-  std::uint64_t triangles = 0;  // over the sample's faces
+  std::uint64_t triangles = 0;  // what drawing the sample costs (SceneDrawer: its faces in the view frustum)
 };
 
 struct SampleSelectionParams {
-  std::uint64_t far_budget = 150000;  // far-field triangles; the nearest sample's chain is always drawn whole
+  std::uint64_t far_budget = 100000;  // far-field triangles per view; the nearest sample's chain is always drawn whole
   // At most this many samples (0 = no cap). Chains are taken whole, so 1
   // draws the root (the intra scan, the only self-contained sample) alone:
   // the single-sample far field of a one-sample bake.

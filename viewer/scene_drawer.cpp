@@ -108,15 +108,23 @@ SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width
       TdmDrawOptions tdm_options;
       tdm_options.wireframe = options.wireframe;
       if (options.tint_by_cell) cell_tint(cell.id, tdm_options.tint);
-      const std::vector<int> chosen = select_samples(cell.samples, camera.eye, options.samples);
+      // The budget counts what this view would draw: each sample's faces in the frustum.
+      std::vector<bool> in_view(cell.faces.size());
+      std::vector<SampleNode> nodes = cell.samples;
+      for (SampleNode& n : nodes) n.triangles = 0;
+      for (std::size_t k = 0; k < cell.faces.size(); ++k) {
+        const DecodedFace& f = cell.faces[k];
+        in_view[k] = box_in_view(camera, f.bounds);
+        if (!in_view[k]) continue;
+        for (SampleNode& n : nodes)
+          if (n.index == f.sample) n.triangles += f.mesh.triangle_count();
+      }
+      const std::vector<int> chosen = select_samples(nodes, camera.eye, options.samples);
       const std::vector<std::uint64_t>& all = cells_.at(cell.id).handles;
       std::vector<std::uint64_t> handles;
-      for (std::size_t k = 0; k < cell.faces.size() && k < all.size(); ++k) {
-        const DecodedFace& f = cell.faces[k];
-        if (std::find(chosen.begin(), chosen.end(), f.sample) == chosen.end()) continue;
-        if (!box_in_view(camera, f.bounds)) continue;
-        handles.push_back(all[k]);
-      }
+      for (std::size_t k = 0; k < cell.faces.size() && k < all.size(); ++k)
+        if (in_view[k] && std::find(chosen.begin(), chosen.end(), cell.faces[k].sample) != chosen.end())
+          handles.push_back(all[k]);
       stats.samples_drawn = chosen.size();
       stats.far_triangles = tdm_.draw(camera, chunks_.reversed_z(), handles, tdm_options);
     }

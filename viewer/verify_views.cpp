@@ -1,6 +1,7 @@
 #include "viewer/verify_views.h"
 
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -106,6 +107,22 @@ std::vector<Box3d> regions_of_config_text(const std::string& text) {
     regions.push_back({{v[0], v[1], v[2]}, {v[3], v[4], v[5]}});
   }
   return regions;
+}
+
+std::optional<std::uint64_t> far_budget_of_config_text(const std::string& text) {
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("view.far_budget=", 0) != 0) continue;
+    try {
+      std::size_t used = 0;
+      const std::uint64_t v = std::stoull(line.substr(16), &used);
+      if (used == line.size() - 16) return v;
+    } catch (const std::exception&) {
+    }
+    throw std::invalid_argument("malformed config line \"" + line + "\"");
+  }
+  return std::nullopt;
 }
 
 bool region_is_flat(const Box3d& region, const Vec3d& up, double cell_size) {

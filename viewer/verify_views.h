@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,11 @@ std::vector<VerifyViewPlan> plan_verify_views(const Box3d& bounds, bool flat, co
 // `config` text (describe_bake_config), in order; lines that are not regions
 // are ignored. Throws std::invalid_argument for a malformed region line.
 std::vector<Box3d> regions_of_config_text(const std::string& config_text);
+
+// The `view.far_budget` of a cell database's meta `config` text, if it has
+// one (databases baked before it existed do not). Throws
+// std::invalid_argument for a malformed value.
+std::optional<std::uint64_t> far_budget_of_config_text(const std::string& config_text);
 
 // True when `region` is thinner than `cell_size` along `up` (its cells form a
 // single, centred layer of eye heights).

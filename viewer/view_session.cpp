@@ -1,5 +1,7 @@
 #include "viewer/view_session.h"
 
+#include "viewer/verify_views.h"
+
 #include <cstdio>
 #include <stdexcept>
 
@@ -32,6 +34,7 @@ ViewSession::ViewSession(const std::filesystem::path& database, const std::files
       store_(std::make_unique<GeometryStore>(store_of(db_, store_override))),
       index_(db_),
       up_(up_axis(db_.meta("up").value_or("z"))),
+      far_budget_(far_budget_of_config_text(db_.meta("config").value_or("")).value_or(SampleSelectionParams{}.far_budget)),
       drawer_(std::make_unique<SceneDrawer>(std::shared_ptr<GlContext>(create_gl_context(GlBackend::osmesa, 1, 1)),
                                             *store_)) {}
 
@@ -63,7 +66,8 @@ ViewResult ViewSession::render(const ViewRequest& r, ViewMode mode, std::FILE* w
   const CellEntry* entry = r.cell ? index_.find(*r.cell) : index_.nearest(r.eye);
   if (r.cell && !entry) throw std::invalid_argument("view: cell " + std::to_string(*r.cell) + " is not in the database");
   SceneDrawOptions options;
-  options.samples = r.samples;
+  options.samples.far_budget = r.far_budget.value_or(far_budget_);
+  options.samples.max_samples = r.max_samples;
   const bool want_impostor = mode != ViewMode::truth, want_truth = mode != ViewMode::impostor;
 
   if (entry) result.cell_id = entry->id;

@@ -31,7 +31,10 @@ struct ViewRequest {
   int width = 512, height = 512;
   double near_plane = 0.05;
   std::optional<std::int64_t> cell;  // force this cell instead of the eye's
-  SampleSelectionParams samples;      // which samples' far field to draw (viewer/sample_selection.h)
+  // Which samples' far field to draw (viewer/sample_selection.h): far-field
+  // triangles per view (unset: the database's view.far_budget) and a cap.
+  std::optional<std::uint64_t> far_budget;
+  int max_samples = 0;
 };
 
 struct ViewResult {
@@ -69,6 +72,7 @@ class ViewSession {
   std::unique_ptr<GeometryStore> store_;
   CellIndex index_;
   Vec3d up_;
+  std::uint64_t far_budget_;  // the database's view.far_budget (or the default)
   std::unique_ptr<SceneDrawer> drawer_;
   std::map<std::int64_t, std::shared_ptr<const DecodedCell>> decoded_;
   std::map<std::int64_t, std::string> failures_;
