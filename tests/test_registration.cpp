@@ -2,20 +2,25 @@
 // -> dense depth meshes -> simplified -> encoded and decoded -> drawn with
 // TdmRenderer, as viewer/scene_drawer.cpp draws the far field) seen from the
 // sample point must put the edges of thin bars where the ground truth
-// (ChunkRenderer::draw of every chunk) puts them, to a tenth of a pixel.
+// (ChunkRenderer::draw of every chunk) puts them, to a tenth of a pixel, and
+// must not crack.
 //
-// Scene: a closed room (uniform grey walls, floor and ceiling, turned 17
-// degrees about z so no wall is parallel to a cube face) around the eye, with
-// thin vertical bars and horizontal bars 5-20 m away in six colours that each
-// move the grey along one colour axis (+-R, +-G, +-B). Along each scanline
-// across a bar, the bar's weight of a pixel is its colour's step from the grey
-// along that axis (1 inside the bar, 0 on the wall, linear in blends), and the
-// bar's position is the weighted centroid and its width the sum of weights
-// over a window around it: both are unchanged by a symmetric blur (bilinear
-// texture filtering), so they compare the impostor's geometry and texture
-// placement with the truth's at sub-pixel precision. Views look in several
-// directions (across cube-face edges too) at a resolution and field of view
-// unlike the faces'.
+// Scenes: a closed room (grey, turned 17 degrees about z so no wall is
+// parallel to a cube face) around the eye, either with thin bars in front of
+// it (vertical ones tilted a few degrees, horizontal ones, 5-20 m away) or
+// with stripes painted on its walls and floor (coplanar quads: the simplifier
+// turns each plane into a few large triangles, so the stripes live only in the
+// texture). Bars and stripes come in six colours that each move the grey along
+// one colour axis (+-R, +-G, +-B). Along each scanline across a bar, the bar's
+// weight of a pixel is its colour's step from the grey along that axis (1
+// inside the bar, 0 on the wall, linear in blends), and the bar's position is
+// the weighted centroid and its width the sum of weights over a window around
+// it: both are unchanged by a symmetric blur (bilinear texture filtering), so
+// they compare the impostor's geometry and texture placement with the truth's
+// (antialiased, 8x8 supersampled) at sub-pixel precision. Views look in
+// several directions (across cube-face edges too) at a resolution and field
+// of view unlike the faces'. Set CELLBAKE_KEEP_TEST_DIRS to keep the frames as
+// PNGs, CELLBAKE_REGISTRATION_VERBOSE to print every bar.
 #include <gtest/gtest.h>
 
 #include <algorithm>
