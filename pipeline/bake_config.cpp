@@ -70,6 +70,13 @@ Vec3d vec3(const toml::node& n, const std::string& where, const std::string& key
   return v;
 }
 
+// A light direction: 3 finite numbers, not all zero (any length; normalised on use).
+Vec3d direction(const toml::node& n, const std::string& where, const std::string& key) {
+  const Vec3d v = vec3(n, where, key);
+  if (!(length(v) > 0)) fail(where, "'" + key + "' must not be the zero vector");
+  return v;
+}
+
 std::filesystem::path resolve(const BakeConfig& c, const std::string& p) {
   std::filesystem::path path(p);
   if (path.is_relative() && !c.source.empty()) path = c.source.parent_path() / path;
@@ -101,6 +108,24 @@ const std::map<std::string, Setter>& setters() {
        }},
       {"sample.seam_shell_px", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.seam_shell_px = number(n, w, "sample.seam_shell_px", 0, 64);
+       }},
+      {"shading.mode", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.shading.mode = parse_shading_mode(text(n, w, "shading.mode", {"lit", "unlit"}));
+       }},
+      {"shading.key_direction", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.shading.key_direction = direction(n, w, "shading.key_direction");
+       }},
+      {"shading.key_strength", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.shading.key_strength = number(n, w, "shading.key_strength", 0, 2);
+       }},
+      {"shading.fill_direction", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.shading.fill_direction = direction(n, w, "shading.fill_direction");
+       }},
+      {"shading.fill_strength", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.shading.fill_strength = number(n, w, "shading.fill_strength", 0, 2);
+       }},
+      {"shading.ambient", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.shading.ambient = number(n, w, "shading.ambient", 0, 2);
        }},
       {"samples.initial", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.samples_initial = text(n, w, "samples.initial", {"centre", "corners", "corners+centre"});
@@ -261,7 +286,13 @@ std::string describe_bake_config(const BakeConfig& c) {
   o.precision(17);
   o << "up=" << c.up << "\ncells.size=" << c.cell_size << "\nnear.budget=" << c.near_budget
     << "\nsample.face_size=" << c.face_size << "\nsample.supersample=" << c.supersample
-    << "\nsample.near_plane=" << c.near_plane << "\nsample.seam_shell_px=" << c.seam_shell_px << "\nsamples.initial=" << c.samples_initial
+    << "\nsample.near_plane=" << c.near_plane << "\nsample.seam_shell_px=" << c.seam_shell_px
+    << "\nshading.mode=" << shading_mode_name(c.shading.mode) << "\nshading.key_direction=" << c.shading.key_direction.x
+    << "," << c.shading.key_direction.y << "," << c.shading.key_direction.z
+    << "\nshading.key_strength=" << c.shading.key_strength << "\nshading.fill_direction=" << c.shading.fill_direction.x
+    << "," << c.shading.fill_direction.y << "," << c.shading.fill_direction.z
+    << "\nshading.fill_strength=" << c.shading.fill_strength << "\nshading.ambient=" << c.shading.ambient
+    << "\nsamples.initial=" << c.samples_initial
     << "\nsamples.void_threshold=" << c.samples_void_threshold << "\nsamples.max=" << c.samples_max << "\nsamples.void_resolution=" << c.samples_void_resolution
     << "\nsamples.redundancy_tolerance=" << c.samples_redundancy_tolerance << "\nview.far_budget=" << c.far_budget
     << "\ndepth_mesh.skin_angle_deg=" << c.skin_angle_deg

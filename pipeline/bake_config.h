@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "stages/geometry.h"
+#include "stages/render/shading.h"
 
 namespace cellbake {
 
@@ -38,6 +39,12 @@ struct BakeConfig {
   // distance) inside the cull box, so that from anywhere in the cell it
   // overlaps the near field instead of leaving a seam along the box.
   double seam_shell_px = 2.0;
+
+  // [shading]: the fixed light model every chunk drawing applies (the samples
+  // bake it into their images; viewers read it back from the database's meta
+  // `config`). Directions are in the up-axis frame (z = model.up); defaults
+  // and meaning in stages/render/shading.h. "unlit" keeps vertex colours as they are.
+  ShadingParams shading;
 
   // [samples]: where a cell's panoramic samples go (Wilson 2002 ch. 3, ch. 5)
   std::string samples_initial = "corners+centre";  // "centre" | "corners" | "corners+centre"

@@ -30,6 +30,8 @@ class StageTimer {
   Clock::time_point start_;
 };
 
+void hash_vec(Hasher& h, const Vec3d& v) { h.f64(v.x).f64(v.y).f64(v.z); }
+
 void hash_box(Hasher& h, const Box3d& b) {
   h.f64(b.lo.x).f64(b.lo.y).f64(b.lo.z).f64(b.hi.x).f64(b.hi.y).f64(b.hi.z);
 }
@@ -47,6 +49,10 @@ CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::str
   in.text(h.cull);
   in.text("sample").u64(StageVersions::sample).u64(c.face_size).u64(c.supersample).f64(c.near_plane);
   in.f64(c.seam_shell_px);
+  in.text(shading_mode_name(c.shading.mode));
+  hash_vec(in, c.shading.key_direction);
+  hash_vec(in, c.shading.fill_direction);
+  in.f64(c.shading.key_strength).f64(c.shading.fill_strength).f64(c.shading.ambient);
   in.text("samples").text(c.samples_initial).f64(c.samples_void_threshold).u64(c.samples_max);
   in.u64(c.samples_void_resolution);
   in.f64(c.samples_redundancy_tolerance);
@@ -108,6 +114,7 @@ std::vector<Vec3d> next_view_candidates(const Box3d& nav, const std::vector<Samp
 
 void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& source, ChunkRenderer& renderer) {
   StageTimer timer(work, "sample");
+  renderer.set_shading(shading_lights(config.shading, config.up == "y" ? Vec3d{0, 1, 0} : Vec3d{0, 0, 1}));
   SampleParams p;
   p.face_size = config.face_size;
   p.supersample = config.supersample;

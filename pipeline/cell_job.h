@@ -28,7 +28,7 @@ class ChunkRenderer;
 // cell that used it is then recomputed on the next bake.
 struct StageVersions {
   static constexpr int cull_box = 1;
-  static constexpr int sample = 3;      // 3: several samples per cell (initial set + best-next-view)
+  static constexpr int sample = 4;      // 3: several samples per cell (initial set + best-next-view); 4: lit ([shading])
   static constexpr int depth_mesh = 2;  // 2: delta scans lose the pixels their ancestors hold
   static constexpr int simplify = 3;
   static constexpr int encode = 2;      // 2: background texels filled from their covered neighbours

@@ -134,6 +134,8 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   std::vector<TriangleKey> keys;
   Hasher content;
   content.text("cellbake-store-v1").u64(params.max_chunk_triangles);
+  // What the readers make of the same file: v2, uniform vertex colours give way to material colours.
+  content.text("readers-v2");
   content.f64(params.translate.x).f64(params.translate.y).f64(params.translate.z);
   for (const auto& model : models) {
     SourceFileRecord src;
@@ -166,6 +168,8 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
     });
     for (const auto& m : info.materials) materials.push_back(m);
     report.polygons_triangulated += info.polygons_triangulated;
+    if (const std::string note = describe_vertex_colours(info); !note.empty())
+      report.vertex_colour_notes.push_back(model.filename().string() + ": " + note);
     src.triangles = file_triangles;
     sources.push_back(src);
   }

@@ -41,6 +41,9 @@ struct IngestReport {
   Box3d bounds;
   double read_seconds = 0, chunk_seconds = 0, write_seconds = 0;
   std::string content_hash;
+  // One line per model file with vertex colours: "FILE: vertex colours: ..."
+  // (describe_vertex_colours in pipeline/readers/model_reader.h).
+  std::vector<std::string> vertex_colour_notes;
 };
 
 // Ingests `models` into a new store at `store` (replacing an existing one only

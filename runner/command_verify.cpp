@@ -11,6 +11,7 @@
 
 #include <fstream>
 #include <sstream>
+#include <string>
 
 #include "runner/commands.h"
 #include "runner/verify_runner.h"
@@ -53,10 +54,14 @@ void add_verify_command(CLI::App& app) {
   cmd->callback([opt] {
     std::tie(opt->verify.width, opt->verify.height) = parse_image_size(opt->size);
     const VerifySummary s = run_verify(opt->database, opt->report, opt->verify);
-    std::printf("verified %llu cells (%llu rendered, %llu reused, %llu failed), %llu views in %.1f s; median PSNR %.2f dB\n",
+    const std::string blank =
+        s.truth_blank_views == 0 ? std::string()
+                                 : " (" + std::to_string(s.truth_blank_views) + " of " + std::to_string(s.views) +
+                                       " truth views blank: single colour or empty, PSNR says nothing there)";
+    std::printf("verified %llu cells (%llu rendered, %llu reused, %llu failed), %llu views in %.1f s; median PSNR %.2f dB%s\n",
                 (unsigned long long)s.cells_selected, (unsigned long long)s.cells_rendered,
                 (unsigned long long)s.cells_reused, (unsigned long long)s.cells_failed,
-                (unsigned long long)s.views_rendered, s.seconds, s.psnr_median_db);
+                (unsigned long long)s.views_rendered, s.seconds, s.psnr_median_db, blank.c_str());
     std::printf("report: %s\n", s.report_html.c_str());
     if (s.cells_failed > 0) throw std::runtime_error(std::to_string(s.cells_failed) + " cell(s) could not be verified");
   });

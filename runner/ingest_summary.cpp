@@ -34,6 +34,7 @@ void print_ingest_summary(const IngestReport& r, const std::string& store) {
               r.bounds.hi.y, r.bounds.hi.z);
   std::printf("  time: read %.2f s, chunk %.2f s, write %.2f s, total %.2f s (%.2f M triangles/s)\n", r.read_seconds,
               r.chunk_seconds, r.write_seconds, total, total > 0 ? r.triangles_read / total / 1e6 : 0.0);
+  for (const std::string& note : r.vertex_colour_notes) std::printf("  %s\n", note.c_str());
   std::printf("  content hash %s\n", r.content_hash.c_str());
 }
 

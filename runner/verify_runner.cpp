@@ -30,7 +30,7 @@
 namespace cellbake {
 namespace {
 
-constexpr int kCacheVersion = 1;
+constexpr int kCacheVersion = 2;  // 2: views record truth_blank
 
 struct CellTask {
   std::int64_t id = 0;
@@ -104,6 +104,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
   const Vec3d up = up_axis(up_name);
   const double cell_size = std::stod(db.meta("cell_size").value_or("0"));
   const std::vector<Box3d> regions = regions_of_config_text(db.meta("config").value_or(""));
+  const ShadingLights shading = shading_lights(shading_of_config_text(db.meta("config").value_or("")), up);
   const std::uint64_t far_budget = options.far_budget.value_or(
       far_budget_of_config_text(db.meta("config").value_or("")).value_or(SampleSelectionParams{}.far_budget));
 
@@ -191,6 +192,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
         dp.tdm_cache_bytes = std::size_t{256} << 20;
         drawer = std::make_unique<SceneDrawer>(std::shared_ptr<GlContext>(create_gl_context(GlBackend::osmesa, 1, 1)),
                                                store, dp);
+        drawer->set_shading(shading);  // the bake's light model: truth lit like the far field
       }
       SceneDrawOptions draw_options;
       draw_options.samples.far_budget = far_budget;
@@ -235,6 +237,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
         v.skin_fraction = m.skin_fraction;
         v.extra_fraction = m.extra_fraction;
         v.depth_error_median = m.depth_error_median;
+        v.truth_blank = is_blank(truth);
         if (result.views.empty() || worse(v, result.views[result.worst_view])) {
           result.worst_view = int(result.views.size());
           worst_truth = std::move(truth);
@@ -288,6 +291,15 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
   summary.report_html = files.html;
   summary.report_json = files.json;
   summary.psnr_median_db = metric_stats(input.cells, verify_metrics()[0]).median;
+  for (const auto& c : input.cells) {
+    summary.views += c.views.size();
+    for (const auto& v : c.views) summary.truth_blank_views += v.truth_blank;
+  }
+  if (summary.truth_blank_views > 0)
+    std::fprintf(stderr,
+                 "warning: %llu of %llu truth views are blank (one colour over every covered pixel, or nothing "
+                 "covered): PSNR/SSIM say nothing there; is the model black or a single colour?\n",
+                 (unsigned long long)summary.truth_blank_views, (unsigned long long)summary.views);
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return summary;
 }

@@ -38,6 +38,8 @@ struct VerifySummary {
   std::uint64_t cells_reused = 0;    // taken from verify-cells.json
   std::uint64_t cells_failed = 0;    // could not be decoded or drawn (listed in the report)
   std::uint64_t views_rendered = 0;
+  std::uint64_t views = 0;              // in the report (rendered + reused)
+  std::uint64_t truth_blank_views = 0;  // of those, truth views that were blank (image_metrics.h is_blank): PSNR says nothing
   double psnr_median_db = 0;         // over every view (+inf when all are identical; NaN without views)
   std::filesystem::path report_html, report_json;
   double seconds = 0;

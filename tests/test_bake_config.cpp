@@ -4,6 +4,7 @@
 
 #include "pipeline/bake_config.h"
 #include "pipeline/cell_grid.h"
+#include "pipeline/cell_job.h"
 #include "pipeline/embedded_configs.h"
 #include "test_support.h"
 
@@ -95,6 +96,57 @@ TEST(BakeConfig, OverridesValidateLikeFileKeys) {
   EXPECT_NE(error_of([&] { apply_override(c, "near.nope=1"); }).find("unknown key"), std::string::npos);
   EXPECT_NE(error_of([&] { apply_override(c, "sample.face_size=0"); }).find("out of range"), std::string::npos);
   EXPECT_NE(error_of([&] { apply_override(c, "novalue"); }).find("section.key=value"), std::string::npos);
+}
+
+TEST(BakeConfig, ShadingKeysParseValidateAndEnterTheSampleHash) {
+  test::TempDir dir;
+  test::write_text(dir / "s.toml", R"(
+[shading]
+mode = "lit"
+key_direction = [0, 1, 2]
+key_strength = 0.7
+fill_direction = [1, 0, 0]
+fill_strength = 0.2
+ambient = 0.25
+)");
+  const BakeConfig c = load_bake_config(dir / "s.toml");
+  EXPECT_EQ(c.shading.mode, ShadingMode::lit);
+  EXPECT_EQ(c.shading.key_direction, (Vec3d{0, 1, 2}));
+  EXPECT_EQ(c.shading.key_strength, 0.7);
+  EXPECT_EQ(c.shading.fill_direction, (Vec3d{1, 0, 0}));
+  EXPECT_EQ(c.shading.fill_strength, 0.2);
+  EXPECT_EQ(c.shading.ambient, 0.25);
+  const std::string text = describe_bake_config(c);
+  EXPECT_NE(text.find("shading.mode=lit\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("shading.key_direction=0,1,2\n"), std::string::npos) << text;
+
+  test::write_text(dir / "zero.toml", "[shading]\n\nkey_direction = [0, 0, 0]\n");
+  std::string e = error_of([&] { load_bake_config(dir / "zero.toml"); });
+  EXPECT_NE(e.find("zero.toml:3"), std::string::npos) << e;
+  EXPECT_NE(e.find("zero vector"), std::string::npos) << e;
+  test::write_text(dir / "mode.toml", "[shading]\nmode = \"phong\"\n");
+  e = error_of([&] { load_bake_config(dir / "mode.toml"); });
+  EXPECT_NE(e.find("mode.toml:2"), std::string::npos) << e;
+  EXPECT_NE(e.find("lit, unlit"), std::string::npos) << e;
+  BakeConfig o;
+  EXPECT_NE(error_of([&] { apply_override(o, "shading.ambient=-1"); }).find("out of range"), std::string::npos);
+  EXPECT_NE(error_of([&] { apply_override(o, "shading.fill_direction=[1, 2]"); }).find("3 numbers"), std::string::npos);
+  apply_override(o, "shading.mode=unlit");
+  EXPECT_EQ(o.shading.mode, ShadingMode::unlit);
+
+  // Shading is part of the sample stage's hash, not the cull box's.
+  BakeConfig a;
+  a.regions = {Box3d{{0, 0, 0}, {2, 2, 2}}};
+  const CellSpec cell = enumerate_cells(a.regions, a.cell_size).front();
+  const CellHashes base = cell_hashes(cell, a, "store");
+  for (const char* change : {"shading.mode=unlit", "shading.key_strength=0.5", "shading.fill_direction=[0,1,0]",
+                             "shading.ambient=0.2", "shading.key_direction=[1,1,1]", "shading.fill_strength=0.1"}) {
+    BakeConfig b = a;
+    apply_override(b, change);
+    const CellHashes h = cell_hashes(cell, b, "store");
+    EXPECT_EQ(h.cull, base.cull) << change;
+    EXPECT_NE(h.input, base.input) << change;
+  }
 }
 
 TEST(BakeConfig, ValidationRequiresStoreAndRegions) {

@@ -126,6 +126,26 @@ TEST(ImageMetrics, ErrorImageMarksHolesSkinsAndExtras) {
   EXPECT_EQ(e[3], (Rgba8{0, 255, 255, 255}));
 }
 
+TEST(ImageMetrics, BlankFramesAreOneColourOrEmpty) {
+  // Nothing covered: blank.
+  EXPECT_TRUE(is_blank(flat(8, 8, {0, 0, 0, 0}, kSky)));
+  // One colour over every covered pixel (a black model): blank, whatever the background.
+  ViewFrame black = flat(8, 8, {0, 0, 0, 255}, 3.0f);
+  black.depth[5] = kSky;
+  black.color[5] = {90, 90, 90, 0};
+  EXPECT_TRUE(is_blank(black));
+  // Alpha alone does not make a picture.
+  black.color[6].a = 17;
+  EXPECT_TRUE(is_blank(black));
+  // Two colours among the covered pixels: not blank.
+  black.color[7] = {0, 0, 1, 255};
+  EXPECT_FALSE(is_blank(black));
+  EXPECT_FALSE(is_blank(stripes(16, 16, 0)));
+  ViewFrame bad = flat(4, 4, {}, 1.0f);
+  bad.depth.pop_back();
+  EXPECT_THROW(is_blank(bad), std::invalid_argument);
+}
+
 TEST(ImageMetrics, MismatchedFramesAreRejected) {
   const ViewFrame a = flat(4, 4, {}, 1.0f), b = flat(4, 5, {}, 1.0f);
   EXPECT_THROW(compare_frames(a, b), std::invalid_argument);

@@ -179,5 +179,31 @@ TEST(Ingest, BadInputFailsClearlyAndLeavesTheStoreUntouched) {
     EXPECT_EQ(e.path().string().find(".spill-"), std::string::npos) << e.path();
 }
 
+// A kitchen-style OBJ: "v x y z 0 0 0" on every vertex (an exporter's
+// default) and a red material. The store holds red, not black, and the ingest
+// summary says which colours were used.
+TEST(Ingest, UniformVertexColoursGiveWayToMaterialsAndTheSummarySaysSo) {
+  test::TempDir dir;
+  test::write_text(dir / "k.mtl", "newmtl red\nKd 0.8 0 0\n");
+  std::ostringstream obj;
+  obj << "mtllib k.mtl\nusemtl red\n";
+  for (int i = 0; i < 4; ++i) obj << "v " << i % 2 << " " << i / 2 << " 0 0 0 0\n";
+  obj << "f 1 2 4\nf 1 4 3\n";
+  test::write_text(dir / "kitchen.obj", obj.str());
+  auto r = test::run_cellbake("ingest " + (dir / "kitchen.obj").string() + " --store " + (dir / "s.db").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("kitchen.obj: vertex colours: ignored (all equal: 0 0 0), material colours used"),
+            std::string::npos)
+      << r.output;
+  GeometryStore store(dir / "s.db");
+  std::size_t colours = 0;
+  for (const ChunkRef& ref : store.all_chunks())
+    for (const Rgba8& c : store.load(ref.id)->colors) {
+      EXPECT_EQ(c, (Rgba8{204, 0, 0, 255}));
+      ++colours;
+    }
+  EXPECT_GT(colours, 0u);
+}
+
 }  // namespace
 }  // namespace cellbake

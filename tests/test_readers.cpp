@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <zlib.h>
 
+#include <array>
 #include <bit>
 #include <cstdint>
 #include <cstring>
@@ -146,6 +147,66 @@ TEST(ObjReader, VertexColoursTexcoordsAndCornerForms) {
   EXPECT_EQ(r.triangles[2].color[1], (Rgba8{0, 255, 0, 255}));
   EXPECT_EQ(r.triangles[2].color[2], (Rgba8{128, 255, 255, 255}));  // no vertex colour: the material colour
   EXPECT_EQ(r.triangles[2].uv[2], (Uv{0, 1}));
+}
+
+// Exporters write "v x y z 0 0 0" on every vertex by default: multiplied into
+// Kd that would blank the model. Uniform vertex colours give way to the
+// material colour (model_reader.h).
+TEST(ObjReader, UniformBlackVertexColoursGiveWayToTheMaterial) {
+  TempDir dir;
+  write_text(dir / "k.mtl", "newmtl red\nKd 1 0 0\n");
+  const std::string obj =
+      "mtllib k.mtl\n"
+      "v 0 0 0 0 0 0\nv 1 0 0 0 0 0\nv 0 1 0 0 0 0\n"
+      "f 1 2 3\n"  // under the default material: the vertex colour is all there is
+      "usemtl red\n"
+      "f 1 2 3\n"
+      "v 0 0 1 0 0 0\nv 1 0 1 0 0 0\nv 0 1 1 0 0 0\n"  // more vertices after faces: still all equal
+      "f 4 5 6\n";
+  write_text(dir / "k.obj", obj);
+  write_gzip(dir / "kz.obj.gz", obj);
+  for (const char* name : {"k.obj", "kz.obj.gz"}) {
+    const ReadResult r = read_all(dir / name);
+    ASSERT_EQ(r.triangles.size(), 3u) << name;
+    EXPECT_EQ(r.triangles[0].color[0], (Rgba8{0, 0, 0, 255})) << name;
+    for (int t = 1; t < 3; ++t)
+      for (int i = 0; i < 3; ++i) EXPECT_EQ(r.triangles[t].color[i], (Rgba8{255, 0, 0, 255})) << name << " " << t;
+    EXPECT_EQ(r.info.vertex_colours, VertexColourUse::uniform_ignored) << name;
+    EXPECT_EQ(r.info.uniform_vertex_colour, (Rgba8{0, 0, 0, 255})) << name;
+    EXPECT_EQ(describe_vertex_colours(r.info), "vertex colours: ignored (all equal: 0 0 0), material colours used");
+  }
+}
+
+// The rule is file-wide: colours that differ only after the first material
+// face still vary (the reader looks ahead before emitting that face).
+TEST(ObjReader, VaryingVertexColoursStillMultiplyTheMaterial) {
+  TempDir dir;
+  write_text(dir / "m.mtl", "newmtl half\nKd 0.5 1 1\n");
+  write_text(dir / "v.obj",
+             "mtllib m.mtl\nusemtl half\n"
+             "v 0 0 0 1 1 1\nv 1 0 0 1 1 1\nv 0 1 0 1 1 1\n"
+             "f 1 2 3\n"
+             "v 0 0 1 0 1 0\nv 1 0 1 0 1 0\nv 0 1 1 1 1 1\n"
+             "f 4 5 6\n");
+  const ReadResult r = read_all(dir / "v.obj");
+  ASSERT_EQ(r.triangles.size(), 2u);
+  EXPECT_EQ(r.triangles[0].color[0], (Rgba8{128, 255, 255, 255}));  // white x Kd
+  EXPECT_EQ(r.triangles[1].color[0], (Rgba8{0, 255, 0, 255}));      // green x Kd
+  EXPECT_EQ(r.info.vertex_colours, VertexColourUse::varying);
+  EXPECT_NE(describe_vertex_colours(r.info).find("used (they vary)"), std::string::npos);
+}
+
+TEST(ObjReader, UniformVertexColoursWithoutMaterialsAreKept) {
+  TempDir dir;
+  write_text(dir / "u.obj", "v 0 0 0 0 0 0\nv 1 0 0 0 0 0\nv 0 1 0 0 0 0\nf 1 2 3\n");
+  const ReadResult r = read_all(dir / "u.obj");
+  ASSERT_EQ(r.triangles.size(), 1u);
+  EXPECT_EQ(r.triangles[0].color[0], (Rgba8{0, 0, 0, 255}));
+  EXPECT_EQ(r.info.vertex_colours, VertexColourUse::uniform_kept);
+  EXPECT_NE(describe_vertex_colours(r.info).find("the model is black"), std::string::npos);
+  write_text(dir / "none.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  EXPECT_EQ(read_all(dir / "none.obj").info.vertex_colours, VertexColourUse::none);
+  EXPECT_EQ(describe_vertex_colours(read_all(dir / "none.obj").info), "");
 }
 
 TEST(ObjReader, MissingMaterialLibraryFallsBackToDefaultColour) {
@@ -297,6 +358,23 @@ TEST(PlyReader, FacesBeforeVerticesFloatColoursAndTexcoords) {
   EXPECT_EQ(r.triangles[0].color[1], (Rgba8{0, 0, 0, 51}));
   EXPECT_EQ(r.triangles[0].uv[1], (Uv{1, 0}));
   EXPECT_EQ(r.triangles[0].uv[0], (Uv{0, 1}));
+}
+
+// PLY has no material colours: all-black vertex colours are the colour (and
+// the reader says so, so the ingest summary can warn).
+TEST(PlyReader, UniformBlackVertexColoursAreKeptAndReported) {
+  TempDir dir;
+  write_text(dir / "b.ply",
+             "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+             "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+             "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+             "0 0 0 0 0 0\n1 0 0 0 0 0\n0 1 0 0 0 0\n3 0 1 2\n");
+  const ReadResult r = read_all(dir / "b.ply");
+  ASSERT_EQ(r.triangles.size(), 1u);
+  EXPECT_EQ(r.triangles[0].color[0], (Rgba8{0, 0, 0, 255}));
+  EXPECT_EQ(r.info.vertex_colours, VertexColourUse::uniform_kept);
+  EXPECT_NE(describe_vertex_colours(r.info).find("the model is black"), std::string::npos)
+      << describe_vertex_colours(r.info);
 }
 
 TEST(PlyReader, NoColoursMeansDefaultGrey) {
@@ -530,6 +608,40 @@ std::string one_triangle_gltf() {
   "bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":6}],
   "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[2,3,0]},
                {"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}]})";
+}
+
+// One triangle with COLOR_0 (float RGB per vertex) and a red material.
+std::string coloured_triangle_gltf(const std::array<float, 9>& colours) {
+  std::string buffer;
+  for (float v : {0.0f, 0.0f, 0.0f, 2.0f, 0.0f, 0.0f, 0.0f, 3.0f, 0.0f}) put<float>(buffer, v, false);
+  for (float c : colours) put<float>(buffer, c, false);
+  for (std::uint16_t i : {0, 1, 2, 0}) put<std::uint16_t>(buffer, i, false);
+  return R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+  "meshes":[{"primitives":[{"attributes":{"POSITION":0,"COLOR_0":1},"indices":2,"material":0}]}],
+  "materials":[{"name":"red","pbrMetallicRoughness":{"baseColorFactor":[1,0,0,1]}}],
+  "buffers":[{"byteLength":80,"uri":"data:application/octet-stream;base64,)" +
+         base64(buffer) + R"("}],
+  "bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":36},
+                 {"buffer":0,"byteOffset":72,"byteLength":6}],
+  "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[2,3,0]},
+               {"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"},
+               {"bufferView":2,"componentType":5123,"count":3,"type":"SCALAR"}]})";
+}
+
+TEST(AssimpReader, UniformBlackVertexColoursGiveWayToTheMaterial) {
+  TempDir dir;
+  write_text(dir / "black.gltf", coloured_triangle_gltf({0, 0, 0, 0, 0, 0, 0, 0, 0}));
+  const ReadResult black = read_all(dir / "black.gltf");
+  ASSERT_EQ(black.triangles.size(), 1u);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(black.triangles[0].color[i], (Rgba8{255, 0, 0, 255})) << i;
+  EXPECT_EQ(black.info.vertex_colours, VertexColourUse::uniform_ignored);
+
+  write_text(dir / "varied.gltf", coloured_triangle_gltf({1, 1, 1, 0, 0, 0, 1, 1, 1}));
+  const ReadResult varied = read_all(dir / "varied.gltf");
+  ASSERT_EQ(varied.triangles.size(), 1u);
+  EXPECT_EQ(varied.triangles[0].color[0], (Rgba8{255, 0, 0, 255}));
+  EXPECT_EQ(varied.triangles[0].color[1], (Rgba8{0, 0, 0, 255}));
+  EXPECT_EQ(varied.info.vertex_colours, VertexColourUse::varying);
 }
 
 TEST(AssimpReader, GltfWithEmbeddedBuffer) {

@@ -70,6 +70,7 @@ std::vector<SampleNode> star() {
 TEST(SampleSelection, NearestSampleComesWithItsAncestorsThenMoreWithinTheBudget) {
   SampleSelectionParams p;
   p.far_budget = 61000;
+  p.root_factor = 0;
   const auto chosen = select_samples(star(), {0.2, 0.1, 0}, p);
   ASSERT_GE(chosen.size(), 2u);
   EXPECT_EQ(chosen[0], 1);
@@ -84,9 +85,19 @@ TEST(SampleSelection, MaxSamplesOneDrawsTheRootAlone) {
   p.max_samples = 2;
   EXPECT_EQ(select_samples(star(), {4, 4, 0}, p), (std::vector<int>{4, 0}));
   p.far_budget = 0;  // the nearest chain is drawn whatever the budget
+  p.root_factor = 0;
   p.max_samples = 0;
   EXPECT_EQ(select_samples(star(), {4, 4, 0}, p), (std::vector<int>{4, 0}));
   EXPECT_TRUE(select_samples({}, {0, 0, 0}, p).empty());
+}
+
+TEST(SampleSelection, TheBudgetGrowsToTwiceTheRootAlone) {
+  SampleSelectionParams p;
+  p.far_budget = 0;
+  p.root_factor = 2.0;  // 100 k: the root (50 k) and all four corners (5 k each) fit
+  EXPECT_EQ(select_samples(star(), {0, 0, 0}, p).size(), 5u);
+  p.root_factor = 1.15;  // 57.5 k: the root and one corner
+  EXPECT_EQ(select_samples(star(), {0, 0, 0}, p), (std::vector<int>{1, 0}));
 }
 
 TEST(SampleSelection, BoxInViewCullsBehindAndBeside) {

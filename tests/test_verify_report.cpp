@@ -204,6 +204,67 @@ TEST(VerifyViews, RegionsFromConfigText) {
   EXPECT_THROW(regions_of_config_text("region=1,2,3\n"), std::invalid_argument);
 }
 
+// A black model (every vertex "0 0 0", no materials) bakes a black far field
+// and a black truth: PSNR is +infinity, and the report must say that the
+// truth views are blank rather than let that pass for a perfect bake.
+TEST(VerifyRun, BlackModelReportsBlankTruthViews) {
+  test::TempDir dir;
+  std::ostringstream box;
+  int next = 1;
+  test::obj_box(box, next, {0, 0, 0}, {6, 4, 3}, 2);
+  std::istringstream lines(box.str());
+  std::ostringstream black;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("v ", 0) == 0) {
+      std::istringstream v(line.substr(2));
+      double x, y, z;
+      v >> x >> y >> z;
+      black << "v " << x << " " << y << " " << z << " 0 0 0\n";
+    } else {
+      black << line << "\n";
+    }
+  }
+  test::write_text(dir / "black.obj", black.str());
+  IngestParams ip;
+  ip.max_chunk_triangles = 128;
+  ingest_models({dir / "black.obj"}, dir / "black.store.db", ip, tbb_parallel_for());
+  BakeConfig c;
+  c.store = dir / "black.store.db";
+  c.regions = {Box3d{{2, 2, 1.5}, {2, 2, 1.5}}};
+  c.cell_size = 2.0;
+  c.near_budget = 0;
+  c.face_size = 16;
+  c.samples_initial = "centre";
+  c.samples_max = 1;
+  c.image_format = "png";
+  c.database = dir / "cells.db";
+  BakeOptions bo;
+  bo.threads = 1;
+  bo.quiet = true;
+  ASSERT_EQ(run_bake(c, bo).cells_baked, 1u);
+
+  VerifyOptions vo;
+  vo.views_per_cell = 2;
+  vo.width = vo.height = 16;
+  vo.threads = 1;
+  vo.quiet = true;
+  vo.sample_views = false;
+  const VerifySummary s = run_verify(c.database, dir / "report", vo);
+  EXPECT_EQ(s.views, 2u);
+  EXPECT_EQ(s.truth_blank_views, 2u);
+  const nlohmann::json j = nlohmann::json::parse(read_text(dir / "report" / "report.json"));
+  EXPECT_EQ(j["summary"]["truth_blank_views"].get<int>(), 2);
+  EXPECT_TRUE(j["cells"][0]["views"][0]["truth_blank"].get<bool>());
+  EXPECT_NE(read_text(dir / "report" / "report.html").find("truth views are blank"), std::string::npos);
+
+  // And the command's summary line says so.
+  const auto cli = test::run_cellbake("verify " + c.database.string() + " --report " + (dir / "cli").string() +
+                                      " --views-per-cell 1 --size 16x16 --threads 1 --quiet");
+  EXPECT_EQ(cli.exit_code, 0) << cli.output;
+  EXPECT_NE(cli.output.find("1 of 1 truth views blank"), std::string::npos) << cli.output;
+  EXPECT_NE(cli.output.find("warning: 1 of 1 truth views are blank"), std::string::npos) << cli.output;
+}
+
 TEST(VerifyRun, TinyBakeReportIsCompleteAndResumable) {
   test::TempDir dir;
   test::ingest_room_store(dir.path());
@@ -262,6 +323,8 @@ TEST(VerifyRun, TinyBakeReportIsCompleteAndResumable) {
     EXPECT_TRUE(std::filesystem::file_size(report / cell["triptych"].get<std::string>()) > 100);
   }
   EXPECT_EQ(j["summary"]["views"].get<int>(), 4);
+  EXPECT_EQ(j["summary"]["truth_blank_views"].get<int>(), 0);
+  EXPECT_EQ(s.truth_blank_views, 0u);
   EXPECT_EQ(j["summary"]["psnr_db"]["count"].get<int>(), 4);
   for (const char* plot : {"psnr_vs_bake_seconds", "psnr_vs_bytes", "psnr_vs_triangles", "psnr_vs_distance",
                            "holes_vs_distance"}) {

@@ -146,6 +146,21 @@ ImageMetrics compare_frames(const ViewFrame& impostor, const ViewFrame& truth, c
   return m;
 }
 
+bool is_blank(const ViewFrame& frame) {
+  validate(frame, "blank test");
+  const Rgba8* first = nullptr;
+  for (std::size_t i = 0; i < frame.color.size(); ++i) {
+    if (!frame.covered(i)) continue;
+    const Rgba8& c = frame.color[i];
+    if (!first) {
+      first = &c;
+    } else if (c.r != first->r || c.g != first->g || c.b != first->b) {
+      return false;
+    }
+  }
+  return true;
+}
+
 std::vector<Rgba8> error_image(const ViewFrame& impostor, const ViewFrame& truth, const ImageMetricsParams& params) {
   validate_pair(impostor, truth);
   std::vector<Rgba8> out(truth.color.size());

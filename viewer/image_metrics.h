@@ -58,6 +58,14 @@ struct ImageMetrics {
 };
 ImageMetrics compare_frames(const ViewFrame& impostor, const ViewFrame& truth, const ImageMetricsParams& params = {});
 
+// True when `frame` shows nothing to compare: no pixel is covered, or every
+// covered pixel has the same R, G, B (a black or single-colour model, an
+// empty view). PSNR against such a truth says nothing about what a person
+// would see (a black truth and a black impostor give +infinity). Pure; the
+// uncovered background is ignored. Throws std::invalid_argument like
+// compare_frames for a frame whose vectors do not hold width * height values.
+bool is_blank(const ViewFrame& frame);
+
 // A false-colour error image of the same size (row 0 at the top):
 //  * covered in neither frame: black;
 //  * hole (truth covered, impostor not): magenta (255, 0, 255);

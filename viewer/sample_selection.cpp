@@ -20,6 +20,10 @@ std::vector<int> select_samples(const std::vector<SampleNode>& samples, const Ve
     const double da = length(a->eye - eye), db = length(b->eye - eye);
     return da < db || (da == db && a->index < b->index);
   });
+  std::uint64_t root_triangles = 0;
+  for (const SampleNode& s : samples)
+    if (s.parent < 0 || !by_index.contains(s.parent)) root_triangles += s.triangles;
+  const double budget = std::max(double(params.far_budget), params.root_factor * double(root_triangles));
   std::vector<int> chosen;
   std::uint64_t triangles = 0;
   int chains = 0;
@@ -38,7 +42,7 @@ std::vector<int> select_samples(const std::vector<SampleNode>& samples, const Ve
     }
     // A chain that does not fit is skipped: a shorter or cheaper one further away may.
     if (params.max_samples > 0 && chosen.size() + chain.size() > std::size_t(params.max_samples)) continue;
-    if (chains > 0 && triangles + cost > params.far_budget) continue;
+    if (chains > 0 && double(triangles + cost) > budget) continue;
     chosen.insert(chosen.end(), chain.begin(), chain.end());
     triangles += cost;
     ++chains;

@@ -21,7 +21,12 @@ struct SampleNode {
 };
 
 struct SampleSelectionParams {
-  std::uint64_t far_budget = 100000;  // far-field triangles per view; the nearest sample's chain is always drawn whole
+  // Far-field triangles per view: the larger of far_budget and root_factor
+  // times what the root sample alone costs in this view (so a cell whose
+  // root is already large may still draw its delta scans). The nearest
+  // sample's chain is always drawn whole.
+  std::uint64_t far_budget = 100000;
+  double root_factor = 2.0;
   // At most this many samples (0 = no cap). Chains are taken whole, so 1
   // draws the root (the intra scan, the only self-contained sample) alone:
   // the single-sample far field of a one-sample bake.

@@ -68,6 +68,12 @@ class SceneDrawer {
   SceneFrameStats draw_truth(const RenderCamera& camera, int width, int height, const SceneDrawOptions& options,
                              ViewFrame& out);
 
+  // The light model of the chunks drawn from now on (near field and truth;
+  // ChunkRenderer::set_shading). Viewers pass the bake's own
+  // (shading_of_config_text of the database's meta `config`), so that truth
+  // and near field are lit like the far field's baked images.
+  void set_shading(const ShadingLights& lights) { chunks_.set_shading(lights); }
+
   std::size_t tdm_gpu_bytes() const { return tdm_.gpu_bytes(); }
   ChunkRendererStats chunk_stats() const { return chunks_.stats(); }
   // Leaves the calling thread without a current context.

@@ -178,6 +178,7 @@ nlohmann::json to_json(const VerifyViewResult& v) {
           {"psnr_db_root", number_or_null(v.psnr_db_root)},
           {"hole_fraction_root", number_or_null(v.hole_fraction_root)},
           {"samples_drawn", v.samples_drawn},
+          {"truth_blank", v.truth_blank},
           {"triangles_impostor", v.triangles_impostor},
           {"triangles_truth", v.triangles_truth},
           {"ms_impostor", number_or_null(v.ms_impostor)},
@@ -234,6 +235,7 @@ VerifyCellResult cell_from_json(const nlohmann::json& j) {
     r.psnr_db_root = v.contains("psnr_db_root") ? number_from(v, "psnr_db_root", std::numeric_limits<double>::infinity()) : kNaN;
     r.hole_fraction_root = v.contains("hole_fraction_root") ? number_from(v, "hole_fraction_root", kNaN) : kNaN;
     r.samples_drawn = v.value("samples_drawn", std::uint64_t{0});
+    r.truth_blank = v.value("truth_blank", false);
     r.triangles_impostor = v.at("triangles_impostor").get<std::uint64_t>();
     r.triangles_truth = v.at("triangles_truth").get<std::uint64_t>();
     r.ms_impostor = number_from(v, "ms_impostor", kNaN);
@@ -245,10 +247,11 @@ VerifyCellResult cell_from_json(const nlohmann::json& j) {
 
 nlohmann::json summary_json(const std::vector<VerifyCellResult>& cells) {
   nlohmann::json s;
-  std::size_t views = 0, failed = 0;
+  std::size_t views = 0, failed = 0, blank = 0;
   std::vector<double> bake, bytes, tri_imp, tri_truth;
   for (const auto& c : cells) {
     views += c.views.size();
+    for (const auto& v : c.views) blank += v.truth_blank;
     failed += !c.error.empty();
     if (!c.error.empty()) continue;
     bake.push_back(c.bake_seconds_total());
@@ -261,6 +264,7 @@ nlohmann::json summary_json(const std::vector<VerifyCellResult>& cells) {
   s["cells"] = cells.size();
   s["cells_failed"] = failed;
   s["views"] = views;
+  s["truth_blank_views"] = blank;
   for (const auto& m : verify_metrics()) {
     const MetricStats st = metric_stats(cells, m);
     s[m.name] = {{"count", st.count},
@@ -376,6 +380,11 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
     << escape_xml(input.params.dump()) << "</code>. " << summary["cells"].get<std::size_t>() << " cells ("
     << summary["cells_failed"].get<std::size_t>() << " could not be verified), " << summary["views"].get<std::size_t>()
     << " views: each rendered as the cell's impostor (near field + textured depth meshes) and as ground truth.</p>\n";
+  if (const std::size_t blank = summary["truth_blank_views"].get<std::size_t>(); blank > 0)
+    h << "<p><b>Warning: " << blank << " of " << summary["views"].get<std::size_t>()
+      << " truth views are blank</b> (one colour over every covered pixel, or nothing covered): their PSNR and SSIM "
+         "say nothing about the bake. A black or single-colour model (check the ingest summary's vertex colours) "
+         "or views that see nothing.</p>\n";
   h << "<p class=\"note\">PSNR and SSIM compare colours (higher is better); hole = truth surface the impostor "
        "misses, skin = impostor surface >5% nearer than the truth, extra = impostor surface where the truth is empty "
        "(fractions, lower is better); depth error = median relative depth error; ms = warm frame time of the "

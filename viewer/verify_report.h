@@ -29,6 +29,9 @@ struct VerifyViewResult {
   double psnr_db_root = std::numeric_limits<double>::quiet_NaN();
   double hole_fraction_root = std::numeric_limits<double>::quiet_NaN();
   std::uint64_t samples_drawn = 0;  // samples whose far field the impostor drew
+  // The truth showed one colour over every covered pixel, or covered nothing
+  // (is_blank, viewer/image_metrics.h): its PSNR says nothing.
+  bool truth_blank = false;
   std::uint64_t triangles_impostor = 0, triangles_truth = 0;
   double ms_impostor = 0, ms_truth = 0;  // warm frame, wall clock
 };
@@ -87,7 +90,8 @@ nlohmann::json to_json(const VerifyViewResult& view);
 nlohmann::json to_json(const VerifyCellResult& cell);
 VerifyCellResult cell_from_json(const nlohmann::json& j);
 
-// The `summary` object of report.json: cells, cells_failed, views, and per
+// The `summary` object of report.json: cells, cells_failed, views,
+// truth_blank_views (views whose truth was blank: their PSNR says nothing), and per
 // metric of verify_metrics() {count, median, worst, worst_cell, worst_view,
 // median_centre, median_corner}; also median bake seconds and bytes per cell.
 nlohmann::json summary_json(const std::vector<VerifyCellResult>& cells);

@@ -125,6 +125,51 @@ std::optional<std::uint64_t> far_budget_of_config_text(const std::string& text) 
   return std::nullopt;
 }
 
+ShadingParams shading_of_config_text(const std::string& text) {
+  ShadingParams p;
+  p.mode = ShadingMode::unlit;  // no shading lines: baked before shading existed
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("shading.", 0) != 0) continue;
+    const std::size_t eq = line.find('=');
+    const std::string key = line.substr(0, eq), value = eq == std::string::npos ? "" : line.substr(eq + 1);
+    const auto malformed = [&]() { return std::invalid_argument("malformed config line \"" + line + "\""); };
+    const auto scalar = [&]() {
+      std::istringstream v(value);
+      double d;
+      if (!(v >> d) || !(v >> std::ws).eof()) throw malformed();
+      return d;
+    };
+    const auto vector = [&]() {
+      std::istringstream v(value);
+      Vec3d d;
+      char comma1 = 0, comma2 = 0;
+      if (!(v >> d.x >> comma1 >> d.y >> comma2 >> d.z) || comma1 != ',' || comma2 != ',' || !(v >> std::ws).eof())
+        throw malformed();
+      return d;
+    };
+    if (key == "shading.mode") {
+      try {
+        p.mode = parse_shading_mode(value);
+      } catch (const std::invalid_argument&) {
+        throw malformed();
+      }
+    } else if (key == "shading.key_direction") {
+      p.key_direction = vector();
+    } else if (key == "shading.fill_direction") {
+      p.fill_direction = vector();
+    } else if (key == "shading.key_strength") {
+      p.key_strength = scalar();
+    } else if (key == "shading.fill_strength") {
+      p.fill_strength = scalar();
+    } else if (key == "shading.ambient") {
+      p.ambient = scalar();
+    }
+  }
+  return p;
+}
+
 bool region_is_flat(const Box3d& region, const Vec3d& up, double cell_size) {
   return dot(region.extent(), up) < cell_size;
 }

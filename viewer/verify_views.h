@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "stages/geometry.h"
+#include "stages/render/shading.h"
 
 namespace cellbake {
 
@@ -47,6 +48,13 @@ std::vector<Box3d> regions_of_config_text(const std::string& config_text);
 // one (databases baked before it existed do not). Throws
 // std::invalid_argument for a malformed value.
 std::optional<std::uint64_t> far_budget_of_config_text(const std::string& config_text);
+
+// The light model a cell database was baked with, from its meta `config`
+// text (the shading.* lines describe_bake_config writes; directions in the
+// up-axis frame). Databases baked before shading existed have no such lines
+// and were baked unlit: then mode is unlit (and the rest ShadingParams{}).
+// Throws std::invalid_argument for a malformed shading line.
+ShadingParams shading_of_config_text(const std::string& config_text);
 
 // True when `region` is thinner than `cell_size` along `up` (its cells form a
 // single, centred layer of eye heights).

@@ -36,7 +36,9 @@ ViewSession::ViewSession(const std::filesystem::path& database, const std::files
       up_(up_axis(db_.meta("up").value_or("z"))),
       far_budget_(far_budget_of_config_text(db_.meta("config").value_or("")).value_or(SampleSelectionParams{}.far_budget)),
       drawer_(std::make_unique<SceneDrawer>(std::shared_ptr<GlContext>(create_gl_context(GlBackend::osmesa, 1, 1)),
-                                            *store_)) {}
+                                            *store_)) {
+  drawer_->set_shading(shading_lights(shading_of_config_text(db_.meta("config").value_or("")), up_));
+}
 
 ViewSession::~ViewSession() = default;
 

@@ -2,7 +2,9 @@
 // Asset Import Library (assimp), which loads the whole scene: node transforms
 // are baked into the vertices (aiProcess_PreTransformVertices), polygons are
 // triangulated, points and lines are dropped. Material i of the scene becomes
-// material i + 1 of ours (0 stays the default grey).
+// material i + 1 of ours (0 stays the default grey). Vertex colours (set 0)
+// multiply material colours only when they vary across the scene; all equal,
+// the material colour wins (model_reader.h).
 #include <assimp/config.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
@@ -41,7 +43,25 @@ Material convert_material(const aiMaterial& source) {
   return material;
 }
 
-void emit_mesh(const std::string& file, unsigned mesh_index, const aiMesh& mesh, ModelInfo& info,
+Rgba8 vertex_colour_of(const aiColor4D& c) {
+  return {unit_to_byte(c.r), unit_to_byte(c.g), unit_to_byte(c.b), unit_to_byte(c.a)};
+}
+
+// Every vertex colour of the scene (set 0 of each mesh), for the "do they vary" rule.
+ColourVariation scene_colour_variation(const aiScene& scene) {
+  ColourVariation variation;
+  for (unsigned m = 0; m < scene.mNumMeshes && !variation.varies; ++m) {
+    const aiMesh& mesh = *scene.mMeshes[m];
+    if (!mesh.mColors[0]) continue;
+    for (unsigned v = 0; v < mesh.mNumVertices && !variation.varies; ++v)
+      variation.add(vertex_colour_of(mesh.mColors[0][v]));
+  }
+  return variation;
+}
+
+// Emits the mesh's triangles; `colours_vary` is the scene-wide rule's verdict.
+// Returns true when some corner's uniform vertex colour gave way to its material's.
+bool emit_mesh(const std::string& file, unsigned mesh_index, const aiMesh& mesh, bool colours_vary, ModelInfo& info,
                const TriangleCallback& emit) {
   const std::uint32_t material_index = mesh.mMaterialIndex + 1;
   const Rgba8 material_colour =
@@ -54,6 +74,7 @@ void emit_mesh(const std::string& file, unsigned mesh_index, const aiMesh& mesh,
       throw InputError(file, "mesh " + std::to_string(mesh_index) + " vertex " + std::to_string(v),
                        "non-finite coordinate");
   }
+  bool ignored = false;
   Triangle t;
   t.material = material_index < info.materials.size() ? material_index : 0;
   for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
@@ -66,15 +87,15 @@ void emit_mesh(const std::string& file, unsigned mesh_index, const aiMesh& mesh,
                          "vertex index " + std::to_string(v) + " out of range");
       t.p[i] = {mesh.mVertices[v].x, mesh.mVertices[v].y, mesh.mVertices[v].z};
       Rgba8 vertex_colour;
-      if (colours)
-        vertex_colour = {unit_to_byte(colours[v].r), unit_to_byte(colours[v].g), unit_to_byte(colours[v].b),
-                         unit_to_byte(colours[v].a)};
-      t.color[i] = corner_colour(material_colour, t.material, colours ? &vertex_colour : nullptr);
+      if (colours) vertex_colour = vertex_colour_of(colours[v]);
+      t.color[i] = corner_colour(material_colour, t.material, colours ? &vertex_colour : nullptr, colours_vary);
+      ignored |= colours && t.material != 0 && !colours_vary;
       if (texcoords) t.uv[i] = {texcoords[v].x, texcoords[v].y};
     }
     emit(t);
     ++info.triangles_emitted;
   }
+  return ignored;
 }
 
 }  // namespace
@@ -106,7 +127,12 @@ ModelInfo read_with_assimp(const std::filesystem::path& file, const std::string&
   info.materials.push_back(default_material());
   for (unsigned m = 0; m < scene->mNumMaterials; ++m)
     info.materials.push_back(convert_material(*scene->mMaterials[m]));
-  for (unsigned m = 0; m < scene->mNumMeshes; ++m) emit_mesh(name, m, *scene->mMeshes[m], info, emit);
+  // The scene-wide rule: do the vertex colours vary anywhere?
+  const ColourVariation variation = scene_colour_variation(*scene);
+  bool ignored = false;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m)
+    ignored |= emit_mesh(name, m, *scene->mMeshes[m], variation.varies, info, emit);
+  record_vertex_colour_use(info, variation, ignored);
   return info;
 }
 

@@ -31,4 +31,20 @@ ModelInfo read_model(const std::filesystem::path& file, const TriangleCallback& 
   throw InputError(file.string(), "", "unknown model format '" + ext + "'");
 }
 
+std::string describe_vertex_colours(const ModelInfo& info) {
+  const Rgba8& c = info.uniform_vertex_colour;
+  const std::string colour = std::to_string(c.r) + " " + std::to_string(c.g) + " " + std::to_string(c.b) +
+                             (c.a == 255 ? "" : " " + std::to_string(c.a));
+  switch (info.vertex_colours) {
+    case VertexColourUse::none: return "";
+    case VertexColourUse::varying: return "vertex colours: used (they vary), multiplied into material colours";
+    case VertexColourUse::uniform_ignored:
+      return "vertex colours: ignored (all equal: " + colour + "), material colours used";
+    case VertexColourUse::uniform_kept:
+      return "vertex colours: all equal (" + colour + "), used: no material colour to prefer" +
+             (c.r == 0 && c.g == 0 && c.b == 0 ? std::string(" (the model is black)") : std::string());
+  }
+  return "";
+}
+
 }  // namespace cellbake

@@ -16,8 +16,18 @@
 
 namespace cellbake {
 
+// What a reader did with per-vertex colours (see read_model).
+enum class VertexColourUse {
+  none,             // the model has no vertex colours
+  varying,          // they vary across the file: multiplied into the material colours
+  uniform_ignored,  // all equal: material colours used instead (default-material faces keep them)
+  uniform_kept,     // all equal, but no face had a material colour to use instead: they are the colour
+};
+
 struct ModelInfo {
   std::vector<Material> materials;  // index 0 is always the default material
+  VertexColourUse vertex_colours = VertexColourUse::none;
+  Rgba8 uniform_vertex_colour{};    // the one colour, when vertex_colours is uniform_*
   std::uint64_t triangles_emitted = 0;
   std::uint64_t polygons_triangulated = 0;  // faces with > 3 corners split into fans
   std::string format;                       // "obj", "ply", "off", "stl", "assimp:<ext>"
@@ -27,11 +37,22 @@ using TriangleCallback = std::function<void(const Triangle&)>;
 
 // Reads `file` and calls `emit` for every triangle, in file order. Material
 // colours are already multiplied into the per-corner colours; a vertex without
-// a colour gets the material colour (default light grey).
+// a colour gets the material colour (default light grey). Vertex colours
+// multiply material colours only when they vary across the file; when every
+// vertex colour is the same (exporters write "v x y z 0 0 0" or "1 1 1" by
+// default) the material colour wins, so such a file is not blanked. Faces
+// under the default material (no usemtl / no material) keep their vertex
+// colours either way, and formats without materials (PLY, OFF) always use
+// them. ModelInfo::vertex_colours says which happened.
 // Throws InputError (naming file, line or byte offset, and the problem) for:
 // unknown/unsupported format, unreadable/truncated/malformed file, NaN or Inf
 // coordinates, out-of-range vertex indices. Degenerate triangles are emitted
 // as they are (ingest counts and skips them). An empty model is not an error here.
 ModelInfo read_model(const std::filesystem::path& file, const TriangleCallback& emit);
+
+// One line for the ingest summary about `info`'s vertex colours, e.g.
+// "vertex colours: ignored (all equal: 0 0 0), material colours used";
+// "" when the model has none.
+std::string describe_vertex_colours(const ModelInfo& info);
 
 }  // namespace cellbake

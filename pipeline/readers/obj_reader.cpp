@@ -2,8 +2,19 @@
 // emitted as soon as they are parsed. Supported statements: v (with optional
 // "r g b [a]" vertex colour extension, floats 0..1), vt, vn, f, mtllib, usemtl;
 // everything else (o, g, s, l, p, curves, ...) is ignored.
+//
+// Vertex colours multiply material colours only when they vary across the
+// file; when every vertex colour is the same (exporters write "v x y z 0 0 0"
+// or "1 1 1" by default), the material's Kd wins, so such a file is not
+// blanked. Faces under the default material (before any usemtl, or naming an
+// unknown material) keep their vertex colours either way. The decision is
+// file-wide: at the first face that needs it, unless the colours read so far
+// already vary, a second streaming pass over the file's "v" lines settles it
+// (stopping at the first differing colour), so faces are still emitted as
+// they are parsed.
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -58,6 +69,7 @@ class ObjReader {
         if (key == "mtllib") load_libraries(scan.rest());
       }
     }
+    record_vertex_colour_use(info_, seen_colours_, ignored_colours_);
     return std::move(info_);
   }
 
@@ -87,6 +99,7 @@ class ObjReader {
       vertex_colours_.push_back(
           {unit_to_byte(extra[0]), unit_to_byte(extra[1]), unit_to_byte(extra[2]), alpha});
       has_colour_.push_back(1);
+      seen_colours_.add(vertex_colours_.back());
     } else if (!vertex_colours_.empty()) {
       vertex_colours_.emplace_back();
       has_colour_.push_back(0);
@@ -151,6 +164,37 @@ class ObjReader {
     if (corners > 3) ++info_.polygons_triangulated;
   }
 
+  // True when the file's vertex colours are not all equal: known once the
+  // colours read so far differ, else settled by scan_vertex_colours().
+  bool vertex_colours_vary() {
+    if (seen_colours_.varies) return true;
+    if (!file_colours_vary_) file_colours_vary_ = scan_vertex_colours();
+    return *file_colours_vary_;
+  }
+
+  // A second pass over the file's "v" lines: true at the first vertex colour
+  // that differs from the first one. Malformed lines are skipped (the main
+  // pass reports them).
+  bool scan_vertex_colours() {
+    BufferedInput in(file_);
+    ColourVariation variation;
+    std::string_view line;
+    while (in.next_line(line)) {
+      TextScan scan(line);
+      scan.skip_blanks();
+      if (scan.end - scan.p < 2 || scan.p[0] != 'v' || !is_blank(scan.p[1])) continue;
+      ++scan.p;
+      double values[7];
+      int count = 0;
+      while (count < 7 && !scan.at_end() && scan.number(values[count])) ++count;
+      if (count < 6 || !scan.at_end()) continue;
+      variation.add({unit_to_byte(values[3]), unit_to_byte(values[4]), unit_to_byte(values[5]),
+                     count == 7 ? unit_to_byte(values[6]) : std::uint8_t{255}});
+      if (variation.varies) return true;
+    }
+    return false;
+  }
+
   void emit_triangle(const ObjCorner& a, const ObjCorner& b, const ObjCorner& c) {
     Triangle t;
     t.material = material_;
@@ -160,7 +204,9 @@ class ObjReader {
       const std::uint32_t v = corners[i]->vertex;
       t.p[i] = positions_[v];
       const bool coloured = !has_colour_.empty() && has_colour_[v];
-      t.color[i] = corner_colour(material_colour, material_, coloured ? &vertex_colours_[v] : nullptr);
+      const bool vary = !coloured || material_ == 0 || vertex_colours_vary();
+      ignored_colours_ |= !vary;
+      t.color[i] = corner_colour(material_colour, material_, coloured ? &vertex_colours_[v] : nullptr, vary);
       if (corners[i]->texcoord >= 0) t.uv[i] = texcoords_[static_cast<std::size_t>(corners[i]->texcoord)];
     }
     emit_(t);
@@ -190,6 +236,9 @@ class ObjReader {
   std::vector<Vec3d> positions_;
   std::vector<Rgba8> vertex_colours_;  // empty until the first coloured vertex
   std::vector<std::uint8_t> has_colour_;
+  ColourVariation seen_colours_;             // every vertex colour read so far
+  std::optional<bool> file_colours_vary_;    // settled by scan_vertex_colours()
+  bool ignored_colours_ = false;             // some corner's uniform colour gave way to its material's
   std::vector<Uv> texcoords_;
   std::uint64_t normal_count_ = 0;
   std::unordered_map<std::string, std::uint32_t> material_by_name_;

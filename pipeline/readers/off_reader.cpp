@@ -75,6 +75,8 @@ class OffReader {
       if (!next_significant(line)) fail("unexpected end of file in face " + std::to_string(f));
       read_face(line);
     }
+    // OFF has no material colours: vertex colours are the colour, even all equal.
+    record_vertex_colour_use(info_, colour_variation(colours_), false);
     return std::move(info_);
   }
 

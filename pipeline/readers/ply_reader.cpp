@@ -270,6 +270,8 @@ class PlyReader {
       read_ply_header(again);
       body(again, header, std::nullopt, face_element);
     }
+    // PLY has no material colours: vertex colours are the colour, even all equal.
+    record_vertex_colour_use(info_, colour_variation(vertices_.colours), false);
     return std::move(info_);
   }
 

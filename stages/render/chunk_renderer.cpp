@@ -34,6 +34,10 @@ void main() {
 }
 )";
 
+// The light model of stages/render/shading.h: a flat face normal from the
+// screen-space derivatives of the eye-relative position (exact for planar
+// triangles, in world axes), two-sided Lambert over two lights plus ambient.
+// A fragment whose derivatives give no normal keeps its base colour.
 constexpr const char* kFragmentShader = R"(#version 330 core
 in vec3 v_relative;
 in float v_view_depth;
@@ -41,12 +45,25 @@ in vec4 v_color;
 uniform vec3 u_discard_lo;  // discard box relative to the eye
 uniform vec3 u_discard_hi;
 uniform int u_keep_inside;  // 0: drop fragments inside the box, 1: keep only those
+uniform int u_lit;          // 0: base colour as it is
+uniform vec3 u_key;         // unit light directions, world axes, times their strengths
+uniform vec3 u_fill;
+uniform float u_ambient;
 layout(location = 0) out vec4 o_color;
 layout(location = 1) out float o_view_depth;
 void main() {
   bool inside = all(greaterThan(v_relative, u_discard_lo)) && all(lessThan(v_relative, u_discard_hi));
   if (inside != (u_keep_inside != 0)) discard;
-  o_color = v_color;
+  vec3 color = v_color.rgb;
+  if (u_lit != 0) {
+    vec3 n = cross(dFdx(v_relative), dFdy(v_relative));
+    float n2 = dot(n, n);
+    if (n2 > 0.0 && !isinf(n2)) {
+      n *= inversesqrt(n2);
+      color = clamp(color * (u_ambient + abs(dot(n, u_key)) + abs(dot(n, u_fill))), 0.0, 1.0);
+    }
+  }
+  o_color = vec4(color, v_color.a);
   o_view_depth = v_view_depth;
 }
 )";
@@ -188,6 +205,10 @@ void ChunkRenderer::build_program() {
   u_discard_lo_ = gl_.GetUniformLocation(program_, "u_discard_lo");
   u_discard_hi_ = gl_.GetUniformLocation(program_, "u_discard_hi");
   u_keep_inside_ = gl_.GetUniformLocation(program_, "u_keep_inside");
+  u_lit_ = gl_.GetUniformLocation(program_, "u_lit");
+  u_key_ = gl_.GetUniformLocation(program_, "u_key");
+  u_fill_ = gl_.GetUniformLocation(program_, "u_fill");
+  u_ambient_ = gl_.GetUniformLocation(program_, "u_ambient");
   check_gl_error(gl_, "chunk_renderer: build_program");
 }
 
@@ -288,6 +309,15 @@ void ChunkRenderer::require_frame(const char* what) const {
   if (!in_frame_) throw std::logic_error(std::string("chunk_renderer: ") + what + " called without begin_frame");
 }
 
+void ChunkRenderer::set_shading(const ShadingLights& lights) {
+  const auto finite_unit = [](const Vec3d& v) { return is_finite(v) && std::abs(length(v) - 1) < 1e-6; };
+  const auto strength = [](double s) { return s >= 0 && std::isfinite(s); };
+  if (!finite_unit(lights.key) || !finite_unit(lights.fill) || !strength(lights.key_strength) ||
+      !strength(lights.fill_strength) || !strength(lights.ambient))
+    throw std::invalid_argument("chunk_renderer: shading needs unit light directions and finite strengths >= 0");
+  lights_ = lights;
+}
+
 bool ChunkRenderer::is_cached(std::int64_t id) const { return cache_.contains(id); }
 
 void ChunkRenderer::release(CachedChunk& entry) {
@@ -382,6 +412,11 @@ void ChunkRenderer::set_camera_uniforms(const RenderCamera& camera, const Box3d&
   gl_.UseProgram(program_);
   gl_.UniformMatrix4fv(u_view_projection_, 1, GL_FALSE, matrix.data());
   gl_.Uniform1i(u_keep_inside_, clip == BoxClip::keep_inside ? 1 : 0);
+  const Vec3d key = lights_.key * lights_.key_strength, fill = lights_.fill * lights_.fill_strength;
+  gl_.Uniform1i(u_lit_, lights_.lit ? 1 : 0);
+  gl_.Uniform3f(u_key_, static_cast<float>(key.x), static_cast<float>(key.y), static_cast<float>(key.z));
+  gl_.Uniform3f(u_fill_, static_cast<float>(fill.x), static_cast<float>(fill.y), static_cast<float>(fill.z));
+  gl_.Uniform1f(u_ambient_, static_cast<float>(lights_.ambient));
   gl_.Uniform3f(u_forward_, static_cast<float>(camera.forward.x), static_cast<float>(camera.forward.y),
                 static_cast<float>(camera.forward.z));
   if (discard_box.empty()) {

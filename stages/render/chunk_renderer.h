@@ -13,6 +13,9 @@
 // A discard box removes every fragment whose world position lies strictly
 // inside it (the far field of a view cell is everything outside its cull box);
 // with BoxClip::keep_inside it keeps exactly those instead (the near field).
+// Colours: the chunk's vertex colours under the fixed light model of
+// stages/render/shading.h (flat face normals from screen-space derivatives),
+// or as they are when the shading is unlit.
 #pragma once
 
 #include <array>
@@ -28,6 +31,7 @@
 #include "stages/chunk_source.h"
 #include "stages/geometry.h"
 #include "stages/render/gl_context.h"
+#include "stages/render/shading.h"
 
 namespace cellbake {
 
@@ -100,6 +104,12 @@ class ChunkRenderer {
   // it current again). Call after each unit of work on a pooled thread so the
   // renderer can later be used or destroyed from any thread.
   void release_context() { context_->release_current(); }
+  // The light model of every later draw (stages/render/shading.h); the
+  // default is shading_lights(ShadingParams{}, z up). Takes effect at the next
+  // draw call; the occlusion test is unaffected. Throws std::invalid_argument
+  // for non-unit directions or negative or non-finite strengths.
+  void set_shading(const ShadingLights& lights);
+  const ShadingLights& shading() const { return lights_; }
   // True when chunk `id` has cached buffers.
   bool is_cached(std::int64_t id) const;
   // Drops every cached chunk (call when the ids' geometry changed).
@@ -175,6 +185,8 @@ class ChunkRenderer {
   const GlFunctions& gl_;  // *gl_functions_
   unsigned program_ = 0;
   int u_offset_ = -1, u_view_projection_ = -1, u_forward_ = -1, u_discard_lo_ = -1, u_discard_hi_ = -1, u_keep_inside_ = -1;
+  int u_lit_ = -1, u_key_ = -1, u_fill_ = -1, u_ambient_ = -1;
+  ShadingLights lights_ = shading_lights(ShadingParams{}, Vec3d{0, 0, 1});
   unsigned framebuffer_ = 0, color_buffer_ = 0, view_depth_buffer_ = 0, depth_buffer_ = 0;
   int frame_width_ = 0, frame_height_ = 0;
   bool in_frame_ = false;

@@ -63,6 +63,7 @@ namespace cellbake {
   X(PFNGLVERTEXATTRIBPOINTERPROC, VertexAttribPointer, "glVertexAttribPointer")         \
   X(PFNGLDRAWELEMENTSPROC, DrawElements, "glDrawElements")                             \
   X(PFNGLUNIFORM1IPROC, Uniform1i, "glUniform1i")                                       \
+  X(PFNGLUNIFORM1FPROC, Uniform1f, "glUniform1f")                                       \
   X(PFNGLUNIFORM4FPROC, Uniform4f, "glUniform4f")                                       \
   X(PFNGLGENTEXTURESPROC, GenTextures, "glGenTextures")                                 \
   X(PFNGLDELETETEXTURESPROC, DeleteTextures, "glDeleteTextures")                        \

@@ -29,6 +29,7 @@
 #include "viewer/interactive/glfw_window_context.h"
 #include "viewer/png_file.h"
 #include "viewer/scene_drawer.h"
+#include "viewer/verify_views.h"
 #include "viewer/view_camera.h"
 
 namespace cellbake {
@@ -150,6 +151,7 @@ int run(const Options& opt) {
     auto context = std::make_shared<GlfwWindowContext>(window);
     SceneDrawerParams drawer_params;
     SceneDrawer drawer(context, store, drawer_params);
+    drawer.set_shading(shading_lights(shading_of_config_text(meta_db.meta("config").value_or("")), up));
     const GlFunctions gl = load_gl_functions(*context);
     GLuint display = 0;
     gl.GenTextures(1, &display);
