@@ -211,6 +211,10 @@ int run(int argc, char** argv) {
 
   SceneDrawer drawer(std::shared_ptr<GlContext>(create_gl_context(GlBackend::osmesa, 1, 1)), store);
   ChunkRenderer lod_renderer(create_gl_context(GlBackend::osmesa, 1, 1));
+  // Every baseline lit like the bake (its far field's images carry that light).
+  const ShadingLights shading = shading_lights(shading_of_config_text(db.meta("config").value_or("")), up);
+  drawer.set_shading(shading);
+  lod_renderer.set_shading(shading);
   const auto loader = [&](std::int64_t id) { return store.load(id); };
   std::map<std::string, Row> rows;
   const char* order[] = {"truth", "impostor", "lod-meshopt", "lod-openmesh"};

@@ -139,6 +139,15 @@ const std::map<std::string, Setter>& setters() {
       {"samples.void_resolution", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.samples_void_resolution = int(integer(n, w, "samples.void_resolution", 4, 256));
        }},
+      {"samples.keep_margin_px", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.samples_keep_margin_px = int(integer(n, w, "samples.keep_margin_px", 0, 16));
+       }},
+      {"samples.min_island_px", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.samples_min_island_px = int(integer(n, w, "samples.min_island_px", 0, 1 << 20));
+       }},
+      {"simplify.delta_boundary_error_px", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.delta_boundary_error_px = number(n, w, "simplify.delta_boundary_error_px", 0, 8);
+       }},
       {"samples.redundancy_tolerance", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.samples_redundancy_tolerance = number(n, w, "samples.redundancy_tolerance", 0, 0.1);
        }},
@@ -293,7 +302,8 @@ std::string describe_bake_config(const BakeConfig& c) {
     << "," << c.shading.fill_direction.y << "," << c.shading.fill_direction.z
     << "\nshading.fill_strength=" << c.shading.fill_strength << "\nshading.ambient=" << c.shading.ambient
     << "\nsamples.initial=" << c.samples_initial
-    << "\nsamples.void_threshold=" << c.samples_void_threshold << "\nsamples.max=" << c.samples_max << "\nsamples.void_resolution=" << c.samples_void_resolution
+    << "\nsamples.void_threshold=" << c.samples_void_threshold << "\nsamples.max=" << c.samples_max << "\nsamples.void_resolution=" << c.samples_void_resolution << "\nsamples.keep_margin_px=" << c.samples_keep_margin_px << "\nsamples.min_island_px=" << c.samples_min_island_px
+    << "\nsimplify.delta_boundary_error_px=" << c.delta_boundary_error_px
     << "\nsamples.redundancy_tolerance=" << c.samples_redundancy_tolerance << "\nview.far_budget=" << c.far_budget
     << "\ndepth_mesh.skin_angle_deg=" << c.skin_angle_deg
     << "\ndepth_mesh.depth_jump=" << c.depth_jump

@@ -51,7 +51,9 @@ struct BakeConfig {
   double samples_void_threshold = 0.005;  // stop adding samples when the worst candidate's void is below this fraction of the sphere
   int samples_max = 12;                   // cap on samples per cell (initial set included)
   int samples_void_resolution = 16;       // void rays per candidate: this^2 per cube face
-  double samples_redundancy_tolerance = 5e-5;  // relative inverse-depth agreement for "an ancestor already holds this pixel"
+  double samples_redundancy_tolerance = 5e-5;
+  int samples_keep_margin_px = 2;         // kept pixels of a delta scan grow this many rings back over removed ones
+  int samples_min_island_px = 4;          // kept specks of a delta scan smaller than this are dropped (before growing)  // relative inverse-depth agreement for "an ancestor already holds this pixel"
 
   // [depth_mesh]
   double skin_angle_deg = 3.0;   // edges within this angle of the eye ray are skins
@@ -63,6 +65,10 @@ struct BakeConfig {
   // Outlines (silhouettes, skin edges, coverage edges) move at most this far
   // on screen; 0 keeps them pixel-exact (staircases, many more triangles).
   double boundary_error_px = 0.5;
+  // The same for delta scans (samples other than the root); their outlines
+  // mostly run along pixels an ancestor holds, which they overlap by
+  // samples.keep_margin_px.
+  double delta_boundary_error_px = 1.0;
   int max_face_triangles = 10000;      // per cube face (thesis VWALK cap)
 
   // [encode]

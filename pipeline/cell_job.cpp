@@ -55,7 +55,8 @@ CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::str
   in.f64(c.shading.key_strength).f64(c.shading.fill_strength).f64(c.shading.ambient);
   in.text("samples").text(c.samples_initial).f64(c.samples_void_threshold).u64(c.samples_max);
   in.u64(c.samples_void_resolution);
-  in.f64(c.samples_redundancy_tolerance);
+  in.f64(c.samples_redundancy_tolerance).u64(c.samples_keep_margin_px).f64(c.delta_boundary_error_px);
+  in.u64(c.samples_min_island_px);
   // Where the samples may go: the cell's navigable part (not the whole region,
   // so growing a region leaves its existing cells up to date).
   if (cell.region >= 0 && std::size_t(cell.region) < c.regions.size())
@@ -184,6 +185,8 @@ void run_depth_mesh(CellWork& work, const BakeConfig& config) {
   RedundancyParams rp;
   rp.tolerance = config.samples_redundancy_tolerance;
   rp.jump = config.depth_jump;
+  rp.keep_margin = config.samples_keep_margin_px;
+  rp.min_island = config.samples_min_island_px;
   {
     StageTimer redundancy(work, "redundancy");
     for (std::size_t i : order) {
@@ -212,10 +215,12 @@ void run_simplify(CellWork& work, const BakeConfig& config) {
   p.depth_error_relative = config.depth_error_relative;
   p.boundary_error_px = config.boundary_error_px;
   p.max_triangles = static_cast<std::size_t>(config.max_face_triangles);
+  SimplifyParams delta = p;
+  delta.boundary_error_px = config.delta_boundary_error_px;
   for (SampleWork& s : work.samples) {
     const auto t0 = Clock::now();
     for (int f = 0; f < kCubeFaces; ++f) {
-      SimplifyResult r = simplify_face_mesh(s.dense[f], config.face_size, p);
+      SimplifyResult r = simplify_face_mesh(s.dense[f], config.face_size, s.parent < 0 ? p : delta);
       s.simplified[f] = std::move(r.mesh);
       s.boundary_error_px[f] = r.achieved.max_boundary_error_px;
       s.depth_error[f] = r.achieved.max_depth_error_relative;

@@ -39,7 +39,7 @@ struct RedundancyParams {
   // Kept pixels grow by this many pixels (8-neighbourhood) back into the
   // removed ones, so that a delta mesh overlaps its ancestors' meshes along
   // the seam instead of leaving a crack there (the depth test resolves it).
-  int keep_margin = 1;
+  int keep_margin = 2;
 };
 
 struct RedundancyStats {

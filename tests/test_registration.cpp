@@ -185,10 +185,20 @@ enum class Stage {
   coarse,      // the same with 12 position bits: the quantisation step a ~1 km model gets at 16 bits
 };
 
+// Unlit: the bar weights measure colour steps from the wall's grey, which
+// lighting would scale differently per surface orientation (the light model
+// is tested in test_shading.cpp).
+ShadingLights unlit_lights() {
+  ShadingParams p;
+  p.mode = ShadingMode::unlit;
+  return shading_lights(p, Vec3d{0, 0, 1});
+}
+
 struct Pipeline {
   std::shared_ptr<GlContext> context{create_gl_context(GlBackend::osmesa, 1, 1)};
   ChunkRenderer chunks{std::make_unique<SharedGlContext>(context)};
   TdmRenderer tdm{context};
+  Pipeline() { chunks.set_shading(unlit_lights()); }
 };
 
 std::vector<std::uint64_t> upload_impostor(Pipeline& gl, const CubeSample& sample, Stage stage) {

@@ -48,8 +48,14 @@ void add_closed_box(InMemoryChunkSource& source, const Vec3d& centre) {
                                     centre + Vec3d{0.37 * face, -0.21, 0.13}));
 }
 
+// Unlit: these tests check geometry and exact vertex colours; the light model
+// is tested in test_shading.cpp.
 std::unique_ptr<ChunkRenderer> make_renderer(ChunkRendererParams params = {}) {
-  return std::make_unique<ChunkRenderer>(create_gl_context(GlBackend::osmesa, 1, 1), params);
+  auto renderer = std::make_unique<ChunkRenderer>(create_gl_context(GlBackend::osmesa, 1, 1), params);
+  ShadingParams unlit;
+  unlit.mode = ShadingMode::unlit;
+  renderer->set_shading(shading_lights(unlit, Vec3d{0, 0, 1}));
+  return renderer;
 }
 
 SampleParams small_params(int face_size = 32, int supersample = 1) {

@@ -141,7 +141,7 @@ TEST(Shading, UnlitReproducesTheVertexColourExactly) {
   r->set_shading(shading_lights(p, kZUp));
   const Rgba8 base{37, 150, 222, 255};
   const double t = 0.9;
-  const Frame f = render(*r, camera_down({0, 0, 5}, 1.0),
+  const Frame f = render(*r, camera_down({0, 0, 5}, 0.3),
                          square({0, 0, 0}, {std::cos(t), 0, -std::sin(t)}, {0, 1, 0}, base));
   int covered = 0;
   for (std::size_t i = 0; i < f.color.size(); ++i) {

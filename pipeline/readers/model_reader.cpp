@@ -37,7 +37,8 @@ std::string describe_vertex_colours(const ModelInfo& info) {
                              (c.a == 255 ? "" : " " + std::to_string(c.a));
   switch (info.vertex_colours) {
     case VertexColourUse::none: return "";
-    case VertexColourUse::varying: return "vertex colours: used (they vary), multiplied into material colours";
+    case VertexColourUse::varying:
+      return "vertex colours: used (they vary; multiplied into the material colour where a face has one)";
     case VertexColourUse::uniform_ignored:
       return "vertex colours: ignored (all equal: " + colour + "), material colours used";
     case VertexColourUse::uniform_kept:
