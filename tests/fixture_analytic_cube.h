@@ -64,4 +64,34 @@ inline CubeSample analytic_cube_sample(const Vec3d& eye, const std::vector<Box3d
   return sample;
 }
 
+// A box with a flat colour, for samples that need colours too.
+struct ColoredBox {
+  Box3d box;
+  Rgba8 color{200, 200, 200, 255};
+};
+
+// As above, with each pixel coloured by the nearest box (background (0, 0, 0, 0)).
+inline CubeSample analytic_cube_sample(const Vec3d& eye, const std::vector<ColoredBox>& boxes, int size) {
+  std::vector<Box3d> plain;
+  for (const ColoredBox& b : boxes) plain.push_back(b.box);
+  CubeSample sample = analytic_cube_sample(eye, plain, size);
+  for (int f = 0; f < kCubeFaces; ++f) {
+    CubeFace& face = sample.faces[f];
+    const FaceBasis basis = cube_face_basis(f);
+    for (int j = 0; j < size; ++j)
+      for (int i = 0; i < size; ++i) {
+        const std::size_t k = static_cast<std::size_t>(j) * size + i;
+        face.color[k] = Rgba8{0, 0, 0, 0};
+        if (!std::isfinite(face.depth[k])) continue;
+        const Vec3d dir = cube_face_direction(basis, 2 * (i + 0.5) / size - 1, 1 - 2 * (j + 0.5) / size);
+        double best = std::numeric_limits<double>::infinity();
+        for (const ColoredBox& b : boxes) {
+          const double d = ray_box_surface(eye, dir, b.box);
+          if (d < best) best = d, face.color[k] = b.color;
+        }
+      }
+  }
+  return sample;
+}
+
 }  // namespace cellbake::test

@@ -4,16 +4,15 @@
 
 #include "stages/background_fill.h"
 #include "stages/sample_redundancy.h"
-#include "tests/fixture_box_scene.h"
+#include "tests/fixture_analytic_cube.h"
 
 namespace cellbake {
 namespace {
 
-using test::box_scene_sample;
-using test::SceneBox;
+using test::ColoredBox;
 
 // A closed room 20 x 20 x 6 m (walls 0.2 m thick) with a pillar in it.
-std::vector<SceneBox> room_with_pillar() {
+std::vector<ColoredBox> room_with_pillar() {
   return {{{{-10, -10, -0.2}, {10, 10, 0}}, {90, 90, 90, 255}},     // floor
           {{{-10, -10, 6}, {10, 10, 6.2}}, {120, 120, 140, 255}},   // ceiling
           {{{-10.2, -10, 0}, {-10, 10, 6}}, {200, 60, 60, 255}},    // walls
@@ -32,7 +31,7 @@ std::size_t covered(const CubeSample& s) {
 
 TEST(SampleRedundancy, ASampleAtTheSameEyeIsWhollyRedundant) {
   const auto scene = room_with_pillar();
-  const CubeSample a = box_scene_sample({0, 0, 1.7}, scene, 64);
+  const CubeSample a = test::analytic_cube_sample({0, 0, 1.7}, scene, 64);
   CubeSample d = a;
   const CubeSample* ancestors[] = {&a};
   const RedundancyStats st = remove_redundant_pixels(d, ancestors);
@@ -44,8 +43,8 @@ TEST(SampleRedundancy, ASampleAtTheSameEyeIsWhollyRedundant) {
 TEST(SampleRedundancy, ADeltaScanKeepsOnlyWhatThePillarHidFromItsParent) {
   const auto scene = room_with_pillar();
   const int n = 128;
-  const CubeSample a = box_scene_sample({0, 0, 1.7}, scene, n);
-  const CubeSample original = box_scene_sample({1.5, 1.5, 1.7}, scene, n);
+  const CubeSample a = test::analytic_cube_sample({0, 0, 1.7}, scene, n);
+  const CubeSample original = test::analytic_cube_sample({1.5, 1.5, 1.7}, scene, n);
   CubeSample d = original;
   const CubeSample* ancestors[] = {&a};
   RedundancyParams p;
@@ -72,7 +71,7 @@ TEST(SampleRedundancy, ADeltaScanKeepsOnlyWhatThePillarHidFromItsParent) {
         const Vec3d point = original.eye + cube_face_direction(b, 2 * (i + 0.5) / n - 1, 1 - 2 * (j + 0.5) / n) * double(depth);
         const bool kept = std::isfinite(d.faces[f].depth[k]);
         if (kept) EXPECT_FALSE(sample_holds_point(a, point, p));
-        const double t = test::ray_box(a.eye, point - a.eye, core);
+        const double t = test::ray_box_surface(a.eye, point - a.eye, core);
         const bool on_pillar = point.x >= 4 - 1e-9 && point.x <= 5 + 1e-9 && std::abs(point.y) <= 0.5 + 1e-9;
         if (t < 1.0 - 1e-3 && !on_pillar) {
           ++hidden;
@@ -89,10 +88,10 @@ TEST(SampleRedundancy, TwoSurfacesAFewMillimetresApartFarAwayAreToldApart) {
   // 4.6 to 7.6 degrees: the underside is new to the delta, and along the
   // delta's rays it lies only 0.2-0.3 % behind the parent's top face. (The
   // sheet's 5 mm end faces are seen by both and may go.)
-  const std::vector<SceneBox> scene = {{{{15, -5, -0.0025}, {25, 5, 0.0025}}, {200, 100, 50, 255}}};
+  const std::vector<ColoredBox> scene = {{{{15, -5, -0.0025}, {25, 5, 0.0025}}, {200, 100, 50, 255}}};
   const int n = 256;
-  const CubeSample a = box_scene_sample({0, 0, 2}, scene, n);
-  const CubeSample original = box_scene_sample({0, 0, -2}, scene, n);
+  const CubeSample a = test::analytic_cube_sample({0, 0, 2}, scene, n);
+  const CubeSample original = test::analytic_cube_sample({0, 0, -2}, scene, n);
   CubeSample d = original;
   const CubeSample* ancestors[] = {&a};
   // With the default one-ring margin (without it, the first and last rows of
@@ -123,8 +122,8 @@ TEST(SampleRedundancy, TwoSurfacesAFewMillimetresApartFarAwayAreToldApart) {
 
 TEST(SampleRedundancy, KeepMarginGrowsKeptPixelsBackOverTheSeam) {
   const auto scene = room_with_pillar();
-  const CubeSample a = box_scene_sample({0, 0, 1.7}, scene, 96);
-  CubeSample tight = box_scene_sample({1.5, 1.5, 1.7}, scene, 96), grown = tight;
+  const CubeSample a = test::analytic_cube_sample({0, 0, 1.7}, scene, 96);
+  CubeSample tight = test::analytic_cube_sample({1.5, 1.5, 1.7}, scene, 96), grown = tight;
   const CubeSample* ancestors[] = {&a};
   RedundancyParams p;
   p.keep_margin = 0;
@@ -142,8 +141,8 @@ TEST(SampleRedundancy, KeepMarginGrowsKeptPixelsBackOverTheSeam) {
 
 TEST(SampleRedundancy, RejectsMismatchedSizes) {
   const auto scene = room_with_pillar();
-  const CubeSample a = box_scene_sample({0, 0, 1.7}, scene, 32);
-  CubeSample d = box_scene_sample({1, 0, 1.7}, scene, 16);
+  const CubeSample a = test::analytic_cube_sample({0, 0, 1.7}, scene, 32);
+  CubeSample d = test::analytic_cube_sample({1, 0, 1.7}, scene, 16);
   const CubeSample* ancestors[] = {&a};
   EXPECT_THROW(remove_redundant_pixels(d, ancestors), std::invalid_argument);
 }
