@@ -22,6 +22,24 @@ std::vector<ColoredBox> room_with_pillar() {
           {{{4, -0.5, 0}, {5, 0.5, 6}}, {250, 250, 250, 255}}};     // pillar
 }
 
+// Calls visit(face, pixel index, world point, kept) for every covered pixel of
+// `original`, kept = still covered in `reduced`.
+template <class Visit>
+void for_each_covered_pixel(const CubeSample& original, const CubeSample& reduced, Visit visit) {
+  const int n = original.faces[0].size;
+  for (int f = 0; f < kCubeFaces; ++f) {
+    const FaceBasis b = cube_face_basis(f);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const std::size_t k = std::size_t(j) * n + i;
+        const float depth = original.faces[f].depth[k];
+        if (!std::isfinite(depth)) continue;
+        const Vec3d dir = cube_face_direction(b, 2 * (i + 0.5) / n - 1, 1 - 2 * (j + 0.5) / n);
+        visit(f, k, original.eye + dir * double(depth), std::isfinite(reduced.faces[f].depth[k]));
+      }
+  }
+}
+
 std::size_t covered(const CubeSample& s) {
   std::size_t n = 0;
   for (const CubeFace& f : s.faces)
@@ -61,24 +79,15 @@ TEST(SampleRedundancy, ADeltaScanKeepsOnlyWhatThePillarHidFromItsParent) {
   Box3d core = scene.back().box;
   for (int axis = 0; axis < 3; ++axis) core.lo[axis] += 0.1, core.hi[axis] -= 0.1;
   std::size_t hidden = 0;
-  for (int f = 0; f < kCubeFaces; ++f) {
-    const FaceBasis b = cube_face_basis(f);
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const std::size_t k = std::size_t(j) * n + i;
-        const float depth = original.faces[f].depth[k];
-        if (!std::isfinite(depth)) continue;
-        const Vec3d point = original.eye + cube_face_direction(b, 2 * (i + 0.5) / n - 1, 1 - 2 * (j + 0.5) / n) * double(depth);
-        const bool kept = std::isfinite(d.faces[f].depth[k]);
-        if (kept) EXPECT_FALSE(sample_holds_point(a, point, p));
-        const double t = test::ray_box_surface(a.eye, point - a.eye, core);
-        const bool on_pillar = point.x >= 4 - 1e-9 && point.x <= 5 + 1e-9 && std::abs(point.y) <= 0.5 + 1e-9;
-        if (t < 1.0 - 1e-3 && !on_pillar) {
-          ++hidden;
-          EXPECT_TRUE(kept) << "face " << f << " pixel " << i << "," << j;
-        }
-      }
-  }
+  for_each_covered_pixel(original, d, [&](int f, std::size_t k, const Vec3d& point, bool kept) {
+    if (kept) EXPECT_FALSE(sample_holds_point(a, point, p));
+    const double t = test::ray_box_surface(a.eye, point - a.eye, core);
+    const bool on_pillar = point.x >= 4 - 1e-9 && point.x <= 5 + 1e-9 && std::abs(point.y) <= 0.5 + 1e-9;
+    if (t < 1.0 - 1e-3 && !on_pillar) {
+      ++hidden;
+      EXPECT_TRUE(kept) << "face " << f << " pixel " << k;
+    }
+  });
   EXPECT_GT(hidden, 0u);
 }
 
@@ -99,21 +108,13 @@ TEST(SampleRedundancy, TwoSurfacesAFewMillimetresApartFarAwayAreToldApart) {
   // pixel, may go).
   remove_redundant_pixels(d, ancestors);
   std::size_t underside = 0, underside_removed = 0;
-  for (int f = 0; f < kCubeFaces; ++f) {
-    const FaceBasis b = cube_face_basis(f);
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const std::size_t k = std::size_t(j) * n + i;
-        const float depth = original.faces[f].depth[k];
-        if (!std::isfinite(depth)) continue;
-        const Vec3d p = original.eye + cube_face_direction(b, 2 * (i + 0.5) / n - 1, 1 - 2 * (j + 0.5) / n) * double(depth);
-        if (std::abs(p.z + 0.0025) > 1e-6) continue;
-        ++underside;
-        underside_removed += std::isfinite(d.faces[f].depth[k]) ? 0 : 1;
-        // Away from the sheet's side edges, none may go.
-        if (std::abs(p.y) < 4.5) EXPECT_TRUE(std::isfinite(d.faces[f].depth[k])) << "face " << f << " pixel " << i << "," << j;
-      }
-  }
+  for_each_covered_pixel(original, d, [&](int f, std::size_t k, const Vec3d& p, bool kept) {
+    if (std::abs(p.z + 0.0025) > 1e-6) return;
+    ++underside;
+    underside_removed += kept ? 0 : 1;
+    // Away from the sheet's side edges, none may go.
+    if (std::abs(p.y) < 4.5) EXPECT_TRUE(kept) << "face " << f << " pixel " << k;
+  });
   EXPECT_GT(underside, 300u);
   // At the sheet's corners, where the parent's strip ends in both directions
   // within a pixel, a few may (measured: 3 of 472).
