@@ -7,8 +7,11 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
+#include "pipeline/bake_config.h"
 #include "pipeline/ingest.h"
+#include "runner/bake_runner.h"
 #include "runner/parallel.h"
 #include "stages/geometry.h"
 
@@ -61,6 +64,48 @@ inline std::filesystem::path ingest_room_store(const std::filesystem::path& dir,
   params.max_chunk_triangles = 128;
   ingest_models({obj}, store, params, tbb_parallel_for());
   return store;
+}
+
+// A 12 x 12 x 4 m room (walls split wall_grid x wall_grid) with one pillar
+// (x 7..8, y 5..7) and any extra boxes, as OBJ text.
+inline std::string pillar_room_obj(int wall_grid = 8, const std::vector<Box3d>& extra = {}) {
+  std::ostringstream o;
+  int next = 1;
+  obj_box(o, next, {0, 0, 0}, {12, 12, 4}, wall_grid);
+  obj_box(o, next, {7, 5, 0}, {8, 7, 4}, 4);
+  for (const Box3d& b : extra) obj_box(o, next, b.lo, b.hi, 4);
+  return o.str();
+}
+
+// Writes `obj` as DIR/room.obj, ingests it (128-triangle chunks) into
+// DIR/room.store.db and returns a bake configuration for it: 2 m cells over
+// `region`, PNG faces of `face_size`, the near budget given, the database
+// DIR/cells.db; the rest defaults (several samples per cell).
+inline BakeConfig obj_room_bake_config(const std::filesystem::path& dir, const std::string& obj, const Box3d& region,
+                                       std::uint64_t near_budget, int face_size) {
+  {
+    std::ofstream(dir / "room.obj", std::ios::binary) << obj;
+  }
+  IngestParams ip;
+  ip.max_chunk_triangles = 128;
+  ingest_models({dir / "room.obj"}, dir / "room.store.db", ip, tbb_parallel_for());
+  BakeConfig c;
+  c.store = dir / "room.store.db";
+  c.regions = {region};
+  c.cell_size = 2.0;
+  c.near_budget = near_budget;
+  c.face_size = face_size;
+  c.image_format = "png";
+  c.database = dir / "cells.db";
+  return c;
+}
+
+// run_bake without progress output.
+inline BakeSummary bake_quietly(const BakeConfig& config, int threads = 2) {
+  BakeOptions options;
+  options.threads = threads;
+  options.quiet = true;
+  return run_bake(config, options);
 }
 
 }  // namespace cellbake::test

@@ -29,28 +29,10 @@ struct BakedCell {
   test::TempDir dir;
   std::filesystem::path db;
   explicit BakedCell(const std::string& initial = "corners+centre") {
-    std::ostringstream o;
-    int next = 1;
-    test::obj_box(o, next, {0, 0, 0}, {12, 12, 4}, 16);
-    test::obj_box(o, next, {7, 5, 0}, {8, 7, 4}, 4);
-    test::obj_box(o, next, {9, 2, 0}, {9.2, 10, 1}, 4);
-    test::write_text(dir / "room.obj", o.str());
-    IngestParams ip;
-    ip.max_chunk_triangles = 128;
-    ingest_models({dir / "room.obj"}, dir / "room.store.db", ip, tbb_parallel_for());
-    BakeConfig c;
-    c.store = dir / "room.store.db";
-    c.regions = {Box3d{{2, 5, 1.6}, {4, 7, 1.6}}};
-    c.cell_size = 2.0;
-    c.near_budget = 600;
-    c.face_size = 128;
-    c.image_format = "png";
+    BakeConfig c = test::obj_room_bake_config(dir.path(), test::pillar_room_obj(16, {Box3d{{9, 2, 0}, {9.2, 10, 1}}}),
+                                              Box3d{{2, 5, 1.6}, {4, 7, 1.6}}, 600, 128);
     c.samples_initial = initial;
-    c.database = dir / "cells.db";
-    BakeOptions bo;
-    bo.threads = 2;
-    bo.quiet = true;
-    EXPECT_EQ(run_bake(c, bo).cells_baked, 1u);
+    EXPECT_EQ(test::bake_quietly(c).cells_baked, 1u);
     db = c.database;
   }
 };

@@ -33,27 +33,9 @@ struct BakedRoom {
   test::TempDir dir;
   std::filesystem::path db;
   BakedRoom() {
-    std::ostringstream o;
-    int next = 1;
-    test::obj_box(o, next, {0, 0, 0}, {12, 12, 4}, 8);
-    test::obj_box(o, next, {7, 5, 0}, {8, 7, 4}, 4);
-    test::write_text(dir / "room.obj", o.str());
-    IngestParams ip;
-    ip.max_chunk_triangles = 128;
-    ingest_models({dir / "room.obj"}, dir / "room.store.db", ip, tbb_parallel_for());
-    BakeConfig c;
-    c.store = dir / "room.store.db";
-    c.regions = {Box3d{{1, 5, 1.6}, {5, 7, 1.6}}};
-    c.cell_size = 2.0;
-    c.near_budget = 300;
-    c.face_size = 64;
-    c.image_format = "png";
-    c.database = dir / "cells.db";
-    BakeOptions bo;
-    bo.threads = 2;
-    bo.quiet = true;
-    const BakeSummary s = run_bake(c, bo);
-    EXPECT_EQ(s.cells_baked, 2u);
+    const BakeConfig c = test::obj_room_bake_config(dir.path(), test::pillar_room_obj(), Box3d{{1, 5, 1.6}, {5, 7, 1.6}},
+                                                    300, 64);
+    EXPECT_EQ(test::bake_quietly(c).cells_baked, 2u);
     db = c.database;
   }
 };

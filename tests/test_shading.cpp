@@ -264,28 +264,10 @@ TEST(Shading, ConfigTextRoundTripAndOlderDatabasesAreUnlit) {
 // empty, so every face shows the whole room around the sample point.
 TEST(Shading, BakedSampleFaceMatchesTheViewersTruthFromTheSameEye) {
   test::TempDir dir;
-  std::ostringstream o;
-  int next = 1;
-  test::obj_box(o, next, {0, 0, 0}, {12, 12, 4}, 8);
-  test::obj_box(o, next, {7, 5, 0}, {8, 7, 4}, 4);
-  test::write_text(dir / "room.obj", o.str());
-  IngestParams ip;
-  ip.max_chunk_triangles = 128;
-  ingest_models({dir / "room.obj"}, dir / "room.store.db", ip, tbb_parallel_for());
-  BakeConfig c;
-  c.store = dir / "room.store.db";
-  c.regions = {Box3d{{1, 5, 1.6}, {3, 7, 1.6}}};
-  c.cell_size = 2.0;
-  c.near_budget = 0;
-  c.face_size = 64;
+  BakeConfig c = test::obj_room_bake_config(dir.path(), test::pillar_room_obj(), Box3d{{1, 5, 1.6}, {3, 7, 1.6}}, 0, 64);
   c.samples_initial = "centre";
   c.samples_max = 1;
-  c.image_format = "png";
-  c.database = dir / "cells.db";
-  BakeOptions bo;
-  bo.threads = 1;
-  bo.quiet = true;
-  ASSERT_EQ(run_bake(c, bo).cells_baked, 1u);
+  ASSERT_EQ(test::bake_quietly(c, 1).cells_baked, 1u);
 
   CellDb db(c.database, CellDb::Mode::read_only);
   const auto row = db.get_cell(1, true);
