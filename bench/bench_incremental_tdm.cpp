@@ -33,7 +33,7 @@ const std::vector<CubeSample>& samples() {
     const std::vector<Vec3d> eyes = {{0, 0, 1.7},  {-2, -2, 1.7}, {2, -2, 1.7}, {-2, 2, 1.7},
                                      {2, 2, 1.7},  {0, -2, 1.7},  {-2, 0, 1.7}, {2, 0, 1.7}};
     std::vector<CubeSample> s;
-    for (const Vec3d& e : eyes) s.push_back(test::analytic_cube_sample(e, scene(), 512));
+    for (const Vec3d& e : eyes) s.push_back(test::analytic_colored_cube_sample(e, scene(), 512));
     return s;
   }();
   return all;

@@ -71,7 +71,7 @@ struct ColoredBox {
 };
 
 // As above, with each pixel coloured by the nearest box (background (0, 0, 0, 0)).
-inline CubeSample analytic_cube_sample(const Vec3d& eye, const std::vector<ColoredBox>& boxes, int size) {
+inline CubeSample analytic_colored_cube_sample(const Vec3d& eye, const std::vector<ColoredBox>& boxes, int size) {
   std::vector<Box3d> plain;
   for (const ColoredBox& b : boxes) plain.push_back(b.box);
   CubeSample sample = analytic_cube_sample(eye, plain, size);

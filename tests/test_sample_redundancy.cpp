@@ -49,7 +49,7 @@ std::size_t covered(const CubeSample& s) {
 
 TEST(SampleRedundancy, ASampleAtTheSameEyeIsWhollyRedundant) {
   const auto scene = room_with_pillar();
-  const CubeSample a = test::analytic_cube_sample({0, 0, 1.7}, scene, 64);
+  const CubeSample a = test::analytic_colored_cube_sample({0, 0, 1.7}, scene, 64);
   CubeSample d = a;
   const CubeSample* ancestors[] = {&a};
   const RedundancyStats st = remove_redundant_pixels(d, ancestors);
@@ -61,8 +61,8 @@ TEST(SampleRedundancy, ASampleAtTheSameEyeIsWhollyRedundant) {
 TEST(SampleRedundancy, ADeltaScanKeepsOnlyWhatThePillarHidFromItsParent) {
   const auto scene = room_with_pillar();
   const int n = 128;
-  const CubeSample a = test::analytic_cube_sample({0, 0, 1.7}, scene, n);
-  const CubeSample original = test::analytic_cube_sample({1.5, 1.5, 1.7}, scene, n);
+  const CubeSample a = test::analytic_colored_cube_sample({0, 0, 1.7}, scene, n);
+  const CubeSample original = test::analytic_colored_cube_sample({1.5, 1.5, 1.7}, scene, n);
   CubeSample d = original;
   const CubeSample* ancestors[] = {&a};
   RedundancyParams p;
@@ -99,8 +99,8 @@ TEST(SampleRedundancy, TwoSurfacesAFewMillimetresApartFarAwayAreToldApart) {
   // sheet's 5 mm end faces are seen by both and may go.)
   const std::vector<ColoredBox> scene = {{{{15, -5, -0.0025}, {25, 5, 0.0025}}, {200, 100, 50, 255}}};
   const int n = 256;
-  const CubeSample a = test::analytic_cube_sample({0, 0, 2}, scene, n);
-  const CubeSample original = test::analytic_cube_sample({0, 0, -2}, scene, n);
+  const CubeSample a = test::analytic_colored_cube_sample({0, 0, 2}, scene, n);
+  const CubeSample original = test::analytic_colored_cube_sample({0, 0, -2}, scene, n);
   CubeSample d = original;
   const CubeSample* ancestors[] = {&a};
   // With the default one-ring margin (without it, the first and last rows of
@@ -123,8 +123,8 @@ TEST(SampleRedundancy, TwoSurfacesAFewMillimetresApartFarAwayAreToldApart) {
 
 TEST(SampleRedundancy, KeepMarginGrowsKeptPixelsBackOverTheSeam) {
   const auto scene = room_with_pillar();
-  const CubeSample a = test::analytic_cube_sample({0, 0, 1.7}, scene, 96);
-  CubeSample tight = test::analytic_cube_sample({1.5, 1.5, 1.7}, scene, 96), grown = tight;
+  const CubeSample a = test::analytic_colored_cube_sample({0, 0, 1.7}, scene, 96);
+  CubeSample tight = test::analytic_colored_cube_sample({1.5, 1.5, 1.7}, scene, 96), grown = tight;
   const CubeSample* ancestors[] = {&a};
   RedundancyParams p;
   p.keep_margin = 0;
@@ -142,8 +142,8 @@ TEST(SampleRedundancy, KeepMarginGrowsKeptPixelsBackOverTheSeam) {
 
 TEST(SampleRedundancy, RejectsMismatchedSizes) {
   const auto scene = room_with_pillar();
-  const CubeSample a = test::analytic_cube_sample({0, 0, 1.7}, scene, 32);
-  CubeSample d = test::analytic_cube_sample({1, 0, 1.7}, scene, 16);
+  const CubeSample a = test::analytic_colored_cube_sample({0, 0, 1.7}, scene, 32);
+  CubeSample d = test::analytic_colored_cube_sample({1, 0, 1.7}, scene, 16);
   const CubeSample* ancestors[] = {&a};
   EXPECT_THROW(remove_redundant_pixels(d, ancestors), std::invalid_argument);
 }
