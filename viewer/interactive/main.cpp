@@ -152,6 +152,9 @@ int run(const Options& opt) {
     SceneDrawerParams drawer_params;
     SceneDrawer drawer(context, store, drawer_params);
     drawer.set_shading(shading_lights(shading_of_config_text(meta_db.meta("config").value_or("")), up));
+    // The far field as the bake asked: view.far_budget (older databases: the default).
+    const std::uint64_t far_budget = far_budget_of_config_text(meta_db.meta("config").value_or(""))
+                                         .value_or(SampleSelectionParams{}.far_budget);
     const GlFunctions gl = load_gl_functions(*context);
     GLuint display = 0;
     gl.GenTextures(1, &display);
@@ -236,6 +239,7 @@ int run(const Options& opt) {
       options.tint_by_cell = state.tint_by_cell;
       options.near_field = state.mode != DrawMode::far_only;
       options.far_field = state.mode != DrawMode::near_only;
+      options.samples.far_budget = far_budget;
       const auto t0 = std::chrono::steady_clock::now();
       try {
         if (state.mode == DrawMode::truth || !cell) {
@@ -279,6 +283,8 @@ int run(const Options& opt) {
       ImGui::Text("near %llu tris   far %llu tris   chunks %llu (%llu tris)", (unsigned long long)info.near_triangles,
                   (unsigned long long)info.stats.far_triangles, (unsigned long long)info.stats.chunks_drawn,
                   (unsigned long long)info.stats.chunk_triangles);
+      ImGui::Text("far field: %llu samples drawn (budget %llu triangles)", (unsigned long long)info.stats.samples_drawn,
+                  (unsigned long long)far_budget);
       ImGui::Text("frame %.1f ms   draw %.1f ms", info.frame_ms, info.stats.milliseconds);
       const CellCacheStats cs = cache.stats();
       ImGui::Text("cache: %zu cells, %.1f MB, hits %llu, misses %llu, failed %llu", cs.cells, cs.bytes / 1048576.0,

@@ -1,0 +1,105 @@
+// Cell database schema v3 (several samples per cell): a version 2 database,
+// as cellbake wrote it before, opens read-only as it is and migrates in place
+// when opened read-write, keeping its cells; merge refuses to mix versions.
+#include <gtest/gtest.h>
+
+#include "storage/cell_db.h"
+#include "storage/cell_db_merge.h"
+#include "storage/sqlite_db.h"
+#include "test_support.h"
+
+namespace cellbake {
+namespace {
+
+// A version 2 database with one done cell of one sample (one face).
+void write_v2_database(const std::filesystem::path& file) {
+  SqliteDb db(file, SqliteDb::Mode::read_write_create);
+  db.exec(R"sql(
+CREATE TABLE meta(key TEXT PRIMARY KEY, value TEXT NOT NULL);
+CREATE TABLE cells(
+  id INTEGER PRIMARY KEY, region INTEGER NOT NULL, gx INTEGER NOT NULL, gy INTEGER NOT NULL, gz INTEGER NOT NULL,
+  min_x REAL, min_y REAL, min_z REAL, max_x REAL, max_y REAL, max_z REAL,
+  status TEXT NOT NULL, error TEXT NOT NULL DEFAULT '',
+  input_hash TEXT NOT NULL, cull_hash TEXT NOT NULL, content_hash TEXT NOT NULL,
+  cull_half_size REAL, near_triangles INTEGER, near_chunks BLOB,
+  far_triangles INTEGER, bytes INTEGER, max_boundary_error_px REAL, max_depth_error REAL,
+  stage_seconds TEXT NOT NULL DEFAULT '{}');
+CREATE TABLE samples(
+  cell_id INTEGER NOT NULL REFERENCES cells(id) ON DELETE CASCADE, sample_index INTEGER NOT NULL,
+  eye_x REAL NOT NULL, eye_y REAL NOT NULL, eye_z REAL NOT NULL, parent INTEGER NOT NULL,
+  PRIMARY KEY(cell_id, sample_index));
+CREATE TABLE faces(
+  cell_id INTEGER NOT NULL, sample_index INTEGER NOT NULL, face INTEGER NOT NULL,
+  image_format TEXT NOT NULL, image BLOB NOT NULL, mesh BLOB NOT NULL,
+  triangles INTEGER NOT NULL, boundary_error_px REAL, depth_error REAL,
+  PRIMARY KEY(cell_id, sample_index, face),
+  FOREIGN KEY(cell_id, sample_index) REFERENCES samples(cell_id, sample_index) ON DELETE CASCADE);
+INSERT INTO meta VALUES('kind', 'cellbake-cell-database');
+INSERT INTO cells VALUES(7, 0, 1, 2, 0, 0, 0, 0, 2, 2, 2, 'done', '', 'in', 'cull', 'content', 1.5, 10, x'', 20,
+                         30, 0.4, 0.01, '{"sample": 1.0}');
+INSERT INTO samples VALUES(7, 0, 1, 1, 1, -1);
+INSERT INTO faces VALUES(7, 0, 3, 'png', x'0102', x'0304', 20, 0.4, 0.01);
+PRAGMA user_version = 2;
+)sql");
+}
+
+TEST(CellDbMigration, AVersionTwoDatabaseOpensReadOnlyAsItIs) {
+  test::TempDir dir;
+  write_v2_database(dir / "old.db");
+  CellDb db(dir / "old.db", CellDb::Mode::read_only);
+  EXPECT_EQ(db.schema_version(), 2);
+  const auto cell = db.get_cell(7);
+  ASSERT_TRUE(cell);
+  ASSERT_EQ(cell->samples.size(), 1u);
+  EXPECT_EQ(cell->samples[0].eye, (Vec3d{1, 1, 1}));
+  EXPECT_EQ(cell->samples[0].parent, -1);
+  EXPECT_EQ(cell->samples[0].void_after, -1);  // not measured in version 2
+  EXPECT_EQ(cell->samples[0].removed_pixels, 0u);
+  ASSERT_EQ(cell->samples[0].faces.size(), 1u);
+  EXPECT_EQ(cell->samples[0].faces[0].mesh, (std::vector<std::uint8_t>{3, 4}));
+}
+
+TEST(CellDbMigration, OpeningReadWriteMigratesToVersionThreeKeepingTheCells) {
+  test::TempDir dir;
+  write_v2_database(dir / "old.db");
+  {
+    CellDb db(dir / "old.db", CellDb::Mode::read_write);
+    EXPECT_EQ(db.schema_version(), 3);
+    EXPECT_TRUE(db.integrity_ok());
+    // New rows carry the new columns.
+    CellRow row = *db.get_cell(7);
+    row.id = 8;
+    row.samples[0].void_after = 0.004;
+    row.samples[0].covered_pixels = 100;
+    row.samples[0].removed_pixels = 90;
+    row.samples[0].seconds = 1.5;
+    db.put_cell(row);
+  }
+  CellDb db(dir / "old.db", CellDb::Mode::read_only);
+  EXPECT_EQ(db.schema_version(), 3);
+  const auto old_cell = db.get_cell(7), new_cell = db.get_cell(8);
+  ASSERT_TRUE(old_cell && new_cell);
+  EXPECT_EQ(old_cell->content_hash, "content");
+  EXPECT_EQ(old_cell->samples[0].void_after, -1);
+  EXPECT_EQ(new_cell->samples[0].void_after, 0.004);
+  EXPECT_EQ(new_cell->samples[0].covered_pixels, 100u);
+  EXPECT_EQ(new_cell->samples[0].removed_pixels, 90u);
+  EXPECT_EQ(new_cell->samples[0].seconds, 1.5);
+}
+
+TEST(CellDbMigration, MergeRefusesAShardOfAnotherVersionNamingIt) {
+  test::TempDir dir;
+  write_v2_database(dir / "shard.db");
+  CellDb target(dir / "merged.db", CellDb::Mode::read_write);
+  const CellDb shard(dir / "shard.db", CellDb::Mode::read_only);
+  try {
+    copy_cells(target, shard);
+    FAIL() << "expected a refusal";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("shard.db"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("schema version 2"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace cellbake
