@@ -21,7 +21,7 @@ void add_status_command(CLI::App& app) {
   cmd->add_option("databases", opt->dbs, "Cell database(s); several shards are summed")->required();
   cmd->add_flag("--json", opt->json, "Machine-readable output");
   cmd->callback([opt] {
-    std::uint64_t total = 0, done = 0, failed = 0, bytes = 0, far = 0;
+    std::uint64_t total = 0, done = 0, failed = 0, bytes = 0, far = 0, samples = 0, delta_covered = 0, delta_removed = 0;
     std::map<std::string, double> stage_seconds;
     // Per-cell content hashes from every database, combined in id order, so a
     // merged database and its shards hash alike.
@@ -36,6 +36,9 @@ void add_status_command(CLI::App& app) {
       failed += t.cells_failed;
       bytes += t.bytes;
       far += t.far_triangles;
+      samples += t.samples;
+      delta_covered += t.delta_covered_pixels;
+      delta_removed += t.delta_removed_pixels;
       for (const auto& [k, v] : t.stage_seconds) stage_seconds[k] += v;
       for (const auto& [id, stamp] : db.stamps())
         if (stamp.status == "done") cell_hashes[id] = stamp.content_hash;
@@ -54,6 +57,9 @@ void add_status_command(CLI::App& app) {
       j["content_hash"] = h.hex();
       j["bytes"] = bytes;
       j["far_triangles"] = far;
+      j["samples"] = samples;
+      j["delta_covered_pixels"] = delta_covered;
+      j["delta_removed_pixels"] = delta_removed;
       j["databases"] = per_db;
       std::printf("%s\n", j.dump(2).c_str());
       return;
@@ -61,6 +67,10 @@ void add_status_command(CLI::App& app) {
     std::printf("cells: %llu total, %llu done, %llu failed, %llu pending\n", (unsigned long long)total,
                 (unsigned long long)done, (unsigned long long)failed, (unsigned long long)pending);
     std::printf("stored: %.1f MB, %llu far-field triangles\n", bytes / 1e6, (unsigned long long)far);
+    if (done > 0 && samples > 0)
+      std::printf("samples: %.2f per done cell; delta scans: %.1f %% of their pixels removed (an ancestor holds them)\n",
+                  double(samples) / double(done),
+                  delta_covered ? 100.0 * double(delta_removed) / double(delta_covered) : 0.0);
     for (const auto& [k, v] : stage_seconds) std::printf("  %-11s %9.2f s\n", k.c_str(), v);
     std::printf("content hash: %s\n", h.hex().c_str());
   });

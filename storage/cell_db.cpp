@@ -292,6 +292,15 @@ CellDbTotals CellDb::totals() const {
         if (v.is_number()) t.stage_seconds[k] += v.get<double>();
   }
   t.content_hash = h.hex();
+  SqliteStatement samples(*db_, schema_version_ >= 3
+                                    ? "SELECT count(*), total(CASE WHEN parent >= 0 THEN covered_pixels END), "
+                                      "total(CASE WHEN parent >= 0 THEN removed_pixels END) FROM samples"
+                                    : "SELECT count(*), 0, 0 FROM samples");
+  if (samples.step()) {
+    t.samples = std::uint64_t(samples.column_int(0));
+    t.delta_covered_pixels = std::uint64_t(samples.column_double(1));
+    t.delta_removed_pixels = std::uint64_t(samples.column_double(2));
+  }
   return t;
 }
 

@@ -80,6 +80,9 @@ struct CellDbTotals {
   std::map<std::string, double> stage_seconds;
   std::uint64_t bytes = 0, far_triangles = 0, near_triangles = 0;
   std::string content_hash;  // over every done cell's content_hash in id order
+  std::uint64_t samples = 0;                 // panoramic samples over all cells
+  std::uint64_t delta_covered_pixels = 0;    // pixels with a surface in delta scans (samples with a parent)
+  std::uint64_t delta_removed_pixels = 0;    // of those, removed because an ancestor holds them
 };
 
 class CellDb {
