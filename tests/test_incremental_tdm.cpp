@@ -5,6 +5,8 @@
 // near field and the far field along the cull box from anywhere in the cell.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 
@@ -12,7 +14,9 @@
 #include "pipeline/ingest.h"
 #include "runner/bake_runner.h"
 #include "runner/parallel.h"
+#include "stages/encode.h"
 #include "storage/cell_db.h"
+#include "viewer/decoded_cell.h"
 #include "fixture_room_obj.h"
 #include "test_support.h"
 #include "viewer/view_camera.h"
@@ -134,6 +138,39 @@ TEST(IncrementalTdm, NoSeamAlongTheCullBoxFromAnyCorner) {
     }
   EXPECT_GT(band_pixels, 500u);
   EXPECT_EQ(band_holes, 0u) << "of " << band_pixels << " pixels along the cull box";
+}
+
+TEST(IncrementalTdm, FaceTilesHoldEveryTriangleOnceInsideTheirBounds) {
+  CellDb db(cell().db, CellDb::Mode::read_only);
+  const auto row = db.get_cell(1);
+  ASSERT_TRUE(row);
+  const DecodedCell decoded = decode_cell(*row);
+  std::size_t faces = 0;
+  for (const DecodedFace& f : decoded.faces) {
+    // The same triangles as the stored mesh, reordered tile by tile.
+    const FaceMesh stored = decode_face_mesh(row->samples[std::size_t(f.sample)].faces[std::size_t(f.face)].mesh);
+    auto triangles = [](const FaceMesh& m) {
+      std::vector<std::array<std::uint32_t, 3>> t;
+      for (std::size_t i = 0; i < m.indices.size(); i += 3) t.push_back({m.indices[i], m.indices[i + 1], m.indices[i + 2]});
+      std::sort(t.begin(), t.end());
+      return t;
+    };
+    EXPECT_EQ(triangles(f.mesh), triangles(stored));
+    std::uint32_t next = 0;
+    for (const FaceTile& t : f.tiles) {
+      EXPECT_EQ(t.first_index, next);
+      EXPECT_GT(t.index_count, 0u);
+      next += t.index_count;
+      for (std::uint32_t i = t.first_index; i < t.first_index + t.index_count; ++i) {
+        const Vec3f& p = f.mesh.positions[f.mesh.indices[i]];
+        const Vec3d w = f.eye + Vec3d{p.x, p.y, p.z};
+        EXPECT_TRUE(t.bounds.contains(Box3d{w, w}));
+      }
+    }
+    EXPECT_EQ(next, f.mesh.indices.size());
+    faces += f.tiles.size() > 1;
+  }
+  EXPECT_GT(faces, 0u);  // some face spans several tiles
 }
 
 TEST(IncrementalTdm, CentreOnlyBakesOneSampleAndMaxSamplesOneDrawsIt) {

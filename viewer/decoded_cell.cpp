@@ -1,5 +1,7 @@
 #include "viewer/decoded_cell.h"
 
+#include <algorithm>
+#include <array>
 #include <stdexcept>
 #include <string>
 
@@ -12,6 +14,48 @@ std::size_t DecodedCell::bytes() const {
          f.mesh.indices.size() * sizeof(std::uint32_t) + f.image.pixels.size() * sizeof(Rgba8);
   return b;
 }
+
+namespace {
+
+// Reorders the face's triangles tile by tile (stable within a tile) on a
+// kFaceTiles^2 grid over its texture coordinates (the face's image plane) and
+// records each non-empty tile's index range and world bounds.
+void split_into_tiles(DecodedFace& d) {
+  const FaceMesh& m = d.mesh;
+  const std::size_t triangles = m.triangle_count();
+  constexpr int kTiles = kFaceTiles * kFaceTiles;
+  std::vector<int> tile_of(triangles);
+  std::array<std::uint32_t, kTiles> count{};
+  for (std::size_t t = 0; t < triangles; ++t) {
+    float u = 0, v = 0;
+    for (int c = 0; c < 3; ++c) u += m.uvs[m.indices[3 * t + c]].u, v += m.uvs[m.indices[3 * t + c]].v;
+    const int tu = std::clamp(int(u / 3 * kFaceTiles), 0, kFaceTiles - 1), tv = std::clamp(int(v / 3 * kFaceTiles), 0, kFaceTiles - 1);
+    tile_of[t] = tv * kFaceTiles + tu;
+    ++count[std::size_t(tile_of[t])];
+  }
+  std::array<std::uint32_t, kTiles> start{};
+  for (int k = 1; k < kTiles; ++k) start[std::size_t(k)] = start[std::size_t(k) - 1] + count[std::size_t(k) - 1];
+  std::vector<std::uint32_t> indices(m.indices.size());
+  std::array<Box3d, kTiles> bounds;
+  std::array<std::uint32_t, kTiles> next = start;
+  for (std::size_t t = 0; t < triangles; ++t) {
+    const std::size_t k = std::size_t(tile_of[t]);
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t i = m.indices[3 * t + c];
+      indices[3 * std::size_t(next[k]) + c] = i;
+      const Vec3f& p = m.positions[i];
+      bounds[k].expand(d.eye + Vec3d{p.x, p.y, p.z});
+    }
+    ++next[k];
+  }
+  d.mesh.indices = std::move(indices);
+  d.tiles.clear();
+  for (int k = 0; k < kTiles; ++k)
+    if (count[std::size_t(k)] > 0)
+      d.tiles.push_back({3 * start[std::size_t(k)], 3 * count[std::size_t(k)], bounds[std::size_t(k)]});
+}
+
+}  // namespace
 
 DecodedCell decode_cell(const CellRow& row) {
   const std::string where = "cell " + std::to_string(row.id);
@@ -44,6 +88,7 @@ DecodedCell decode_cell(const CellRow& row) {
         if (!(uv.u >= 0 && uv.u <= 1 && uv.v >= 0 && uv.v <= 1))
           throw std::runtime_error(face + ": texture coordinate outside [0, 1]");
       for (const Vec3f& p : d.mesh.positions) d.bounds.expand(s.eye + Vec3d{p.x, p.y, p.z});
+      split_into_tiles(d);
       cell.far_triangles += d.mesh.triangle_count();
       node.triangles += d.mesh.triangle_count();
       cell.faces.push_back(std::move(d));

@@ -13,13 +13,24 @@
 
 namespace cellbake {
 
+// A tile of a face mesh: a run of its triangles (after decode_cell reorders
+// them tile by tile) and their world bounds, so a view draws only the tiles
+// it can see (the thesis kept an octree of the meshes for the same purpose).
+struct FaceTile {
+  std::uint32_t first_index = 0, index_count = 0;
+  Box3d bounds;
+};
+
 struct DecodedFace {
   int sample = 0, face = 0;
   Vec3d eye;  // the sample's eye; mesh positions are relative to it
   Box3d bounds;  // world bounds of the mesh (empty for an empty mesh)
-  FaceMesh mesh;
+  FaceMesh mesh;  // triangles ordered tile by tile
   DecodedImage image;
+  std::vector<FaceTile> tiles;  // non-empty tiles of a kFaceTiles x kFaceTiles grid over the face (by triangle centroid)
 };
+
+constexpr int kFaceTiles = 4;
 
 struct DecodedCell {
   std::int64_t id = 0;

@@ -108,25 +108,30 @@ SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width
       TdmDrawOptions tdm_options;
       tdm_options.wireframe = options.wireframe;
       if (options.tint_by_cell) cell_tint(cell.id, tdm_options.tint);
-      // The budget counts what this view would draw: each sample's faces in the frustum.
-      std::vector<bool> in_view(cell.faces.size());
+      // The budget counts what this view would draw: each sample's face tiles in the frustum.
+      std::vector<TdmRenderer::Range> visible;  // handle = index into cell.faces until chosen
       std::vector<SampleNode> nodes = cell.samples;
       for (SampleNode& n : nodes) n.triangles = 0;
       for (std::size_t k = 0; k < cell.faces.size(); ++k) {
         const DecodedFace& f = cell.faces[k];
-        in_view[k] = box_in_view(camera, f.bounds);
-        if (!in_view[k]) continue;
-        for (SampleNode& n : nodes)
-          if (n.index == f.sample) n.triangles += f.mesh.triangle_count();
+        if (!box_in_view(camera, f.bounds)) continue;
+        for (const FaceTile& t : f.tiles) {
+          if (!box_in_view(camera, t.bounds)) continue;
+          visible.push_back({k, t.first_index, t.index_count});
+          for (SampleNode& n : nodes)
+            if (n.index == f.sample) n.triangles += t.index_count / 3;
+        }
       }
       const std::vector<int> chosen = select_samples(nodes, camera.eye, options.samples);
       const std::vector<std::uint64_t>& all = cells_.at(cell.id).handles;
-      std::vector<std::uint64_t> handles;
-      for (std::size_t k = 0; k < cell.faces.size() && k < all.size(); ++k)
-        if (in_view[k] && std::find(chosen.begin(), chosen.end(), cell.faces[k].sample) != chosen.end())
-          handles.push_back(all[k]);
+      std::vector<TdmRenderer::Range> ranges;
+      for (const TdmRenderer::Range& r : visible) {
+        const DecodedFace& f = cell.faces[r.handle];
+        if (r.handle < all.size() && std::find(chosen.begin(), chosen.end(), f.sample) != chosen.end())
+          ranges.push_back({all[r.handle], r.first_index, r.index_count});
+      }
       stats.samples_drawn = chosen.size();
-      stats.far_triangles = tdm_.draw(camera, chunks_.reversed_z(), handles, tdm_options);
+      stats.far_triangles = tdm_.draw_ranges(camera, chunks_.reversed_z(), ranges, tdm_options);
     }
   } catch (...) {
     set_wireframe(false);

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <cmath>
 #include <cstddef>
 #include <limits>
@@ -244,9 +245,24 @@ void TdmRenderer::erase(std::uint64_t handle) {
 
 std::uint64_t TdmRenderer::draw(const RenderCamera& camera, bool reversed_z, std::span<const std::uint64_t> handles,
                                 const TdmDrawOptions& options) {
-  for (std::uint64_t handle : handles)
-    if (!uploads_.contains(handle))
-      throw std::out_of_range("tdm_renderer: unknown upload handle " + std::to_string(handle));
+  std::vector<Range> ranges;
+  ranges.reserve(handles.size());
+  for (std::uint64_t handle : handles) {
+    auto it = uploads_.find(handle);
+    if (it == uploads_.end()) throw std::out_of_range("tdm_renderer: unknown upload handle " + std::to_string(handle));
+    ranges.push_back({handle, 0, static_cast<std::uint32_t>(it->second.index_count)});
+  }
+  return draw_ranges(camera, reversed_z, ranges, options);
+}
+
+std::uint64_t TdmRenderer::draw_ranges(const RenderCamera& camera, bool reversed_z, std::span<const Range> ranges,
+                                       const TdmDrawOptions& options) {
+  for (const Range& r : ranges) {
+    auto it = uploads_.find(r.handle);
+    if (it == uploads_.end()) throw std::out_of_range("tdm_renderer: unknown upload handle " + std::to_string(r.handle));
+    if (std::uint64_t(r.first_index) + r.index_count > std::uint64_t(it->second.index_count))
+      throw std::out_of_range("tdm_renderer: index range past upload " + std::to_string(r.handle));
+  }
   const std::array<float, 16> matrix = camera_view_projection(camera, reversed_z);
   context_->make_current();
   const GlFunctions& gl = *gl_;
@@ -259,14 +275,20 @@ std::uint64_t TdmRenderer::draw(const RenderCamera& camera, bool reversed_z, std
   gl.ActiveTexture(GL_TEXTURE0);
   if (options.wireframe) gl.PolygonMode(GL_FRONT_AND_BACK, GL_LINE);
   std::uint64_t triangles = 0;
-  for (std::uint64_t handle : handles) {
-    const Upload& u = uploads_.at(handle);
-    const Vec3d offset = u.eye - camera.eye;  // double, then float: camera-relative
-    gl.Uniform3f(u_offset_, static_cast<float>(offset.x), static_cast<float>(offset.y), static_cast<float>(offset.z));
-    gl.BindTexture(GL_TEXTURE_2D, u.texture);
-    gl.BindVertexArray(u.vertex_array);
-    if (u.index_count > 0) gl.DrawElements(GL_TRIANGLES, u.index_count, GL_UNSIGNED_INT, nullptr);
-    triangles += static_cast<std::uint64_t>(u.index_count / 3);
+  std::uint64_t bound = 0;
+  for (const Range& r : ranges) {
+    const Upload& u = uploads_.at(r.handle);
+    if (r.handle != bound) {
+      const Vec3d offset = u.eye - camera.eye;  // double, then float: camera-relative
+      gl.Uniform3f(u_offset_, static_cast<float>(offset.x), static_cast<float>(offset.y), static_cast<float>(offset.z));
+      gl.BindTexture(GL_TEXTURE_2D, u.texture);
+      gl.BindVertexArray(u.vertex_array);
+      bound = r.handle;
+    }
+    if (r.index_count > 0)
+      gl.DrawElements(GL_TRIANGLES, static_cast<int>(r.index_count), GL_UNSIGNED_INT,
+                      reinterpret_cast<const void*>(std::uintptr_t(r.first_index) * sizeof(std::uint32_t)));
+    triangles += r.index_count / 3;
   }
   if (options.wireframe) gl.PolygonMode(GL_FRONT_AND_BACK, GL_FILL);
   gl.BindVertexArray(0);

@@ -52,6 +52,16 @@ class TdmRenderer {
   // for an unknown handle.
   std::uint64_t draw(const RenderCamera& camera, bool reversed_z, std::span<const std::uint64_t> handles,
                      const TdmDrawOptions& options = {});
+  // One range of an upload's triangles: indices [first_index, first_index + index_count).
+  struct Range {
+    std::uint64_t handle = 0;
+    std::uint32_t first_index = 0, index_count = 0;
+  };
+  // As above, drawing only the given index ranges (e.g. the tiles of a face
+  // mesh the camera can see). Throws std::out_of_range for an unknown handle
+  // or a range past the upload's indices.
+  std::uint64_t draw_ranges(const RenderCamera& camera, bool reversed_z, std::span<const Range> ranges,
+                            const TdmDrawOptions& options = {});
   // Bytes held by uploads (vertex, index and texture data).
   std::size_t gpu_bytes() const { return bytes_; }
 
