@@ -18,7 +18,9 @@ void add_bake_options(CLI::App& cmd, BakeCommandOptions& opt) {
   cmd.add_option("--near-budget", opt.near_budget, "Near-field triangle budget per cell")->check(CLI::NonNegativeNumber);
   cmd.add_option("--face-size", opt.face_size, "Stored cube-face resolution, pixels")->check(CLI::Range(8, 4096));
   cmd.add_option("--out", opt.out, "Output cell database (overrides [output] database)");
-  cmd.add_option("--threads", opt.run.threads, "Worker threads (0 = all cores)")->capture_default_str();
+  cmd.add_option("--threads", opt.run.threads, "Worker threads (0 = all cores)")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
   cmd.add_option("--cells", opt.run.cells, "Only these cell ids, e.g. 1-10,15,20-");
   cmd.add_flag("--force", opt.run.force, "Recompute cells even when their stored hash matches");
   cmd.add_option("--shard", opt.shard, "Bake only shard I of N (I/N, 0-based)");

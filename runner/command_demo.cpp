@@ -29,7 +29,7 @@ void add_demo_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("demo", "Run the embedded default end to end: generate, ingest and bake the plant");
   cmd->add_option("--out,-o", opt->out, "Output folder")->capture_default_str();
   cmd->add_option("--triangles", opt->triangles, "Plant size in triangles")->capture_default_str();
-  cmd->add_option("--threads", opt->threads, "Worker threads (0 = all cores)");
+  cmd->add_option("--threads", opt->threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
   cmd->add_option("--set", opt->sets, "Override a config key: section.key=value (repeatable)");
   cmd->callback([opt] {
     const std::filesystem::path out(opt->out);

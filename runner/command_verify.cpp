@@ -40,7 +40,7 @@ void add_verify_command(CLI::App& app) {
   cmd->add_option("--fov", opt->verify.fov_y_deg, "Vertical field of view, degrees")->check(CLI::Range(1.0, 179.0));
   cmd->add_option("--near", opt->verify.near_plane, "Near plane distance, model units")->check(CLI::PositiveNumber);
   cmd->add_option("--seed", opt->verify.seed, "Seed of the interior view points")->capture_default_str();
-  cmd->add_option("--threads", opt->verify.threads, "Worker threads (0 = all cores)");
+  cmd->add_option("--threads", opt->verify.threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
   cmd->add_option("--worst", opt->verify.worst_views, "Worst views shown as triptychs")->capture_default_str();
   cmd->add_option("--store", opt->verify.store, "Geometry store (default: the one the database names)");
   cmd->add_flag("--quiet", opt->verify.quiet, "No progress output");

@@ -219,3 +219,26 @@ TEST(Bake, KilledBakeResumesToTheSameDatabase) {
 
 }  // namespace
 }  // namespace cellbake
+
+namespace cellbake {
+namespace {
+
+TEST(BakeCli, ThreadCountsOutOfRangeAreRefusedNamingTheOption) {
+  test::TempDir dir;
+  make_room_store(dir);
+  const std::string store = (dir / "room.store.db").string();
+  for (const char* threads : {"1073741824", "-1"}) {
+    const auto bake = test::run_cellbake("bake --store '" + store + "' --up z --region 1,1,1.6,3,3,1.6 --cell-size 2 --threads " +
+                                         threads + " --out '" + (dir / "cells.db").string() + "'");
+    EXPECT_NE(bake.exit_code, 0) << bake.output;
+    EXPECT_NE(bake.output.find("--threads"), std::string::npos) << bake.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "cells.db"));
+    const auto verify = test::run_cellbake("verify '" + (dir / "none.db").string() + "' --report '" +
+                                           (dir / "report").string() + "' --threads " + threads);
+    EXPECT_NE(verify.exit_code, 0) << verify.output;
+    EXPECT_NE(verify.output.find("--threads"), std::string::npos) << verify.output;
+  }
+}
+
+}  // namespace
+}  // namespace cellbake
