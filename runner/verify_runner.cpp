@@ -103,10 +103,11 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
   const std::string up_name = db.meta("up").value_or("z");
   const Vec3d up = up_axis(up_name);
   const double cell_size = std::stod(db.meta("cell_size").value_or("0"));
-  const std::vector<Box3d> regions = regions_of_config_text(db.meta("config").value_or(""));
-  const ShadingLights shading = shading_lights(shading_of_config_text(db.meta("config").value_or("")), up);
-  const std::uint64_t far_budget = options.far_budget.value_or(
-      far_budget_of_config_text(db.meta("config").value_or("")).value_or(SampleSelectionParams{}.far_budget));
+  const std::string config_text = db.meta("config").value_or("");
+  const std::vector<Box3d> regions = regions_of_config_text(config_text);
+  const ShadingLights shading = shading_lights(shading_of_config_text(config_text), up);
+  const std::uint64_t far_budget =
+      options.far_budget.value_or(far_budget_of_config_text(config_text).value_or(SampleSelectionParams{}.far_budget));
 
   nlohmann::json params{{"views_per_cell", options.views_per_cell}, {"width", options.width},
                         {"height", options.height},                 {"fov_y_deg", options.fov_y_deg},

@@ -4,6 +4,7 @@
 
 #include "stages/sample_points.h"
 #include "viewer/sample_selection.h"
+#include "viewer/view_camera.h"
 
 namespace cellbake {
 namespace {

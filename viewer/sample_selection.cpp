@@ -5,7 +5,6 @@
 #include "viewer/sample_selection.h"
 
 #include <algorithm>
-#include <array>
 #include <map>
 
 namespace cellbake {
@@ -26,7 +25,6 @@ std::vector<int> select_samples(const std::vector<SampleNode>& samples, const Ve
   const double budget = std::max(double(params.far_budget), params.root_factor * double(root_triangles));
   std::vector<int> chosen;
   std::uint64_t triangles = 0;
-  int chains = 0;
   for (const SampleNode* s : nearest) {
     if (std::find(chosen.begin(), chosen.end(), s->index) != chosen.end()) continue;
     // The chain: the sample and every ancestor not chosen yet.
@@ -42,33 +40,11 @@ std::vector<int> select_samples(const std::vector<SampleNode>& samples, const Ve
     }
     // A chain that does not fit is skipped: a shorter or cheaper one further away may.
     if (params.max_samples > 0 && chosen.size() + chain.size() > std::size_t(params.max_samples)) continue;
-    if (chains > 0 && double(triangles + cost) > budget) continue;
+    if (!chosen.empty() && double(triangles + cost) > budget) continue;
     chosen.insert(chosen.end(), chain.begin(), chain.end());
     triangles += cost;
-    ++chains;
   }
   return chosen;
-}
-
-namespace {
-
-double max_dot(const Vec3d& n, const Vec3d& lo, const Vec3d& hi) {
-  double s = 0;
-  for (int k = 0; k < 3; ++k) s += n[k] * (n[k] >= 0 ? hi[k] : lo[k]);
-  return s;
-}
-
-}  // namespace
-
-bool box_in_view(const RenderCamera& c, const Box3d& box) {
-  if (box.empty()) return false;
-  const Vec3d lo = box.lo - c.eye, hi = box.hi - c.eye;
-  if (max_dot(c.forward, lo, hi) < c.near_plane) return false;
-  const std::array<Vec3d, 4> sides = {c.right - c.forward * c.tan_left, c.forward * c.tan_right - c.right,
-                                      c.up - c.forward * c.tan_bottom, c.forward * c.tan_top - c.up};
-  for (const Vec3d& n : sides)
-    if (max_dot(n, lo, hi) < 0) return false;
-  return true;
 }
 
 }  // namespace cellbake

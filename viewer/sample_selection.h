@@ -2,14 +2,13 @@
 // 2002 §5.3): the sample nearest the eye plus its ancestors in the dependency
 // tree (a delta scan only holds what its ancestors lack), then the next
 // nearest samples with their ancestors while a far-field triangle budget
-// allows; and which of their face meshes the camera can see at all.
+// allows.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
 #include "stages/geometry.h"
-#include "stages/render/chunk_renderer.h"
 
 namespace cellbake {
 
@@ -38,10 +37,5 @@ struct SampleSelectionParams {
 // index. Deterministic. Empty input gives an empty result.
 std::vector<int> select_samples(const std::vector<SampleNode>& samples, const Vec3d& eye,
                                 const SampleSelectionParams& params);
-
-// Whether any part of world box `box` can be inside the camera's frustum
-// (conservative: false only when the box lies wholly behind the near plane or
-// outside one side plane). An empty box is never in view.
-bool box_in_view(const RenderCamera& camera, const Box3d& box);
 
 }  // namespace cellbake

@@ -98,10 +98,10 @@ SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width
   set_wireframe(options.wireframe);
   SceneFrameStats stats;
   try {
-    // The near field whole: the sampler discarded exactly the box, so a
-    // near field clipped at the box would leave a band wherever the eye is
-    // not at the sample point; the overlap past the box is resolved by the
-    // depth test (the far field holds the same surfaces there).
+    // The near field whole: a near field clipped at the box would leave a
+    // band wherever the eye is not at a sample point; the overlap with the
+    // far field (which also reaches a shell inside the box) is resolved by
+    // the depth test.
     if (options.near_field)
       chunks_.draw(camera, Box3d{}, cell.near_ids, [this](std::int64_t id) { return source_.load(id); });
     if (options.far_field) {
@@ -109,7 +109,11 @@ SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width
       tdm_options.wireframe = options.wireframe;
       if (options.tint_by_cell) cell_tint(cell.id, tdm_options.tint);
       // The budget counts what this view would draw: each sample's face tiles in the frustum.
-      std::vector<TdmRenderer::Range> visible;  // handle = index into cell.faces until chosen
+      struct VisibleTile {
+        std::size_t face;  // index into cell.faces (and its upload handle)
+        std::uint32_t first_index, index_count;
+      };
+      std::vector<VisibleTile> visible;
       std::vector<SampleNode> nodes = cell.samples;
       for (SampleNode& n : nodes) n.triangles = 0;
       for (std::size_t k = 0; k < cell.faces.size(); ++k) {
@@ -125,11 +129,9 @@ SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width
       const std::vector<int> chosen = select_samples(nodes, camera.eye, options.samples);
       const std::vector<std::uint64_t>& all = cells_.at(cell.id).handles;
       std::vector<TdmRenderer::Range> ranges;
-      for (const TdmRenderer::Range& r : visible) {
-        const DecodedFace& f = cell.faces[r.handle];
-        if (r.handle < all.size() && std::find(chosen.begin(), chosen.end(), f.sample) != chosen.end())
-          ranges.push_back({all[r.handle], r.first_index, r.index_count});
-      }
+      for (const VisibleTile& t : visible)
+        if (t.face < all.size() && std::find(chosen.begin(), chosen.end(), cell.faces[t.face].sample) != chosen.end())
+          ranges.push_back({all[t.face], t.first_index, t.index_count});
       stats.samples_drawn = chosen.size();
       stats.far_triangles = tdm_.draw_ranges(camera, chunks_.reversed_z(), ranges, tdm_options);
     }

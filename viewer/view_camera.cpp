@@ -46,6 +46,18 @@ RenderCamera look_at_camera(const Vec3d& eye, const Vec3d& look, const Vec3d& wo
   return c;
 }
 
+bool box_in_view(const RenderCamera& c, const Box3d& box) {
+  if (box.empty()) return false;
+  const Vec3d lo = box.lo - c.eye, hi = box.hi - c.eye;
+  if (max_dot(c.forward, lo, hi) < c.near_plane) return false;
+  // Inward normals of the side planes through the eye.
+  const std::array<Vec3d, 4> sides = {c.right - c.forward * c.tan_left, c.forward * c.tan_right - c.right,
+                                      c.up - c.forward * c.tan_bottom, c.forward * c.tan_top - c.up};
+  for (const Vec3d& n : sides)
+    if (max_dot(n, lo, hi) < 0) return false;
+  return true;
+}
+
 std::vector<std::int64_t> chunks_in_view(const RenderCamera& c, const ChunkSource& source) {
   const Box3d model = source.model_bounds();
   if (model.empty()) return {};
@@ -60,18 +72,9 @@ std::vector<std::int64_t> chunks_in_view(const RenderCamera& c, const ChunkSourc
   for (double d : {c.near_plane, reach})
     for (double s : {c.tan_left, c.tan_right})
       for (double t : {c.tan_bottom, c.tan_top}) frustum_box.expand(c.eye + (c.forward + c.right * s + c.up * t) * d);
-  // Inward normals of the side planes through the eye.
-  const std::array<Vec3d, 4> sides = {c.right - c.forward * c.tan_left, c.forward * c.tan_right - c.right,
-                                      c.up - c.forward * c.tan_bottom, c.forward * c.tan_top - c.up};
   std::vector<std::int64_t> ids;
-  for (const ChunkRef& ref : source.query(frustum_box)) {
-    if (ref.bounds.empty()) continue;
-    const Vec3d lo = ref.bounds.lo - c.eye, hi = ref.bounds.hi - c.eye;
-    if (max_dot(c.forward, lo, hi) < c.near_plane) continue;
-    bool outside = false;
-    for (const Vec3d& n : sides) outside = outside || max_dot(n, lo, hi) < 0;
-    if (!outside) ids.push_back(ref.id);
-  }
+  for (const ChunkRef& ref : source.query(frustum_box))
+    if (box_in_view(c, ref.bounds)) ids.push_back(ref.id);
   std::sort(ids.begin(), ids.end());
   return ids;
 }

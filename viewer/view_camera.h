@@ -23,6 +23,11 @@ Vec3d up_axis(const std::string& up);
 RenderCamera look_at_camera(const Vec3d& eye, const Vec3d& look, const Vec3d& world_up, double fov_y_deg, int width,
                             int height, double near_plane = 0.01);
 
+// Whether any part of world box `box` can be inside the camera's frustum
+// (conservative: false only when the box lies wholly behind the near plane or
+// outside one side plane). An empty box is never in view.
+bool box_in_view(const RenderCamera& camera, const Box3d& box);
+
 // Ids of every chunk of `source` whose bounds meet the camera's frustum (its
 // four side planes and near plane, out to the model's bounds), sorted by id.
 // Conservative: a chunk whose box only touches the frustum near a corner may be
