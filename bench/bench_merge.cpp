@@ -53,7 +53,8 @@ std::vector<std::filesystem::path> make_shards(const std::filesystem::path& dir,
       row.content_hash = "content" + std::to_string(id);
       row.near_chunks = {{id, 1000, true}};
       row.stage_seconds = {{"sample", 1.0}};
-      SampleRow sample{0, {double(id), 0, 1.6}, -1, {}};
+      SampleRow sample;
+      sample.eye = {double(id), 0, 1.6};
       for (int f = 0; f < 6; ++f)
         sample.faces.push_back({f, "jpeg", random_bytes(kImageBytes, rng), random_bytes(kMeshBytes, rng), 5000, 0, 0});
       row.samples = {std::move(sample)};

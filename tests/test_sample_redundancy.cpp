@@ -80,7 +80,9 @@ TEST(SampleRedundancy, ADeltaScanKeepsOnlyWhatThePillarHidFromItsParent) {
   for (int axis = 0; axis < 3; ++axis) core.lo[axis] += 0.1, core.hi[axis] -= 0.1;
   std::size_t hidden = 0;
   for_each_covered_pixel(original, d, [&](int f, std::size_t k, const Vec3d& point, bool kept) {
-    if (kept) EXPECT_FALSE(sample_holds_point(a, point, p));
+    if (kept) {
+      EXPECT_FALSE(sample_holds_point(a, point, p));
+    }
     const double t = test::ray_box_surface(a.eye, point - a.eye, core);
     const bool on_pillar = point.x >= 4 - 1e-9 && point.x <= 5 + 1e-9 && std::abs(point.y) <= 0.5 + 1e-9;
     if (t < 1.0 - 1e-3 && !on_pillar) {
@@ -113,7 +115,9 @@ TEST(SampleRedundancy, TwoSurfacesAFewMillimetresApartFarAwayAreToldApart) {
     ++underside;
     underside_removed += kept ? 0 : 1;
     // Away from the sheet's side edges, none may go.
-    if (std::abs(p.y) < 4.5) EXPECT_TRUE(kept) << "face " << f << " pixel " << k;
+    if (std::abs(p.y) < 4.5) {
+      EXPECT_TRUE(kept) << "face " << f << " pixel " << k;
+    }
   });
   EXPECT_GT(underside, 300u);
   // At the sheet's corners, where the parent's strip ends in both directions
