@@ -10,6 +10,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev libspdlog-dev libxxhash-dev zlib1g-dev
   libgtest-dev libbenchmark-dev slurmctld slurmd slurm-client munge
   libglfw3-dev libimgui-dev libstb-dev xvfb xauth
+  libembree-dev libegl-dev
 )
 
 missing=()

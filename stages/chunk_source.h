@@ -5,9 +5,12 @@
 
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "stages/geometry.h"
+#include "stages/texture.h"
 
 namespace cellbake {
 
@@ -27,6 +30,16 @@ class ChunkSource {
   virtual std::shared_ptr<const Chunk> load(std::int64_t id) const = 0;
   // World bounds of the whole model (empty box for an empty model).
   virtual Box3d model_bounds() const = 0;
+  // The model's material table, indexed by Chunk::materials (empty: every
+  // triangle uses material 0, untextured).
+  virtual std::vector<Material> materials() const { return {}; }
+  // The texture `id` (a Material::texture_id > 0); throws std::runtime_error
+  // naming it when it is missing or corrupt. Safe to call from several threads.
+  virtual std::shared_ptr<const TextureImage> load_texture(std::int64_t id) const;
 };
+
+inline std::shared_ptr<const TextureImage> ChunkSource::load_texture(std::int64_t id) const {
+  throw std::runtime_error("chunk source has no texture " + std::to_string(id));
+}
 
 }  // namespace cellbake

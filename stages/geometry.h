@@ -81,6 +81,8 @@ struct Triangle {
   std::array<Vec3d, 3> p;
   std::array<Rgba8, 3> color;
   std::array<Uv, 3> uv;       // meaningful only when the source had texcoords
+  std::array<Vec3f, 3> normal;  // unit per-corner normals; meaningful only when has_normals
+  bool has_normals = false;     // the source gave normals (OBJ vn, PLY nx ny nz, assimp)
   std::uint32_t material = 0;  // index into the model's material table (0 = default)
 };
 
@@ -94,12 +96,17 @@ struct TriangleMesh {
   std::size_t triangle_count() const { return indices.size() / 3; }
 };
 
-// A material as imported: a base colour multiplied into vertex colours, and an
-// optional texture path (kept for reference; rendering uses colours).
+// A material as imported: a base colour multiplied into vertex colours at
+// ingest, and an optional diffuse / base-colour texture. `texture` is the path
+// or reference the source gave (kept for messages); `texture_id` names the
+// image stored in the geometry store (0 = none: untextured, or the file could
+// not be read). Colours of textured triangles are vertex colour x texel.
 struct Material {
   std::string name;
   Rgba8 color{255, 255, 255, 255};
   std::string texture;
+  std::int64_t texture_id = 0;
+  bool alpha_test = false;  // fragments whose texel alpha is below 0.5 are dropped
 };
 
 // A chunk of spatially coherent triangles: positions are float32 relative to a
@@ -111,6 +118,7 @@ struct Chunk {
   std::vector<Vec3f> positions;
   std::vector<Rgba8> colors;  // one per position
   std::vector<Uv> uvs;        // empty or one per position
+  std::vector<Vec3f> normals; // empty (flat face normals) or one unit normal per position
   std::vector<std::uint32_t> indices;
   std::vector<std::uint32_t> materials;  // empty (all 0) or one per triangle
   std::size_t triangle_count() const { return indices.size() / 3; }

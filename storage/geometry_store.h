@@ -76,7 +76,7 @@ class GeometryStore : public ChunkSource {
 
   const StoreSummary& summary() const { return summary_; }
   std::vector<SourceFileRecord> sources() const;
-  std::vector<Material> materials() const;
+  std::vector<Material> materials() const override;
   std::vector<ChunkRef> all_chunks() const;
   const std::filesystem::path& path() const { return path_; }
 
