@@ -1,84 +1,89 @@
-// OSMesa backend of GlContext: a core profile context (OSMesaCreateContextAttribs
-// with OSMESA_PROFILE = OSMESA_CORE_PROFILE, version 3.3 or newer) rendering
-// into a host-memory RGBA buffer. A second backend (EGL surfaceless) would be
-// one more class here and one more case in create_gl_context().
+// The backend switch of gl_context.h: creation by name, availability probes
+// and the headless fallback order (OSMesa, then EGL).
 #include "stages/render/gl_context.h"
 
-#include <GL/osmesa.h>
-
+#include <exception>
 #include <stdexcept>
-#include <vector>
+#include <thread>
+
+#include "stages/render/gl_context_egl.h"
+#if CELLBAKE_HAVE_OSMESA
+#include "stages/render/gl_context_osmesa.h"
+#endif
 
 namespace cellbake {
-namespace {
 
-class OsMesaContext final : public GlContext {
- public:
-  OsMesaContext(int width, int height)
-      : width_(width), height_(height), buffer_(static_cast<std::size_t>(width) * height * 4) {
-    const int attribs[] = {OSMESA_FORMAT,
-                           OSMESA_RGBA,
-                           OSMESA_DEPTH_BITS,
-                           0,  // drawing goes to framebuffer objects with their own depth buffers
-                           OSMESA_STENCIL_BITS,
-                           0,
-                           OSMESA_ACCUM_BITS,
-                           0,
-                           OSMESA_PROFILE,
-                           OSMESA_CORE_PROFILE,
-                           OSMESA_CONTEXT_MAJOR_VERSION,
-                           3,
-                           OSMESA_CONTEXT_MINOR_VERSION,
-                           3,
-                           0};
-    context_ = OSMesaCreateContextAttribs(attribs, nullptr);
-    if (!context_)
-      throw std::runtime_error("gl_context(osmesa): OSMesaCreateContextAttribs failed for an OpenGL 3.3 core profile");
-    try {
-      make_current();
-    } catch (...) {
-      OSMesaDestroyContext(context_);
-      throw;
-    }
+std::string gl_backend_name(GlBackend backend) {
+  switch (backend) {
+    case GlBackend::osmesa: return "osmesa";
+    case GlBackend::egl: return "egl";
   }
-  ~OsMesaContext() override {
-    release_current();
-    OSMesaDestroyContext(context_);
-  }
-  OsMesaContext(const OsMesaContext&) = delete;
-  OsMesaContext& operator=(const OsMesaContext&) = delete;
+  throw std::invalid_argument("gl_context: unknown backend");
+}
 
-  void make_current() override {
-    if (!OSMesaMakeCurrent(context_, buffer_.data(), GL_UNSIGNED_BYTE, width_, height_))
-      throw std::runtime_error("gl_context(osmesa): OSMesaMakeCurrent failed (" + std::to_string(width_) + "x" +
-                               std::to_string(height_) + ")");
+bool gl_backend_compiled(GlBackend backend) {
+  switch (backend) {
+    case GlBackend::osmesa: return CELLBAKE_HAVE_OSMESA != 0;
+    case GlBackend::egl: return true;
   }
-  void release_current() override {
-    if (is_current()) OSMesaMakeCurrent(nullptr, nullptr, 0, 0, 0);
-  }
-  bool is_current() const override { return OSMesaGetCurrentContext() == context_; }
-  GlProc get_proc_address(const char* name) const override { return OSMesaGetProcAddress(name); }
-  int width() const override { return width_; }
-  int height() const override { return height_; }
-  std::string backend_name() const override { return "osmesa"; }
-
- private:
-  int width_;
-  int height_;
-  std::vector<unsigned char> buffer_;  // the default framebuffer's colour, RGBA8
-  OSMesaContext context_ = nullptr;
-};
-
-}  // namespace
+  return false;
+}
 
 std::unique_ptr<GlContext> create_gl_context(GlBackend backend, int width, int height) {
   if (width < 1 || height < 1)
     throw std::invalid_argument("gl_context: size must be at least 1x1, got " + std::to_string(width) + "x" +
                                 std::to_string(height));
   switch (backend) {
-    case GlBackend::osmesa: return std::make_unique<OsMesaContext>(width, height);
+    case GlBackend::osmesa:
+#if CELLBAKE_HAVE_OSMESA
+      return create_osmesa_context(width, height);
+#else
+      throw std::runtime_error("gl_context(osmesa): this build has no OSMesa (CELLBAKE_WITH_OSMESA=OFF); use egl");
+#endif
+    case GlBackend::egl: return create_egl_context(width, height, EglDevicePolicy::prefer_hardware);
   }
   throw std::invalid_argument("gl_context: unknown backend");
+}
+
+bool gl_backend_available(GlBackend backend) {
+  if (!gl_backend_compiled(backend)) return false;
+  bool ok = false;
+  std::thread probe([&] {
+    try {
+      create_gl_context(backend, 1, 1);  // created current on the probe thread, released when destroyed
+      ok = true;
+    } catch (const std::exception&) {
+      ok = false;
+    }
+  });
+  probe.join();
+  return ok;
+}
+
+std::optional<GlBackend> first_available_gl_backend() {
+  for (GlBackend backend : {GlBackend::osmesa, GlBackend::egl})
+    if (gl_backend_available(backend)) return backend;
+  return std::nullopt;
+}
+
+std::unique_ptr<GlContext> create_headless_gl_context(int width, int height) {
+  std::string osmesa_error;
+  if (gl_backend_compiled(GlBackend::osmesa)) {
+    try {
+      return create_gl_context(GlBackend::osmesa, width, height);
+    } catch (const std::invalid_argument&) {
+      throw;
+    } catch (const std::exception& e) {
+      osmesa_error = e.what();
+    }
+  } else {
+    osmesa_error = "gl_context(osmesa): not in this build";
+  }
+  try {
+    return create_gl_context(GlBackend::egl, width, height);
+  } catch (const std::exception& e) {
+    throw std::runtime_error("gl_context: no headless OpenGL backend: " + osmesa_error + "; " + e.what());
+  }
 }
 
 }  // namespace cellbake

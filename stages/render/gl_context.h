@@ -1,15 +1,16 @@
 // An offscreen OpenGL context behind one small backend interface, so the
-// sampler and the headless viewer run on any machine (OSMesa, Mesa's software
-// rasteriser) and a second backend (EGL surfaceless, or a GPU) can be added
-// beside it without touching the drawing code.
+// sampler and the headless viewer run on any machine: OSMesa (Mesa's software
+// rasteriser into host memory) or EGL (a GPU device when one is present, else
+// Mesa's surfaceless platform, llvmpipe), without touching the drawing code.
 //
 // A context is current on at most one thread at a time; use one context per
 // thread. Nothing here changes global state beyond the calling thread's
-// current context, and nothing reads or sets environment variables (OSMesa's
-// llvmpipe thread count, LP_NUM_THREADS, is the caller's business).
+// current context, and nothing reads or sets environment variables (llvmpipe's
+// thread count, LP_NUM_THREADS, is the caller's business).
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace cellbake {
@@ -19,7 +20,11 @@ using GlProc = void (*)();
 
 enum class GlBackend {
   osmesa,  // Mesa's OSMesa (llvmpipe): a 3.3+ core profile context into a host-memory buffer
+  egl,     // EGL without a surface: first hardware device, else Mesa surfaceless (gl_context_egl.h)
 };
+
+// "osmesa" | "egl".
+std::string gl_backend_name(GlBackend backend);
 
 class GlContext {
  public:
@@ -38,7 +43,8 @@ class GlContext {
   // implementation does not provide it. Needs no current context.
   virtual GlProc get_proc_address(const char* name) const = 0;
   // Width and height in pixels of the context's default framebuffer (drawing
-  // normally goes to framebuffer objects of any size instead).
+  // normally goes to framebuffer objects of any size instead; a backend
+  // without a default framebuffer reports the requested size).
   virtual int width() const = 0;
   virtual int height() const = 0;
   // Backend name, e.g. "osmesa".
@@ -48,7 +54,27 @@ class GlContext {
 // Creates an offscreen OpenGL 3.3+ core profile context whose default
 // framebuffer is `width` x `height` pixels (both >= 1), and makes it current
 // on the calling thread. Throws std::invalid_argument for bad sizes and
-// std::runtime_error naming the backend when the context cannot be created.
+// std::runtime_error naming the backend when the context cannot be created
+// (including a build without that backend: see gl_backend_compiled).
 std::unique_ptr<GlContext> create_gl_context(GlBackend backend, int width, int height);
+
+// True when this build includes `backend` (OSMesa is optional at build time,
+// CMake option CELLBAKE_WITH_OSMESA; EGL is always built).
+bool gl_backend_compiled(GlBackend backend);
+
+// True when a context of `backend` can be created here. Probes by creating
+// and destroying a 1x1 context on a short-lived thread of its own, so the
+// calling thread's current context is untouched. Costs a context creation
+// (milliseconds on llvmpipe); call it once, not per frame.
+bool gl_backend_available(GlBackend backend);
+
+// The headless fallback order: OSMesa when available, else EGL; nullopt when
+// neither can create a context.
+std::optional<GlBackend> first_available_gl_backend();
+
+// create_gl_context with the fallback order above, in one step and without a
+// probe: OSMesa when it creates a context, else EGL. Throws std::runtime_error
+// quoting both backends' errors when neither does.
+std::unique_ptr<GlContext> create_headless_gl_context(int width, int height);
 
 }  // namespace cellbake

@@ -1,0 +1,35 @@
+// EGL backend of GlContext: an OpenGL core profile context (the highest of
+// 4.6 down to 3.3) without any surface (EGL_KHR_surfaceless_context); drawing
+// goes to framebuffer objects. Needs no window system, no environment
+// variables and no OSMesa.
+//
+// Display selection (egl_display.h has the details):
+//   prefer_hardware: the first enumerated EGL device (EGL_EXT_device_enumeration
+//     + EGL_EXT_platform_device) whose extensions do not include
+//     EGL_MESA_device_software and which initialises; else Mesa's surfaceless
+//     platform (EGL_MESA_platform_surfaceless); else the software device.
+//   software_only: the software device (EGL_MESA_device_software, llvmpipe);
+//     else Mesa's surfaceless platform (Mesa may pick a hardware driver there).
+#pragma once
+
+#include <memory>
+
+#include "stages/render/gl_context.h"
+
+namespace cellbake {
+
+enum class EglDevicePolicy { prefer_hardware, software_only };
+
+// An EGL context of `width` x `height` nominal pixels (both >= 1; there is no
+// default framebuffer, width()/height() report the request), current on the
+// calling thread. backend_name() is "egl". Throws std::invalid_argument for
+// bad sizes and std::runtime_error naming "egl", the display tried and the
+// EGL error code when no context can be created.
+std::unique_ptr<GlContext> create_egl_context(int width, int height,
+                                              EglDevicePolicy policy = EglDevicePolicy::prefer_hardware);
+
+// True when EGL enumerates a device that is not Mesa's software device (a GPU).
+// Initialises nothing and creates no context.
+bool egl_hardware_device_present();
+
+}  // namespace cellbake
