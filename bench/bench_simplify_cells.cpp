@@ -28,8 +28,7 @@
 #include "pipeline/bake_config.h"
 #include "pipeline/cell_grid.h"
 #include "pipeline/cell_job.h"
-#include "stages/render/chunk_renderer.h"
-#include "stages/render/gl_context.h"
+#include "pipeline/sample_backend.h"
 #include "stages/simplify.h"
 #include "storage/geometry_store.h"
 
@@ -97,7 +96,8 @@ int run(int argc, char** argv) {
   config.samples_initial = "centre";  // the cell-centre sample alone: whole faces, no delta scans
   config.samples_max = 1;
   GeometryStore store(config.store);
-  ChunkRenderer renderer(create_gl_context(GlBackend::osmesa, 1, 1));
+  const std::unique_ptr<CubeSampler> sampler =
+      CubeSamplerFactory(parse_sample_backend(config.sample_backend), std::size_t(config.embree_cache_mb) << 20).make();
   SimplifyParams params;
   params.depth_error_relative = config.depth_error_relative;
   params.boundary_error_px = config.boundary_error_px;
@@ -111,7 +111,7 @@ int run(int argc, char** argv) {
     CellWork work;
     work.cell = cell;
     run_cull_box(work, config, store);
-    run_sample(work, config, store, renderer);
+    run_sample(work, config, store, *sampler);
     run_depth_mesh(work, config);
     for (int f = 0; f < kCubeFaces; ++f) {
       const FaceMesh& dense = work.samples.at(0).dense[f];

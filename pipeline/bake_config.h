@@ -39,6 +39,13 @@ struct BakeConfig {
   // distance) inside the cull box, so that from anywhere in the cell it
   // overlaps the near field instead of leaving a seam along the box.
   double seam_shell_px = 2.0;
+  // Who renders the samples (pipeline/sample_backend.h): "osmesa" | "egl" |
+  // "embree" | "auto". The pixels differ between the GL rasterisers and the
+  // ray caster within the parity tolerance only; the bake hash tells them apart.
+  std::string sample_backend = "osmesa";
+  // Byte cap of the Embree backend's shared BVH cache, MiB (not hashed: it
+  // changes memory and speed, not pixels).
+  std::uint64_t embree_cache_mb = 4096;
 
   // [shading]: the fixed light model every chunk drawing applies (the samples
   // bake it into their images; viewers read it back from the database's meta

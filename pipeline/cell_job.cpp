@@ -7,6 +7,8 @@
 #include "stages/encode.h"
 #include "stages/hashing.h"
 #include "stages/background_fill.h"
+#include "stages/cube_sampler.h"
+#include "pipeline/sample_backend.h"
 #include "stages/sample.h"
 #include "stages/sample_candidates.h"
 #include "stages/sample_points.h"
@@ -49,6 +51,10 @@ CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::str
   in.text(h.cull);
   in.text("sample").u64(StageVersions::sample).u64(c.face_size).u64(c.supersample).f64(c.near_plane);
   in.f64(c.seam_shell_px);
+  // Only the ray caster's pixels are told apart, so bakes from before the
+  // backend choice (GL) keep their hashes.
+  if (const std::string pixels = sample_backend_pixels(parse_sample_backend(c.sample_backend)); pixels != "gl")
+    in.text("backend").text(pixels);
   in.text(shading_mode_name(c.shading.mode));
   hash_vec(in, c.shading.key_direction);
   hash_vec(in, c.shading.fill_direction);
@@ -113,9 +119,9 @@ std::vector<Vec3d> next_view_candidates(const Box3d& nav, const std::vector<Samp
 
 }  // namespace
 
-void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& source, ChunkRenderer& renderer) {
+void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& source, CubeSampler& sampler) {
   StageTimer timer(work, "sample");
-  renderer.set_shading(shading_lights(config.shading, config.up == "y" ? Vec3d{0, 1, 0} : Vec3d{0, 0, 1}));
+  sampler.set_shading(shading_lights(config.shading, config.up == "y" ? Vec3d{0, 1, 0} : Vec3d{0, 0, 1}));
   SampleParams p;
   p.face_size = config.face_size;
   p.supersample = config.supersample;
@@ -136,7 +142,7 @@ void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& sou
   const auto take = [&](const Vec3d& eye) {
     const auto t0 = Clock::now();
     SampleWork s;
-    s.cube = sample_cube(eye, discard_box, p, source, renderer);
+    s.cube = sampler.sample(eye, discard_box, p, source);
     s.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     work.samples.push_back(std::move(s));
   };

@@ -2,8 +2,8 @@
 // parameter/input hashes that make reruns resumable, and the assembly of a
 // cell database row. Stages run in the order
 //   cull_box -> sample -> depth_mesh -> simplify -> encode
-// and the runner schedules them (sample needs a GL renderer; the others are
-// plain CPU work). A stage that throws turns the cell into a failed row whose
+// and the runner schedules them (sample needs a CubeSampler, one per thread;
+// the others are plain CPU work). A stage that throws turns the cell into a failed row whose
 // message names the cell and the stage.
 #pragma once
 
@@ -22,7 +22,7 @@
 
 namespace cellbake {
 
-class ChunkRenderer;
+class CubeSampler;
 
 // Bump a stage's version when its output changes for the same inputs: every
 // cell that used it is then recomputed on the next bake.
@@ -73,7 +73,8 @@ struct CellWork {
 // Stage steps. Each fills its part of `work` and records its own seconds;
 // each throws on failure (the runner catches via run_stage below).
 void run_cull_box(CellWork& work, const BakeConfig& config, const ChunkSource& source);
-void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& source, ChunkRenderer& renderer);
+// Takes the cell's samples with `sampler` (whichever backend it is).
+void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& source, CubeSampler& sampler);
 void run_depth_mesh(CellWork& work, const BakeConfig& config);
 void run_simplify(CellWork& work, const BakeConfig& config);
 void run_encode(CellWork& work, const BakeConfig& config);

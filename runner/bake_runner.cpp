@@ -14,7 +14,7 @@
 #include "pipeline/cell_job.h"
 #include "runner/progress.h"
 #include "runner/shards.h"
-#include "stages/render/chunk_renderer.h"
+#include "pipeline/sample_backend.h"
 #include "storage/cell_db.h"
 #include "storage/geometry_store.h"
 
@@ -78,7 +78,10 @@ BakeSummary run_bake(const BakeConfig& config, const BakeOptions& options) {
 
   tbb::task_arena arena(threads);
   arena.execute([&] {
-    tbb::enumerable_thread_specific<std::unique_ptr<ChunkRenderer>> renderers;
+    // One sampler per worker thread; the Embree backend's BVH cache is shared by all of them.
+    const CubeSamplerFactory samplers(parse_sample_backend(config.sample_backend),
+                                      std::size_t(config.embree_cache_mb) << 20);
+    tbb::enumerable_thread_specific<std::unique_ptr<CubeSampler>> thread_samplers;
     tbb::flow::graph g;
     tbb::flow::input_node<WorkPtr> source(g, [&](tbb::flow_control& fc) -> WorkPtr {
       const std::size_t i = next++;
@@ -96,18 +99,15 @@ BakeSummary run_bake(const BakeConfig& config, const BakeOptions& options) {
     });
     tbb::flow::function_node<WorkPtr, WorkPtr> sample(g, std::size_t(threads), [&](WorkPtr w) {
       run_stage(*w, "sample", [&] {
-        auto& renderer = renderers.local();
-        if (!renderer) {
-          // Drawing goes to framebuffer objects; the default framebuffer is never used.
-          renderer = std::make_unique<ChunkRenderer>(create_gl_context(GlBackend::osmesa, 1, 1));
-        }
+        auto& sampler = thread_samplers.local();
+        if (!sampler) sampler = samplers.make();
         try {
-          run_sample(*w, config, store, *renderer);
+          run_sample(*w, config, store, *sampler);
         } catch (...) {
-          renderer->release_context();
+          sampler->end_work();
           throw;
         }
-        renderer->release_context();  // renderers are destroyed on another thread
+        sampler->end_work();  // samplers are destroyed on another thread
       });
       return w;
     });

@@ -30,7 +30,9 @@ bool strictly_inside(const Box3d& inner, const Box3d& outer) {
   return true;
 }
 
-void validate(const Vec3d& eye, const SampleParams& p) {
+}  // namespace
+
+void validate_sample_inputs(const Vec3d& eye, const SampleParams& p) {
   if (!is_finite(eye)) throw std::invalid_argument("sample: eye is not finite");
   if (p.face_size < 1) throw std::invalid_argument("sample: face_size must be >= 1, got " + std::to_string(p.face_size));
   if (p.supersample < 1)
@@ -42,8 +44,6 @@ void validate(const Vec3d& eye, const SampleParams& p) {
   if (!(p.depth_agreement >= 0))
     throw std::invalid_argument("sample: depth_agreement must be >= 0, got " + std::to_string(p.depth_agreement));
 }
-
-}  // namespace
 
 std::vector<ChunkRef> chunks_in_face(int face, const Vec3d& eye, const Box3d& cull_box, double near_plane,
                                      const ChunkSource& source) {
@@ -122,7 +122,7 @@ CubeFace downsample_face(const std::vector<Rgba8>& color, const std::vector<floa
 
 CubeSample sample_cube(const Vec3d& eye, const Box3d& cull_box, const SampleParams& params,
                        const ChunkSource& source, ChunkRenderer& renderer) {
-  validate(eye, params);
+  validate_sample_inputs(eye, params);
   const int render_size = params.face_size * params.supersample;
   const ChunkLoader load = [&source](std::int64_t id) { return source.load(id); };
   CubeSample sample;

@@ -34,6 +34,12 @@ struct SampleParams {
   double near_plane = 0.01;  // metres along each face's forward axis; nearer geometry is clipped
 };
 
+// Throws std::invalid_argument unless `eye` is finite and `params` are valid
+// (face_size, supersample >= 1 with face_size * supersample <= 16384, a
+// positive finite near plane, depth_agreement >= 0). Every sampling backend
+// checks its inputs with it.
+void validate_sample_inputs(const Vec3d& eye, const SampleParams& params);
+
 // The chunks that can contribute to cube face `face` (0..5) seen from `eye`:
 // those returned by source.query() for the box around the face's frustum out
 // to the model bounds, whose bounds then meet the frustum (four side planes

@@ -1,0 +1,54 @@
+// Which backend answers the sample stage (config `sample.backend`, issue #12),
+// and the factory that gives each bake worker thread its CubeSampler
+// (stages/cube_sampler.h): "osmesa" and "egl" rasterise with ChunkRenderer on
+// a GL context of that kind, "embree" ray-casts on the CPU through one BVH
+// cache shared by all of a bake's samplers, "auto" picks Embree (the GL
+// backends are for GPUs; see README.md "Sampling backends").
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <string>
+
+#include "stages/cube_sampler.h"
+#include "stages/raycast/chunk_bvh_cache.h"
+
+namespace cellbake {
+
+enum class SampleBackend { osmesa, egl, embree, automatic };
+
+// "osmesa" | "egl" | "embree" | "auto", and back. parse throws
+// std::invalid_argument naming the accepted values.
+const char* sample_backend_name(SampleBackend backend);
+SampleBackend parse_sample_backend(const std::string& name);
+
+// The backend `backend` stands for on this machine: itself, or for
+// `automatic` Embree.
+SampleBackend resolve_sample_backend(SampleBackend backend);
+
+// What the backend's pixels depend on, for the bake hash: "gl" for osmesa and
+// egl (the same shaders; the rasteriser's rules), "embree" for the ray caster
+// (pixel-centre rays). `automatic` is resolved first.
+const char* sample_backend_pixels(SampleBackend backend);
+
+// Makes one sampler per worker thread for one bake (one model). Thread-safe.
+class CubeSamplerFactory {
+ public:
+  // `embree_cache_bytes`: the byte cap of the Embree BVH cache (unused by the
+  // GL backends). Throws std::runtime_error when the backend is unavailable
+  // in this build or Embree fails to start.
+  CubeSamplerFactory(SampleBackend backend, std::size_t embree_cache_bytes);
+  // A new sampler (for GL backends: a new context, current on the calling
+  // thread). Throws std::runtime_error when the context cannot be created.
+  std::unique_ptr<CubeSampler> make() const;
+  // The resolved backend.
+  SampleBackend backend() const { return backend_; }
+  // The shared Embree BVH cache (null for GL backends).
+  const ChunkBvhCache* bvh_cache() const { return cache_.get(); }
+
+ private:
+  SampleBackend backend_;
+  std::shared_ptr<ChunkBvhCache> cache_;
+};
+
+}  // namespace cellbake

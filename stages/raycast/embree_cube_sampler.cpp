@@ -1,0 +1,158 @@
+// Ray-cast panoramic samples (issue #12). Embree 3: Wald et al. 2014, "Embree:
+// a kernel framework for efficient CPU ray tracing", ACM TOG 33(4); coherent
+// streams: Fuetterling et al. 2015, JCGT 4(5); https://www.embree.org/api.html.
+#include "stages/raycast/embree_cube_sampler.h"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "stages/raycast/instance_scene.h"
+#include "stages/raycast/ray_segments.h"
+
+namespace cellbake {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+constexpr unsigned kStream = 1024;  // rays per rtcIntersect1M call
+
+void init_ray(RTCRayHit& r, const Vec3d& dir, float tnear, float tfar, unsigned id) {
+  r.ray.org_x = r.ray.org_y = r.ray.org_z = 0;
+  r.ray.dir_x = static_cast<float>(dir.x);
+  r.ray.dir_y = static_cast<float>(dir.y);
+  r.ray.dir_z = static_cast<float>(dir.z);
+  r.ray.tnear = tnear;
+  r.ray.tfar = tfar;
+  r.ray.time = 0;
+  r.ray.mask = 0xFFFFFFFFu;
+  r.ray.id = id;
+  r.ray.flags = 0;
+  r.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  r.hit.primID = RTC_INVALID_GEOMETRY_ID;
+  r.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+}
+
+}  // namespace
+
+std::vector<std::uint32_t> block_order(int size) {
+  std::vector<std::uint32_t> order;
+  order.reserve(std::size_t(size) * std::size_t(size));
+  for (int band = 0; band < size; band += 4)
+    for (int block = 0; block < size; block += 4)
+      for (int row = band; row < std::min(size, band + 4); ++row)
+        for (int col = block; col < std::min(size, block + 4); ++col)
+          order.push_back(std::uint32_t(row) * std::uint32_t(size) + std::uint32_t(col));
+  return order;
+}
+
+EmbreeCubeSampler::EmbreeCubeSampler(std::shared_ptr<ChunkBvhCache> cache)
+    : cache_(std::move(cache)), shader_(shading_lights(ShadingParams{}, Vec3d{0, 0, 1})) {
+  if (!cache_) throw std::invalid_argument("embree_cube_sampler: null BVH cache");
+}
+
+CubeSample EmbreeCubeSampler::sample(const Vec3d& eye, const Box3d& cull_box, const SampleParams& params,
+                                     const ChunkSource& source) {
+  validate_sample_inputs(eye, params);
+  auto t0 = Clock::now();
+  const std::vector<ChunkRef> refs = cube_chunks(eye, cull_box, params.near_plane, source);
+  std::vector<std::shared_ptr<const ChunkBvh>> bvhs = cache_->acquire(refs, source);
+  stats_.gather_seconds += seconds_since(t0);
+  t0 = Clock::now();
+  const InstanceScene scene(*cache_, std::move(bvhs), eye);
+  stats_.scene_seconds += seconds_since(t0);
+  stats_.instances += scene.size();
+  t0 = Clock::now();
+
+  const int size = params.face_size * params.supersample;
+  if (order_size_ != size) {
+    order_ = block_order(size);
+    order_size_ = size;
+  }
+  const EyeBox box = eye_relative_box(cull_box, eye);
+  const std::size_t pixels = std::size_t(size) * std::size_t(size);
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  std::vector<RTCRayHit> rays(kStream), again(kStream);
+  std::vector<float> second(kStream);  // where each ray's second segment starts (inf: none)
+  std::vector<Rgba8> color;
+  std::vector<float> depth;
+  CubeSample sample;
+  sample.eye = eye;
+  for (int face = 0; face < kCubeFaces; ++face) {
+    const FaceBasis b = cube_face_basis(face);
+    color.assign(pixels, Rgba8{0, 0, 0, 0});
+    depth.assign(pixels, kBackgroundDepth);
+    for (std::size_t start = 0; start < pixels; start += kStream) {
+      const unsigned count = unsigned(std::min<std::size_t>(kStream, pixels - start));
+      for (unsigned k = 0; k < count; ++k) {
+        const std::uint32_t p = order_[start + k];
+        const int row = int(p / std::uint32_t(size)), col = int(p % std::uint32_t(size));
+        const double s = 2.0 * (col + 0.5) / size - 1.0, t = 1.0 - 2.0 * (row + 0.5) / size;
+        const Vec3d dir = cube_face_direction(b, s, t);
+        const RaySegments seg = ray_segments(dir, box, params.near_plane);
+        init_ray(rays[k], dir, seg.t0, seg.t1, p);
+        second[k] = seg.two ? seg.t2 : std::numeric_limits<float>::infinity();
+      }
+      rtcIntersect1M(scene.scene(), &context, rays.data(), count, sizeof(RTCRayHit));
+      stats_.rays += count;
+      // Rays that missed their first segment and have a second one: trace that.
+      unsigned missed = 0;
+      for (unsigned k = 0; k < count; ++k) {
+        if (rays[k].hit.geomID != RTC_INVALID_GEOMETRY_ID || std::isinf(second[k])) continue;
+        RTCRayHit& r = again[missed++];
+        r = rays[k];
+        r.ray.tnear = second[k];
+        r.ray.tfar = std::numeric_limits<float>::infinity();
+        r.ray.id = k;
+        r.hit.geomID = r.hit.primID = r.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+      }
+      if (missed > 0) {
+        rtcIntersect1M(scene.scene(), &context, again.data(), missed, sizeof(RTCRayHit));
+        stats_.second_rays += missed;
+        for (unsigned m = 0; m < missed; ++m) rays[again[m].ray.id] = again[m];
+      }
+      for (unsigned k = 0; k < count; ++k) {
+        const RTCRayHit& r = rays[k];
+        if (r.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+        const ChunkBvh& hit_chunk = scene.instance(r.hit.instID[0]);
+        SurfaceHit hit;
+        hit.chunk = hit_chunk.chunk.get();
+        hit.triangle = r.hit.primID;
+        hit.u = r.hit.u;
+        hit.v = r.hit.v;
+        hit.geometric_normal = {r.hit.Ng_x, r.hit.Ng_y, r.hit.Ng_z};  // instances only translate
+        const float dir_length =
+            std::sqrt(r.ray.dir_x * r.ray.dir_x + r.ray.dir_y * r.ray.dir_y + r.ray.dir_z * r.ray.dir_z);
+        hit.footprint = r.ray.tfar * dir_length * 2.0f / float(size);
+        const std::uint32_t p = order_[start + k];
+        color[p] = shader_.shade(hit);
+        depth[p] = r.ray.tfar;
+        ++stats_.hits;
+      }
+    }
+    CubeFace& out = sample.faces[std::size_t(face)];
+    if (params.supersample == 1) {
+      out.size = params.face_size;
+      out.color = std::move(color);
+      out.depth = std::move(depth);
+      color.clear();
+      depth.clear();
+    } else {
+      out = downsample_face(color, depth, params.face_size, params.supersample, params.depth_agreement);
+    }
+  }
+  cache_->check_device("tracing a cube map");
+  stats_.trace_seconds += seconds_since(t0);
+  ++stats_.cube_maps;
+  return sample;
+}
+
+}  // namespace cellbake

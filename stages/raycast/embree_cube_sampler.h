@@ -1,0 +1,71 @@
+// The Embree sampling backend (issue #12): the cube map of everything outside
+// the cull box by ray casting instead of rasterising. Per cube map: the chunks
+// some face can see (cube_chunks) get their bottom-level BVHs from a cache
+// shared by all sampling threads (stages/raycast/chunk_bvh_cache.h), a
+// top-level scene instances them in the eye's frame (instance_scene.h), and
+// one ray per (sub)pixel centre, in the directions of stages/cube_map.h at the
+// supersampled resolution, is traced in coherent streams (rtcIntersect1M with
+// RTC_INTERSECT_CONTEXT_FLAG_COHERENT, rays ordered in 4 x 4 pixel blocks).
+// Each ray covers [near plane, inf) minus the part strictly inside the cull box
+// (ray_segments.h); its depth is the hit's t, which is planar depth because
+// the directions have forward component 1; its colour is hit_shading.h's.
+// Supersampled faces go through downsample_face like the GL path's.
+//
+// Differences from the GL rasteriser are those of point sampling at pixel
+// centres versus rasterisation rules on triangle edges and float rounding
+// (tests/test_sample_backends.cpp states the tolerance).
+//
+// Embree 3: Wald et al. 2014, ACM TOG 33(4); ray streams: Fuetterling et al.
+// 2015, "Efficient ray tracing kernels for modern CPU architectures", JCGT 4(5);
+// API https://www.embree.org/api.html (rtcIntersect1M).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "stages/cube_sampler.h"
+#include "stages/raycast/chunk_bvh_cache.h"
+#include "stages/raycast/hit_shading.h"
+
+namespace cellbake {
+
+struct EmbreeSamplerStats {
+  std::uint64_t cube_maps = 0;
+  std::uint64_t rays = 0;           // primary segments traced
+  std::uint64_t second_rays = 0;    // second segments (eye outside the cull box)
+  std::uint64_t hits = 0;
+  std::uint64_t instances = 0;      // chunk instances over all cube maps
+  double gather_seconds = 0;        // finding chunks + acquiring their BVHs (builds included)
+  double scene_seconds = 0;         // building top-level scenes
+  double trace_seconds = 0;         // ray setup + tracing + shading + downsampling
+};
+
+class EmbreeCubeSampler final : public CubeSampler {
+ public:
+  // Samples through `cache` (not null; shared with other threads' samplers).
+  explicit EmbreeCubeSampler(std::shared_ptr<ChunkBvhCache> cache);
+
+  void set_shading(const ShadingLights& lights) override { shader_ = HitShader(lights); }
+  CubeSample sample(const Vec3d& eye, const Box3d& cull_box, const SampleParams& params,
+                    const ChunkSource& source) override;
+  std::string backend_name() const override { return "embree"; }
+
+  const EmbreeSamplerStats& stats() const { return stats_; }
+  const ChunkBvhCache& cache() const { return *cache_; }
+
+ private:
+  std::shared_ptr<ChunkBvhCache> cache_;
+  HitShader shader_;
+  EmbreeSamplerStats stats_;
+  std::vector<std::uint32_t> order_;  // pixels of a render_size^2 face in 4 x 4 block order
+  int order_size_ = 0;
+};
+
+// The pixels of a size x size face (row-major indices) in tracing order: bands
+// of 4 rows, each band in 4 x 4 blocks left to right, row-major inside a block
+// (so consecutive groups of 16 rays are compact 4 x 4 packets).
+std::vector<std::uint32_t> block_order(int size);
+
+}  // namespace cellbake

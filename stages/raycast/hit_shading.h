@@ -1,0 +1,50 @@
+// The colour of a ray hit, computed as ChunkRenderer's fragment shader does
+// (the light model of stages/render/shading.h), so that the Embree and GL
+// sampling backends produce the same pixels:
+//   base  = the triangle's vertex colours at the hit's barycentric coordinates
+//           (barycentric in 3D = GL's perspective-correct interpolation);
+//   n     = the chunk's per-vertex normals at the hit, normalised, when it has
+//           them, else the flat face normal;
+//   rgb   = clamp(base * (ambient + |n . key| * key_strength + |n . fill| * fill_strength), 0, 1)
+//           (unlit: base as it is; a zero normal also keeps base), alpha = base alpha,
+// in float and rounded to 8 bits like a GL unorm colour attachment.
+// Textures (the appearance issue) are meant to enter in one place,
+// base_color(): material = chunk.materials[triangle] -> texture, uv from the
+// same barycentrics, mip level from SurfaceHit::footprint.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "stages/geometry.h"
+#include "stages/render/shading.h"
+
+namespace cellbake {
+
+// One ray hit on a chunk triangle, with Embree's barycentric convention:
+// point = (1 - u - v) p0 + u p1 + v p2 for corners p0, p1, p2 = indices
+// 3 * triangle + 0, 1, 2.
+struct SurfaceHit {
+  const Chunk* chunk = nullptr;
+  std::uint32_t triangle = 0;
+  float u = 0, v = 0;
+  Vec3f geometric_normal;  // any length and orientation (Embree's Ng)
+  float footprint = 0;     // world-space width of the pixel at the hit, for a texture's mip level
+};
+
+class HitShader {
+ public:
+  // Throws std::invalid_argument for non-unit directions or negative or
+  // non-finite strengths (the checks of ChunkRenderer::set_shading).
+  explicit HitShader(const ShadingLights& lights);
+  // The pixel colour of `hit` (chunk set, triangle in range).
+  Rgba8 shade(const SurfaceHit& hit) const;
+  // The unlit surface colour at the hit, RGBA in [0, 1].
+  std::array<float, 4> base_color(const SurfaceHit& hit) const;
+
+ private:
+  bool lit_;
+  float key_[3], fill_[3], ambient_;  // directions times strengths, as the shader's uniforms
+};
+
+}  // namespace cellbake

@@ -1,0 +1,53 @@
+// The top-level Embree scene of one cube map: an instance of each needed
+// chunk's bottom-level scene (stages/raycast/chunk_bvh_cache.h), translated by
+// (chunk origin - eye) computed in double and rounded to float once, exactly
+// as ChunkRenderer translates chunks for the GPU. Rays then start at the
+// origin of this eye-relative frame, so models 1e6 m from the world origin
+// keep the precision of their stored float positions.
+//
+// Instancing (two-level BVH): Wald et al. 2014, "Embree: a kernel framework
+// for efficient CPU ray tracing", ACM TOG 33(4); API
+// https://www.embree.org/api.html (RTC_GEOMETRY_TYPE_INSTANCE).
+#pragma once
+
+#include <embree3/rtcore.h>
+
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "stages/chunk_source.h"
+#include "stages/geometry.h"
+#include "stages/raycast/chunk_bvh_cache.h"
+
+namespace cellbake {
+
+// The chunks a cube map at `eye` may show: the union over the six faces of
+// chunks_in_face() (stages/sample.h), sorted by id. Loads nothing.
+std::vector<ChunkRef> cube_chunks(const Vec3d& eye, const Box3d& cull_box, double near_plane,
+                                  const ChunkSource& source);
+
+class InstanceScene {
+ public:
+  // Builds and commits the scene on `device`: instance i (Embree instance id
+  // i) is chunks[i] (not null) translated to the frame of `eye`. Holds the
+  // chunks until destroyed. Throws std::runtime_error on Embree errors.
+  InstanceScene(const ChunkBvhCache& cache, std::vector<std::shared_ptr<const ChunkBvh>> chunks, const Vec3d& eye,
+                RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM);
+  ~InstanceScene();
+  InstanceScene(const InstanceScene&) = delete;
+  InstanceScene& operator=(const InstanceScene&) = delete;
+
+  RTCScene scene() const { return scene_; }
+  // The chunk of instance `id` (an RTCHit::instID[0]).
+  const ChunkBvh& instance(unsigned id) const { return *chunks_[id]; }
+  std::size_t size() const { return chunks_.size(); }
+
+ private:
+  void attach_and_commit(const ChunkBvhCache& cache, const Vec3d& eye, RTCBuildQuality quality);
+
+  RTCScene scene_ = nullptr;
+  std::vector<std::shared_ptr<const ChunkBvh>> chunks_;
+};
+
+}  // namespace cellbake
