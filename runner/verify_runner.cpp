@@ -191,7 +191,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
       if (!drawer) {
         SceneDrawerParams dp;
         dp.tdm_cache_bytes = std::size_t{256} << 20;
-        drawer = std::make_unique<SceneDrawer>(std::shared_ptr<GlContext>(create_gl_context(GlBackend::osmesa, 1, 1)),
+        drawer = std::make_unique<SceneDrawer>(std::shared_ptr<GlContext>(create_headless_gl_context(1, 1)),
                                                store, dp);
         drawer->set_shading(shading);  // the bake's light model: truth lit like the far field
       }

@@ -35,7 +35,7 @@ ViewSession::ViewSession(const std::filesystem::path& database, const std::files
       index_(db_),
       up_(up_axis(db_.meta("up").value_or("z"))),
       far_budget_(far_budget_of_config_text(db_.meta("config").value_or("")).value_or(SampleSelectionParams{}.far_budget)),
-      drawer_(std::make_unique<SceneDrawer>(std::shared_ptr<GlContext>(create_gl_context(GlBackend::osmesa, 1, 1)),
+      drawer_(std::make_unique<SceneDrawer>(std::shared_ptr<GlContext>(create_headless_gl_context(1, 1)),
                                             *store_)) {
   drawer_->set_shading(shading_lights(shading_of_config_text(db_.meta("config").value_or("")), up_));
 }

@@ -1,7 +1,8 @@
 // A headless viewing session over one cell database: finds the view cell of an
 // eye, decodes its far field (falling back to ground truth, with a warning,
 // when the cell is missing, failed or corrupt), and renders impostor and/or
-// ground-truth frames on an offscreen (OSMesa) context.
+// ground-truth frames on an offscreen context (OSMesa when the build has it,
+// else EGL: create_headless_gl_context).
 #pragma once
 
 #include <cstdint>
