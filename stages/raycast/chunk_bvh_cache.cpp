@@ -129,6 +129,7 @@ std::shared_ptr<const ChunkBvh> ChunkBvhCache::build(std::int64_t id, const Chun
 
 std::vector<std::shared_ptr<const ChunkBvh>> ChunkBvhCache::acquire(std::span<const ChunkRef> refs,
                                                                     const ChunkSource& source) {
+  trim();
   std::vector<Result> results(refs.size());
   // Claim and build one chunk at a time, so that concurrent callers walking
   // the same ids split the builds between them; wait only at the end.
@@ -171,9 +172,12 @@ std::vector<std::shared_ptr<const ChunkBvh>> ChunkBvhCache::acquire(std::span<co
   std::vector<std::shared_ptr<const ChunkBvh>> out;
   out.reserve(refs.size());
   for (Result& r : results) out.push_back(r.get());  // rethrows another caller's build error
+  return out;
+}
+
+void ChunkBvhCache::trim() {
   std::lock_guard lock(mutex_);
   evict_beyond_cap();
-  return out;
 }
 
 void ChunkBvhCache::evict_beyond_cap() {

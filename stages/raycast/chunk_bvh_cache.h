@@ -89,6 +89,11 @@ class ChunkBvhCache {
   // whose build failed is not cached.
   std::vector<std::shared_ptr<const ChunkBvh>> acquire(std::span<const ChunkRef> refs, const ChunkSource& source);
 
+  // Drops least recently used BVHs that nobody else holds until the cache is
+  // under its cap (acquire() does this first too). Call when a cube map has
+  // released its BVHs.
+  void trim();
+
   // Throws std::runtime_error with Embree's last error on this device, if any.
   void check_device(const char* what) const;
 

@@ -57,8 +57,8 @@ EmbreeCubeSampler::EmbreeCubeSampler(std::shared_ptr<ChunkBvhCache> cache)
   if (!cache_) throw std::invalid_argument("embree_cube_sampler: null BVH cache");
 }
 
-CubeSample EmbreeCubeSampler::sample(const Vec3d& eye, const Box3d& cull_box, const SampleParams& params,
-                                     const ChunkSource& source) {
+CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box, const SampleParams& params,
+                                         const ChunkSource& source) {
   validate_sample_inputs(eye, params);
   auto t0 = Clock::now();
   const std::vector<ChunkRef> refs = cube_chunks(eye, cull_box, params.near_plane, source);
@@ -153,6 +153,13 @@ CubeSample EmbreeCubeSampler::sample(const Vec3d& eye, const Box3d& cull_box, co
   stats_.trace_seconds += seconds_since(t0);
   ++stats_.cube_maps;
   return sample;
+}
+
+CubeSample EmbreeCubeSampler::sample(const Vec3d& eye, const Box3d& cull_box, const SampleParams& params,
+                                     const ChunkSource& source) {
+  CubeSample result = trace_cube(eye, cull_box, params, source);
+  cache_->trim();  // the cube map's scene is gone: its BVHs may be evicted now
+  return result;
 }
 
 }  // namespace cellbake

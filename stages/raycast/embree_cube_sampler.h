@@ -56,6 +56,9 @@ class EmbreeCubeSampler final : public CubeSampler {
   const ChunkBvhCache& cache() const { return *cache_; }
 
  private:
+  CubeSample trace_cube(const Vec3d& eye, const Box3d& cull_box, const SampleParams& params,
+                        const ChunkSource& source);
+
   std::shared_ptr<ChunkBvhCache> cache_;
   HitShader shader_;
   EmbreeSamplerStats stats_;
