@@ -14,6 +14,12 @@
 //   CELLBAKE_BENCH_EYES="18,14,1.7;22,14,1.7" LP_NUM_THREADS=1 build/bench/bench_sample
 // Without CELLBAKE_BENCH_STORE it is skipped; without CELLBAKE_BENCH_EYES the
 // eyes are 8 points along the model's x midline at 1/4 of its z extent.
+//
+// The *Embree variants run the same cube maps through the Embree ray-casting
+// backend (stages/raycast/embree_cube_sampler.h, issue #12) side by side:
+// warm = BVHs cached (a bake worker's steady state), cold = a fresh BVH cache
+// per cube map (builds included). For medians of 5 runs pass
+//   --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
@@ -27,6 +33,7 @@
 #include "stages/render/chunk_renderer.h"
 #include "stages/render/gl_context.h"
 #include "stages/cull_box.h"
+#include "stages/raycast/embree_cube_sampler.h"
 #include "stages/sample.h"
 #include "storage/geometry_store.h"
 #include "tests/fixture_chunk_source.h"
@@ -117,6 +124,83 @@ void BM_SampleCubeCold(benchmark::State& state) {
 }
 BENCHMARK(BM_SampleCubeCold)->Arg(512)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
+std::unique_ptr<EmbreeCubeSampler> make_embree(ChunkBvhCacheParams params = {}) {
+  return std::make_unique<EmbreeCubeSampler>(std::make_shared<ChunkBvhCache>(params));
+}
+
+void report_embree(benchmark::State& state, const EmbreeCubeSampler& sampler, const EmbreeSamplerStats& before) {
+  const EmbreeSamplerStats& s = sampler.stats();
+  const double cube_maps = static_cast<double>(s.cube_maps - before.cube_maps);
+  state.counters["instances_per_cube"] = static_cast<double>(s.instances - before.instances) / cube_maps;
+  state.counters["gather_ms_per_cube"] = 1e3 * (s.gather_seconds - before.gather_seconds) / cube_maps;
+  state.counters["scene_ms_per_cube"] = 1e3 * (s.scene_seconds - before.scene_seconds) / cube_maps;
+  state.counters["trace_ms_per_cube"] = 1e3 * (s.trace_seconds - before.trace_seconds) / cube_maps;
+  state.counters["bvh_device_MiB"] = static_cast<double>(sampler.cache().stats().device_bytes) / 1048576.0;
+}
+
+void BM_SampleCubeWarmEmbree(benchmark::State& state) {
+  const auto& source = scene();
+  SampleParams params;
+  params.face_size = static_cast<int>(state.range(0));
+  params.supersample = static_cast<int>(state.range(1));
+  auto sampler = make_embree();
+  sampler->sample(kEye, kCullBox, params, source);  // build every BVH once
+  const EmbreeSamplerStats before = sampler->stats();
+  for (auto _ : state) benchmark::DoNotOptimize(sampler->sample(kEye, kCullBox, params, source));
+  report_embree(state, *sampler, before);
+}
+BENCHMARK(BM_SampleCubeWarmEmbree)->Args({512, 1})->Args({512, 2})->Args({64, 1})->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+
+// A fresh BVH cache per cube map: every chunk BVH built (Embree may build on
+// several threads; the CPU time counts them all).
+void BM_SampleCubeColdEmbree(benchmark::State& state) {
+  const auto& source = scene();
+  SampleParams params;
+  params.face_size = static_cast<int>(state.range(0));
+  std::uint64_t triangles = 0;
+  for (auto _ : state) {
+    auto sampler = make_embree();
+    benchmark::DoNotOptimize(sampler->sample(kEye, kCullBox, params, source));
+    triangles += sampler->cache().stats().triangles_built;
+    state.PauseTiming();
+    sampler.reset();
+    state.ResumeTiming();
+  }
+  state.counters["tris_built_per_cube"] = static_cast<double>(triangles) / static_cast<double>(state.iterations());
+}
+BENCHMARK(BM_SampleCubeColdEmbree)->Arg(512)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+
+// The store's cells with their cull boxes (as bench_raycast_raw uses them too).
+std::vector<std::pair<Vec3d, Box3d>> store_cells(const GeometryStore& store) {
+  std::vector<std::pair<Vec3d, Box3d>> cells;
+  for (const Vec3d& eye : bench_eyes(store.model_bounds())) {
+    CullBoxParams cull;
+    cull.min_half_size = 2.0;  // 4 m cells, as in configs/plant-demo.toml
+    cells.emplace_back(eye, Box3d::cube(eye, find_cull_box(eye, cull, store).half_size));
+  }
+  return cells;
+}
+
+void BM_SampleStoreEmbree(benchmark::State& state) {
+  const char* path = std::getenv("CELLBAKE_BENCH_STORE");
+  if (!path) {
+    state.SkipWithError("CELLBAKE_BENCH_STORE is not set");
+    return;
+  }
+  const GeometryStore store(path);
+  const auto cells = store_cells(store);
+  SampleParams params;
+  params.face_size = static_cast<int>(state.range(0));
+  auto sampler = make_embree();
+  for (const auto& [eye, cull_box] : cells) sampler->sample(eye, cull_box, params, store);  // build BVHs
+  const EmbreeSamplerStats before = sampler->stats();
+  for (auto _ : state)
+    for (const auto& [eye, cull_box] : cells) benchmark::DoNotOptimize(sampler->sample(eye, cull_box, params, store));
+  state.counters["cells"] = static_cast<double>(cells.size());
+  report_embree(state, *sampler, before);
+}
+BENCHMARK(BM_SampleStoreEmbree)->Arg(512)->Arg(128)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime()->Iterations(2);
+
 void BM_SampleStore(benchmark::State& state) {
   const char* path = std::getenv("CELLBAKE_BENCH_STORE");
   if (!path) {
@@ -124,12 +208,7 @@ void BM_SampleStore(benchmark::State& state) {
     return;
   }
   const GeometryStore store(path);
-  std::vector<std::pair<Vec3d, Box3d>> cells;
-  for (const Vec3d& eye : bench_eyes(store.model_bounds())) {
-    CullBoxParams cull;
-    cull.min_half_size = 2.0;  // 4 m cells, as in configs/plant-demo.toml
-    cells.emplace_back(eye, Box3d::cube(eye, find_cull_box(eye, cull, store).half_size));
-  }
+  const auto cells = store_cells(store);
   SampleParams params;
   params.face_size = static_cast<int>(state.range(0));
   auto renderer = make_renderer();

@@ -1,6 +1,7 @@
-// Embree 3 bottom-level scenes per chunk with an LRU byte cap. Embree: Wald et
-// al. 2014, "Embree: a kernel framework for efficient CPU ray tracing", ACM TOG
-// 33(4); API: https://www.embree.org/api.html.
+// Embree 3 bottom-level scenes per chunk group with an LRU byte cap. Embree:
+// Wald et al. 2014, "Embree: a kernel framework for efficient CPU ray tracing",
+// ACM TOG 33(4); API: https://www.embree.org/api.html. Groups by median
+// kd-splits: Wald & Havran 2006, "On building fast kd-trees for ray tracing".
 #include "stages/raycast/chunk_bvh_cache.h"
 
 #include <algorithm>
@@ -43,9 +44,36 @@ void validate_chunk(const Chunk& chunk) {
     if (i >= n) throw std::runtime_error(where + " index " + std::to_string(i) + " out of range");
 }
 
+// Median kd-split of chunk refs on the longest axis of their centres' bounds
+// until each part holds at most `cap` triangles (or one chunk).
+void split_groups(std::vector<ChunkRef>& refs, std::size_t begin, std::size_t end, std::size_t cap,
+                  std::vector<std::vector<std::int64_t>>& groups) {
+  std::size_t triangles = 0;
+  for (std::size_t i = begin; i < end; ++i) triangles += refs[i].triangle_count;
+  if (triangles <= cap || end - begin <= 1) {
+    std::vector<std::int64_t> ids;
+    for (std::size_t i = begin; i < end; ++i) ids.push_back(refs[i].id);
+    std::sort(ids.begin(), ids.end());
+    groups.push_back(std::move(ids));
+    return;
+  }
+  Box3d centres;
+  for (std::size_t i = begin; i < end; ++i) centres.expand(refs[i].bounds.center());
+  const Vec3d e = centres.extent();
+  const int axis = e.x >= e.y && e.x >= e.z ? 0 : (e.y >= e.z ? 1 : 2);
+  const std::size_t middle = begin + (end - begin) / 2;
+  std::nth_element(refs.begin() + std::ptrdiff_t(begin), refs.begin() + std::ptrdiff_t(middle),
+                   refs.begin() + std::ptrdiff_t(end), [axis](const ChunkRef& a, const ChunkRef& b) {
+                     const double ca = a.bounds.center()[axis], cb = b.bounds.center()[axis];
+                     return ca != cb ? ca < cb : a.id < b.id;  // deterministic
+                   });
+  split_groups(refs, begin, middle, cap, groups);
+  split_groups(refs, middle, end, cap, groups);
+}
+
 }  // namespace
 
-ChunkBvh::~ChunkBvh() {
+ChunkGroupBvh::~ChunkGroupBvh() {
   if (scene) rtcReleaseScene(scene);
 }
 
@@ -77,47 +105,80 @@ void ChunkBvhCache::check_device(const char* what) const {
                                                         std::to_string(static_cast<int>(error)) + ")");
 }
 
-std::shared_ptr<const ChunkBvh> ChunkBvhCache::build(std::int64_t id, const ChunkSource& source,
-                                                     std::size_t& chunk_bytes) {
+void ChunkBvhCache::partition(const ChunkSource& source) {
+  std::call_once(partitioned_, [&] {
+    std::vector<ChunkRef> refs = source.query(source.model_bounds());
+    std::erase_if(refs, [](const ChunkRef& r) { return r.bounds.empty(); });
+    std::vector<std::vector<std::int64_t>> groups;
+    if (!refs.empty()) split_groups(refs, 0, refs.size(), std::max<std::size_t>(1, params_.group_triangles), groups);
+    std::unordered_map<std::int64_t, std::size_t> group_of;
+    for (std::size_t g = 0; g < groups.size(); ++g)
+      for (std::int64_t id : groups[g]) group_of[id] = g;
+    std::lock_guard lock(mutex_);
+    members_ = std::move(groups);
+    group_of_ = std::move(group_of);
+  });
+}
+
+std::shared_ptr<const ChunkGroupBvh> ChunkBvhCache::build(std::size_t group, const ChunkSource& source,
+                                                          std::size_t& chunk_bytes) {
   const auto t0 = Clock::now();
-  std::shared_ptr<const Chunk> chunk = source.load(id);
+  auto bvh = std::make_shared<ChunkGroupBvh>();
+  Box3d bounds;
+  for (std::int64_t id : members_[group]) {  // members_ is immutable after partition()
+    std::shared_ptr<const Chunk> chunk = source.load(id);
+    if (!chunk) throw std::runtime_error("embree: source returned no chunk for id " + std::to_string(id));
+    if (chunk->id != id)
+      throw std::runtime_error("embree: source returned chunk " + std::to_string(chunk->id) + " for id " +
+                               std::to_string(id));
+    validate_chunk(*chunk);
+    bounds.expand(chunk->bounds);
+    bvh->chunks.push_back(std::move(chunk));
+  }
   const double load_seconds = seconds_since(t0);
-  if (!chunk) throw std::runtime_error("embree: source returned no chunk for id " + std::to_string(id));
-  if (chunk->id != id)
-    throw std::runtime_error("embree: source returned chunk " + std::to_string(chunk->id) + " for id " +
-                             std::to_string(id));
-  validate_chunk(*chunk);
-  auto bvh = std::make_shared<ChunkBvh>();
-  bvh->chunk = chunk;
+  bvh->origin = bounds.empty() ? Vec3d{} : bounds.center();
   bvh->scene = rtcNewScene(device_);
   if (!bvh->scene) check_device("rtcNewScene");
   rtcSetSceneFlags(bvh->scene, static_cast<RTCSceneFlags>(params_.scene_flags));
   rtcSetSceneBuildQuality(bvh->scene, params_.build_quality);
-  const std::size_t vertices = chunk->positions.size(), triangles = chunk->triangle_count();
-  if (triangles > 0) {
+  std::size_t triangles = 0;
+  chunk_bytes = 0;
+  for (std::size_t i = 0; i < bvh->chunks.size(); ++i) {
+    const Chunk& chunk = *bvh->chunks[i];
+    chunk_bytes += attribute_bytes(chunk);
+    const std::size_t vertices = chunk.positions.size(), count = chunk.triangle_count();
+    if (count == 0) continue;  // geometry ids stay chunk indices: this one is simply absent
+    triangles += count;
     RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
     if (!geometry) check_device("rtcNewGeometry");
     rtcSetGeometryBuildQuality(geometry, params_.build_quality);
     // Embree's own buffers (it pads them for its 16-byte vector loads).
     auto* position_buffer = static_cast<float*>(
         rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertices));
-    auto* index_buffer = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-        geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), triangles));
+    auto* index_buffer = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), count));
     if (!position_buffer || !index_buffer) {
       rtcReleaseGeometry(geometry);
       check_device("rtcSetNewGeometryBuffer");
-      throw std::runtime_error("embree: no buffers for chunk " + std::to_string(id));
+      throw std::runtime_error("embree: no buffers for chunk " + std::to_string(chunk.id));
     }
-    static_assert(sizeof(Vec3f) == 3 * sizeof(float));
-    std::memcpy(position_buffer, chunk->positions.data(), vertices * sizeof(Vec3f));
-    std::memcpy(index_buffer, chunk->indices.data(), chunk->indices.size() * sizeof(std::uint32_t));
+    // Chunk frame -> group frame in double, rounded to float once: a vertex
+    // that two chunks store at the same world position lands on the same
+    // float in the group, so shared edges across chunks stay watertight.
+    const Vec3d d = chunk.origin - bvh->origin;
+    for (std::size_t v = 0; v < vertices; ++v) {
+      const Vec3f& p = chunk.positions[v];
+      position_buffer[3 * v] = static_cast<float>(double(p.x) + d.x);
+      position_buffer[3 * v + 1] = static_cast<float>(double(p.y) + d.y);
+      position_buffer[3 * v + 2] = static_cast<float>(double(p.z) + d.z);
+    }
+    std::memcpy(index_buffer, chunk.indices.data(), chunk.indices.size() * sizeof(std::uint32_t));
     rtcCommitGeometry(geometry);
-    rtcAttachGeometryByID(bvh->scene, geometry, 0);
+    rtcAttachGeometryByID(bvh->scene, geometry, static_cast<unsigned>(i));
     rtcReleaseGeometry(geometry);
   }
   rtcCommitScene(bvh->scene);
-  check_device(("building the BVH of chunk " + std::to_string(id)).c_str());
-  chunk_bytes = attribute_bytes(*chunk);
+  check_device(("building the BVH of chunk group " + std::to_string(group)).c_str());
   const double build_seconds = seconds_since(t0);
   std::lock_guard lock(mutex_);
   ++stats_.builds;
@@ -127,50 +188,61 @@ std::shared_ptr<const ChunkBvh> ChunkBvhCache::build(std::int64_t id, const Chun
   return bvh;
 }
 
-std::vector<std::shared_ptr<const ChunkBvh>> ChunkBvhCache::acquire(std::span<const ChunkRef> refs,
-                                                                    const ChunkSource& source) {
+std::vector<std::shared_ptr<const ChunkGroupBvh>> ChunkBvhCache::acquire(std::span<const ChunkRef> refs,
+                                                                         const ChunkSource& source) {
+  partition(source);
   trim();
-  std::vector<Result> results(refs.size());
-  // Claim and build one chunk at a time, so that concurrent callers walking
-  // the same ids split the builds between them; wait only at the end.
-  for (std::size_t i = 0; i < refs.size(); ++i) {
-    const std::int64_t id = refs[i].id;
-    std::promise<std::shared_ptr<const ChunkBvh>> promise;
+  std::vector<std::size_t> groups;
+  groups.reserve(refs.size());
+  for (const ChunkRef& r : refs) {
+    auto it = group_of_.find(r.id);  // immutable after partition()
+    if (it == group_of_.end())
+      throw std::runtime_error("embree: chunk " + std::to_string(r.id) + " is not in the model's chunk list");
+    groups.push_back(it->second);
+  }
+  std::sort(groups.begin(), groups.end());
+  groups.erase(std::unique(groups.begin(), groups.end()), groups.end());
+  std::vector<Result> results(groups.size());
+  // Claim and build one group at a time, so that concurrent callers walking
+  // the same groups split the builds between them; wait only at the end.
+  for (std::size_t i = 0; i < groups.size(); ++i) {
+    const std::size_t group = groups[i];
+    std::promise<std::shared_ptr<const ChunkGroupBvh>> promise;
     {
       std::lock_guard lock(mutex_);
-      auto it = slots_.find(id);
+      auto it = slots_.find(group);
       if (it != slots_.end()) {
         lru_.splice(lru_.begin(), lru_, it->second.recency);
         results[i] = it->second.result;
         ++stats_.hits;
         continue;
       }
-      Slot& slot = slots_[id];
+      Slot& slot = slots_[group];
       slot.result = promise.get_future().share();
-      lru_.push_front(id);
+      lru_.push_front(group);
       slot.recency = lru_.begin();
       results[i] = slot.result;
     }
     std::size_t chunk_bytes = 0;
     try {
-      std::shared_ptr<const ChunkBvh> bvh = build(id, source, chunk_bytes);
+      std::shared_ptr<const ChunkGroupBvh> bvh = build(group, source, chunk_bytes);
       promise.set_value(std::move(bvh));
       std::lock_guard lock(mutex_);
-      Slot& slot = slots_.at(id);
+      Slot& slot = slots_.at(group);
       slot.built = true;
       slot.chunk_bytes = chunk_bytes;
       chunk_bytes_ += chunk_bytes;
     } catch (...) {
       promise.set_exception(std::current_exception());  // waiters see the error too
       std::lock_guard lock(mutex_);
-      auto it = slots_.find(id);
+      auto it = slots_.find(group);
       lru_.erase(it->second.recency);
       slots_.erase(it);
       throw;
     }
   }
-  std::vector<std::shared_ptr<const ChunkBvh>> out;
-  out.reserve(refs.size());
+  std::vector<std::shared_ptr<const ChunkGroupBvh>> out;
+  out.reserve(results.size());
   for (Result& r : results) out.push_back(r.get());  // rethrows another caller's build error
   return out;
 }
@@ -200,7 +272,8 @@ void ChunkBvhCache::evict_beyond_cap() {
 ChunkBvhCacheStats ChunkBvhCache::stats() const {
   std::lock_guard lock(mutex_);
   ChunkBvhCacheStats s = stats_;
-  s.cached_chunks = slots_.size();
+  s.groups = members_.size();
+  s.cached_groups = slots_.size();
   s.device_bytes = std::size_t(std::max<std::int64_t>(0, device_bytes_.load()));
   s.peak_device_bytes = std::size_t(std::max<std::int64_t>(0, peak_device_bytes_.load()));
   s.chunk_bytes = chunk_bytes_;

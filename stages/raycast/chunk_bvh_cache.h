@@ -1,15 +1,24 @@
-// Bottom-level BVHs of chunks for the Embree sampler, shared by every sampling
-// thread of a bake ("one BVH per bake worker set, not per cell"): each chunk
-// becomes an Embree scene holding one triangle geometry in the chunk's own
-// frame (its float positions relative to its double origin, as stored), built
-// the first time some cube map needs it and kept under a byte cap with
-// least-recently-used eviction. Cube maps instance these scenes with
-// eye-relative translations (stages/raycast/embree_cube_sampler.h), so float
-// precision is that of the stored chunk, wherever the model lies.
+// Bottom-level BVHs of chunk groups for the Embree sampler, shared by every
+// sampling thread of a bake ("one BVH per bake worker set, not per cell").
+// The model's chunks are partitioned once into spatially compact groups of up
+// to `group_triangles` triangles (median kd-splits of the chunk centres on the
+// longest axis, as chunking.h splits triangles); a group becomes one Embree
+// scene with one triangle geometry per chunk (float positions relative to the
+// group's double origin), built the first time some cube map needs one of its
+// chunks and kept under a byte cap with least-recently-used eviction. Cube
+// maps instance these scenes with eye-relative translations
+// (stages/raycast/instance_scene.h), so float precision is that of positions
+// relative to a nearby origin, wherever the model lies. Groups rather than
+// single chunks, because every instance a ray enters costs a transform and a
+// second BVH descent, and chunk bounds overlap: on the 2 M plant (512 chunks,
+// 512^2 x 6 rays) one instance per chunk traced in 209 ms, groups of <= 256 k
+// triangles in 164 ms, <= 1 M in 121 ms, one flat BVH in 91 ms
+// (bench_raycast_raw, docs/benchmarks.md "Sampling backends (issue #12)").
 //
 // Embree 3: Wald et al. 2014, "Embree: a kernel framework for efficient CPU ray
 // tracing", ACM TOG 33(4); API reference https://www.embree.org/api.html
 // (rtcNewScene, RTC_GEOMETRY_TYPE_TRIANGLE, rtcSetDeviceMemoryMonitorFunction).
+// Median splits: Wald & Havran 2006, "On building fast kd-trees for ray tracing".
 #pragma once
 
 #include <embree3/rtcore.h>
@@ -30,16 +39,18 @@
 
 namespace cellbake {
 
-// One chunk's committed bottom-level scene and the chunk its attributes
-// (colours, normals, uvs, materials) are read from. Geometry 0 of `scene`,
-// primitive i = triangle i of `chunk`.
-struct ChunkBvh {
+// One chunk group's committed bottom-level scene and the chunks its
+// attributes (colours, normals, uvs, materials) are read from: geometry i of
+// `scene` is chunks[i], its primitive j is triangle j of that chunk, with
+// positions relative to `origin`.
+struct ChunkGroupBvh {
   RTCScene scene = nullptr;
-  std::shared_ptr<const Chunk> chunk;
-  ChunkBvh() = default;
-  ChunkBvh(const ChunkBvh&) = delete;
-  ChunkBvh& operator=(const ChunkBvh&) = delete;
-  ~ChunkBvh();
+  Vec3d origin;
+  std::vector<std::shared_ptr<const Chunk>> chunks;
+  ChunkGroupBvh() = default;
+  ChunkGroupBvh(const ChunkGroupBvh&) = delete;
+  ChunkGroupBvh& operator=(const ChunkGroupBvh&) = delete;
+  ~ChunkGroupBvh();
 };
 
 struct ChunkBvhCacheParams {
@@ -49,23 +60,28 @@ struct ChunkBvhCacheParams {
   // recently used BVHs that no cube map holds are dropped. A cube map whose
   // chunks alone exceed the cap still works (its BVHs are rebuilt next time).
   std::size_t cache_bytes = std::size_t{4} << 30;
+  // Triangles per chunk group at most (a single larger chunk is a group of
+  // its own); 1 makes every chunk its own group.
+  std::size_t group_triangles = std::size_t{1} << 20;
   RTCBuildQuality build_quality = RTC_BUILD_QUALITY_MEDIUM;
-  // Embree scene flags of the chunk scenes. ROBUST makes the ray/triangle test
-  // watertight, so rays through shared edges never slip between triangles.
-  int scene_flags = RTC_SCENE_FLAG_ROBUST;
+  // Embree scene flags of the group scenes. RTC_SCENE_FLAG_ROBUST would make
+  // the ray/triangle test watertight; it cost 15 % in tracing on the 2 M plant
+  // and changed no parity figure of tests/test_sample_backends.cpp, so it is off.
+  int scene_flags = RTC_SCENE_FLAG_NONE;
 };
 
 struct ChunkBvhCacheStats {
-  std::uint64_t builds = 0;           // chunk BVHs built
+  std::uint64_t builds = 0;           // group BVHs built
   std::uint64_t hits = 0;             // requests answered from the cache
   std::uint64_t evictions = 0;
   std::uint64_t triangles_built = 0;  // over all builds
   double build_seconds = 0;           // thread-seconds in loading + building (load included)
   double load_seconds = 0;            // of which in ChunkSource::load
-  std::size_t cached_chunks = 0;
+  std::size_t groups = 0;             // in the model's partition
+  std::size_t cached_groups = 0;
   std::size_t device_bytes = 0;       // Embree's current allocations
   std::size_t peak_device_bytes = 0;
-  std::size_t chunk_bytes = 0;        // attribute arrays of cached chunks
+  std::size_t chunk_bytes = 0;        // attribute arrays of the cached groups' chunks
 };
 
 // Thread-safe; one cache per model (chunk ids of different models collide).
@@ -81,13 +97,16 @@ class ChunkBvhCache {
   // maps must be created on it too).
   RTCDevice device() const { return device_; }
 
-  // The BVHs of `refs`, in order, loading and building those not cached from
-  // `source`. Concurrent calls build each chunk once: a caller builds the
-  // chunks nobody has claimed yet and waits for the others, so threads that
-  // need the same chunks build them in parallel. Throws std::runtime_error for
-  // a malformed chunk (naming its id), load errors and Embree errors; a chunk
+  // The BVHs of the groups holding the chunks `refs`, each once, loading and
+  // building those not cached from `source`. The first call partitions the
+  // model (source.query(source.model_bounds())). Concurrent calls build each
+  // group once: a caller builds the groups nobody has claimed yet and waits
+  // for the others, so threads that need the same groups build them in
+  // parallel. Throws std::runtime_error for a malformed chunk (naming its
+  // id), a chunk not in the model, load errors and Embree errors; a group
   // whose build failed is not cached.
-  std::vector<std::shared_ptr<const ChunkBvh>> acquire(std::span<const ChunkRef> refs, const ChunkSource& source);
+  std::vector<std::shared_ptr<const ChunkGroupBvh>> acquire(std::span<const ChunkRef> refs,
+                                                            const ChunkSource& source);
 
   // Drops least recently used BVHs that nobody else holds until the cache is
   // under its cap (acquire() does this first too). Call when a cube map has
@@ -100,15 +119,16 @@ class ChunkBvhCache {
   ChunkBvhCacheStats stats() const;
 
  private:
-  using Result = std::shared_future<std::shared_ptr<const ChunkBvh>>;
+  using Result = std::shared_future<std::shared_ptr<const ChunkGroupBvh>>;
   struct Slot {
     Result result;
     bool built = false;
     std::size_t chunk_bytes = 0;
-    std::list<std::int64_t>::iterator recency;  // front = most recent
+    std::list<std::size_t>::iterator recency;  // front = most recent
   };
 
-  std::shared_ptr<const ChunkBvh> build(std::int64_t id, const ChunkSource& source, std::size_t& chunk_bytes);
+  void partition(const ChunkSource& source);  // fills group_of_ and members_ once
+  std::shared_ptr<const ChunkGroupBvh> build(std::size_t group, const ChunkSource& source, std::size_t& chunk_bytes);
   void evict_beyond_cap();  // caller holds mutex_
   static bool monitor(void* self, ssize_t bytes, bool post);
 
@@ -117,8 +137,11 @@ class ChunkBvhCache {
   std::atomic<std::int64_t> device_bytes_{0};
   std::atomic<std::int64_t> peak_device_bytes_{0};
   mutable std::mutex mutex_;
-  std::unordered_map<std::int64_t, Slot> slots_;
-  std::list<std::int64_t> lru_;
+  std::once_flag partitioned_;
+  std::unordered_map<std::int64_t, std::size_t> group_of_;  // chunk id -> group
+  std::vector<std::vector<std::int64_t>> members_;          // group -> chunk ids
+  std::unordered_map<std::size_t, Slot> slots_;             // by group
+  std::list<std::size_t> lru_;
   std::size_t chunk_bytes_ = 0;
   ChunkBvhCacheStats stats_;  // counters; sizes filled in by stats()
 };

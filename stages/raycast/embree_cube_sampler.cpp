@@ -62,7 +62,7 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
   validate_sample_inputs(eye, params);
   auto t0 = Clock::now();
   const std::vector<ChunkRef> refs = cube_chunks(eye, cull_box, params.near_plane, source);
-  std::vector<std::shared_ptr<const ChunkBvh>> bvhs = cache_->acquire(refs, source);
+  std::vector<std::shared_ptr<const ChunkGroupBvh>> bvhs = cache_->acquire(refs, source);
   stats_.gather_seconds += seconds_since(t0);
   t0 = Clock::now();
   const InstanceScene scene(*cache_, std::move(bvhs), eye);
@@ -73,6 +73,8 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
   const int size = params.face_size * params.supersample;
   if (order_size_ != size) {
     order_ = block_order(size);
+    coordinate_.resize(std::size_t(size));
+    for (int i = 0; i < size; ++i) coordinate_[std::size_t(i)] = 2.0 * (i + 0.5) / size - 1.0;
     order_size_ = size;
   }
   const EyeBox box = eye_relative_box(cull_box, eye);
@@ -94,9 +96,8 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
       const unsigned count = unsigned(std::min<std::size_t>(kStream, pixels - start));
       for (unsigned k = 0; k < count; ++k) {
         const std::uint32_t p = order_[start + k];
-        const int row = int(p / std::uint32_t(size)), col = int(p % std::uint32_t(size));
-        const double s = 2.0 * (col + 0.5) / size - 1.0, t = 1.0 - 2.0 * (row + 0.5) / size;
-        const Vec3d dir = cube_face_direction(b, s, t);
+        const std::uint32_t row = p / std::uint32_t(size), col = p - row * std::uint32_t(size);
+        const Vec3d dir = cube_face_direction(b, coordinate_[col], -coordinate_[row]);
         const RaySegments seg = ray_segments(dir, box, params.near_plane);
         init_ray(rays[k], dir, seg.t0, seg.t1, p);
         second[k] = seg.two ? seg.t2 : std::numeric_limits<float>::infinity();
@@ -122,9 +123,9 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
       for (unsigned k = 0; k < count; ++k) {
         const RTCRayHit& r = rays[k];
         if (r.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-        const ChunkBvh& hit_chunk = scene.instance(r.hit.instID[0]);
+        const ChunkGroupBvh& group = scene.instance(r.hit.instID[0]);
         SurfaceHit hit;
-        hit.chunk = hit_chunk.chunk.get();
+        hit.chunk = group.chunks[r.hit.geomID].get();
         hit.triangle = r.hit.primID;
         hit.u = r.hit.u;
         hit.v = r.hit.v;

@@ -1,13 +1,14 @@
 // The Embree sampling backend (issue #12): the cube map of everything outside
-// the cull box by ray casting instead of rasterising. Per cube map: the chunks
-// some face can see (cube_chunks) get their bottom-level BVHs from a cache
-// shared by all sampling threads (stages/raycast/chunk_bvh_cache.h), a
-// top-level scene instances them in the eye's frame (instance_scene.h), and
+// the cull box by ray casting instead of rasterising. Per cube map: the groups
+// of the chunks some face can see (cube_chunks) get their bottom-level BVHs
+// from a cache shared by all sampling threads (stages/raycast/chunk_bvh_cache.h),
+// a top-level scene instances them in the eye's frame (instance_scene.h), and
 // one ray per (sub)pixel centre, in the directions of stages/cube_map.h at the
 // supersampled resolution, is traced in coherent streams (rtcIntersect1M with
 // RTC_INTERSECT_CONTEXT_FLAG_COHERENT, rays ordered in 4 x 4 pixel blocks).
 // Each ray covers [near plane, inf) minus the part strictly inside the cull box
-// (ray_segments.h); its depth is the hit's t, which is planar depth because
+// (ray_segments.h), so geometry of a group lying inside the box is never hit
+// (the GL path's fragment discard); its depth is the hit's t, which is planar depth because
 // the directions have forward component 1; its colour is hit_shading.h's.
 // Supersampled faces go through downsample_face like the GL path's.
 //
@@ -63,6 +64,7 @@ class EmbreeCubeSampler final : public CubeSampler {
   HitShader shader_;
   EmbreeSamplerStats stats_;
   std::vector<std::uint32_t> order_;  // pixels of a render_size^2 face in 4 x 4 block order
+  std::vector<double> coordinate_;    // s of column i (= -t of row i): 2 (i + 0.5) / size - 1
   int order_size_ = 0;
 };
 

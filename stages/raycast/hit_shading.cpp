@@ -10,8 +10,9 @@
 namespace cellbake {
 namespace {
 
+// Round to nearest, as a GL unorm8 colour attachment stores a float.
 std::uint8_t to_unorm8(float c) {
-  return static_cast<std::uint8_t>(std::lround(std::clamp(c, 0.0f, 1.0f) * 255.0f));
+  return static_cast<std::uint8_t>(std::clamp(c, 0.0f, 1.0f) * 255.0f + 0.5f);
 }
 
 }  // namespace

@@ -24,9 +24,9 @@ std::vector<ChunkRef> cube_chunks(const Vec3d& eye, const Box3d& cull_box, doubl
   return all;
 }
 
-InstanceScene::InstanceScene(const ChunkBvhCache& cache, std::vector<std::shared_ptr<const ChunkBvh>> chunks,
+InstanceScene::InstanceScene(const ChunkBvhCache& cache, std::vector<std::shared_ptr<const ChunkGroupBvh>> groups,
                              const Vec3d& eye, RTCBuildQuality quality)
-    : chunks_(std::move(chunks)) {
+    : groups_(std::move(groups)) {
   scene_ = rtcNewScene(cache.device());
   if (!scene_) cache.check_device("rtcNewScene");
   try {
@@ -39,15 +39,13 @@ InstanceScene::InstanceScene(const ChunkBvhCache& cache, std::vector<std::shared
 
 void InstanceScene::attach_and_commit(const ChunkBvhCache& cache, const Vec3d& eye, RTCBuildQuality quality) {
   RTCDevice device = cache.device();
-  rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
   rtcSetSceneBuildQuality(scene_, quality);
-  for (std::size_t i = 0; i < chunks_.size(); ++i) {
-    const ChunkBvh& bvh = *chunks_[i];
-    if (bvh.chunk->triangle_count() == 0) continue;
+  for (std::size_t i = 0; i < groups_.size(); ++i) {
+    const ChunkGroupBvh& bvh = *groups_[i];
     RTCGeometry instance = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
     if (!instance) cache.check_device("rtcNewGeometry(instance)");
     rtcSetGeometryInstancedScene(instance, bvh.scene);
-    const Vec3d offset = bvh.chunk->origin - eye;  // double, then float: eye-relative
+    const Vec3d offset = bvh.origin - eye;  // double, then float: eye-relative
     const float transform[12] = {1, 0, 0, 0, 1, 0, 0, 0, 1, static_cast<float>(offset.x),
                                  static_cast<float>(offset.y), static_cast<float>(offset.z)};
     rtcSetGeometryTransform(instance, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, transform);

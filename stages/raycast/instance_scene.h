@@ -1,7 +1,7 @@
 // The top-level Embree scene of one cube map: an instance of each needed
-// chunk's bottom-level scene (stages/raycast/chunk_bvh_cache.h), translated by
-// (chunk origin - eye) computed in double and rounded to float once, exactly
-// as ChunkRenderer translates chunks for the GPU. Rays then start at the
+// chunk group's bottom-level scene (stages/raycast/chunk_bvh_cache.h),
+// translated by (group origin - eye) computed in double and rounded to float
+// once, as ChunkRenderer translates chunks for the GPU. Rays then start at the
 // origin of this eye-relative frame, so models 1e6 m from the world origin
 // keep the precision of their stored float positions.
 //
@@ -29,25 +29,25 @@ std::vector<ChunkRef> cube_chunks(const Vec3d& eye, const Box3d& cull_box, doubl
 
 class InstanceScene {
  public:
-  // Builds and commits the scene on `device`: instance i (Embree instance id
-  // i) is chunks[i] (not null) translated to the frame of `eye`. Holds the
-  // chunks until destroyed. Throws std::runtime_error on Embree errors.
-  InstanceScene(const ChunkBvhCache& cache, std::vector<std::shared_ptr<const ChunkBvh>> chunks, const Vec3d& eye,
+  // Builds and commits the scene on the cache's device: instance i (Embree
+  // instance id i) is groups[i] (not null) translated to the frame of `eye`.
+  // Holds the groups until destroyed. Throws std::runtime_error on Embree errors.
+  InstanceScene(const ChunkBvhCache& cache, std::vector<std::shared_ptr<const ChunkGroupBvh>> groups, const Vec3d& eye,
                 RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM);
   ~InstanceScene();
   InstanceScene(const InstanceScene&) = delete;
   InstanceScene& operator=(const InstanceScene&) = delete;
 
   RTCScene scene() const { return scene_; }
-  // The chunk of instance `id` (an RTCHit::instID[0]).
-  const ChunkBvh& instance(unsigned id) const { return *chunks_[id]; }
-  std::size_t size() const { return chunks_.size(); }
+  // The group of instance `id` (an RTCHit::instID[0]).
+  const ChunkGroupBvh& instance(unsigned id) const { return *groups_[id]; }
+  std::size_t size() const { return groups_.size(); }
 
  private:
   void attach_and_commit(const ChunkBvhCache& cache, const Vec3d& eye, RTCBuildQuality quality);
 
   RTCScene scene_ = nullptr;
-  std::vector<std::shared_ptr<const ChunkBvh>> chunks_;
+  std::vector<std::shared_ptr<const ChunkGroupBvh>> groups_;
 };
 
 }  // namespace cellbake

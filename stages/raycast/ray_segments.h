@@ -8,6 +8,9 @@
 // is the planar view depth and the near plane is t = near.
 #pragma once
 
+#include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <limits>
 
 #include "stages/geometry.h"
@@ -34,7 +37,40 @@ EyeBox eye_relative_box(const Box3d& box, const Vec3d& eye);
 // The segments of the ray eye + t * dir (dir finite and non-zero, near > 0)
 // outside the open box `box` and at t >= near. Segment ends on the box
 // boundary are widened by one float step, so surfaces lying on the boundary
-// (kept by the GL path) are not lost to rounding.
-RaySegments ray_segments(const Vec3d& dir, const EyeBox& box, double near);
+// (kept by the GL path) are not lost to rounding. Inline: the sampler calls it
+// once per ray.
+inline RaySegments ray_segments(const Vec3d& dir, const EyeBox& box, double near) {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  // One float step towards zero / towards infinity, for positive finite floats.
+  const auto step_down = [](float f) { return f > 0 ? std::bit_cast<float>(std::bit_cast<std::uint32_t>(f) - 1) : f; };
+  const auto step_up = [](float f) {
+    return f >= 0 && f < std::numeric_limits<float>::max() ? std::bit_cast<float>(std::bit_cast<std::uint32_t>(f) + 1) : f;
+  };
+  RaySegments s;
+  s.t0 = static_cast<float>(near);
+  if (box.none) return s;
+  // The open interval (t_in, t_out) of t with eye + t dir strictly inside.
+  double t_in = -inf, t_out = inf;
+  for (int k = 0; k < 3; ++k) {
+    if (dir[k] == 0) {
+      if (!(box.lo[k] < 0 && 0 < box.hi[k])) return s;  // never strictly inside this slab
+      continue;
+    }
+    const double inverse = 1.0 / dir[k];
+    const double a = box.lo[k] * inverse, b = box.hi[k] * inverse;
+    t_in = std::max(t_in, std::min(a, b));
+    t_out = std::min(t_out, std::max(a, b));
+  }
+  if (!(t_in < t_out) || t_out <= near) return s;  // the ray misses the interior beyond the near plane
+  const float leave = step_down(static_cast<float>(t_out));
+  if (t_in < near) {  // inside at the near plane: start where it leaves
+    s.t0 = std::max(static_cast<float>(near), leave);
+    return s;
+  }
+  s.t1 = step_up(static_cast<float>(t_in));
+  s.two = true;
+  s.t2 = leave;
+  return s;
+}
 
 }  // namespace cellbake
