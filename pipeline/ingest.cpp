@@ -8,12 +8,14 @@
 #include <chrono>
 #include <deque>
 #include <limits>
+#include <map>
 #include <cstdio>
 #include <fstream>
 #include <stdexcept>
 
 #include "pipeline/input_error.h"
 #include "pipeline/readers/model_reader.h"
+#include "pipeline/texture_import.h"
 #include "stages/chunking.h"
 #include "stages/hashing.h"
 #include "storage/geometry_store.h"
@@ -114,6 +116,54 @@ std::string hash_file(const std::filesystem::path& file, std::uint64_t& bytes) {
   return h.hex();
 }
 
+struct StoredTexture {
+  std::int64_t id = 0;
+  bool has_alpha = false;
+};
+
+// Imports the texture `material` (index `index` of `info`, read from `model`)
+// names, once per distinct image, and sets its texture_id and alpha_test; an
+// image that cannot be read becomes a warning and the material stays untextured.
+void attach_texture(Material& material, std::uint32_t index, const ModelInfo& info,
+                    const std::filesystem::path& model, const IngestParams& params, GeometryStoreWriter& writer,
+                    std::map<std::string, StoredTexture>& texture_ids, Hasher& content, IngestReport& report) {
+  TextureInput input;
+  if (const auto found = info.textures.find(index); found != info.textures.end()) {
+    input = found->second;
+  } else {
+    const std::filesystem::path path(material.texture);
+    input.file = path.is_absolute() ? path : (model.parent_path() / path).lexically_normal();
+  }
+  const bool embedded = input.file.empty();
+  const std::string key = embedded ? model.string() + "#" + material.texture : input.file.string();
+  const std::string shown = embedded ? material.texture + " (embedded)" : input.file.string();
+  bool has_alpha = false;
+  if (const auto known = texture_ids.find(key); known != texture_ids.end()) {
+    material.texture_id = known->second.id;
+    has_alpha = known->second.has_alpha;
+  } else {
+    try {
+      const TextureImage image = import_texture(input, "'" + shown + "'", {params.max_texture_size});
+      if (!embedded) {
+        std::uint64_t bytes = 0;
+        content.text(hash_file(input.file, bytes));
+      }
+      material.texture_id = writer.add_texture(image, shown);
+      ++report.textures;
+      report.texture_bytes += image.bytes();
+      // Known only after a successful import; failures are retried (and warned) per material.
+      texture_ids[key] = {material.texture_id, image.has_alpha};
+      has_alpha = image.has_alpha;
+    } catch (const std::exception& e) {
+      report.texture_warnings.push_back(model.filename().string() + ": material '" + material.name + "': " +
+                                        e.what() + ": material colour used");
+      material.texture_id = 0;
+      return;
+    }
+  }
+  material.alpha_test = has_alpha && input.alpha_allowed;
+}
+
 }  // namespace
 
 IngestReport ingest_models(const std::vector<std::filesystem::path>& models, const std::filesystem::path& store,
@@ -129,6 +179,9 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   TriangleSpill spill(temp_dir / (store.filename().string() + ".spill-" + std::to_string(::getpid())),
                       params.memory_budget_bytes);
 
+  if (params.max_texture_size < 1) throw std::invalid_argument("ingest: max_texture_size must be >= 1");
+  GeometryStoreWriter writer(store);
+  std::map<std::string, StoredTexture> texture_ids;  // by resolved file path or embedded-image key
   std::vector<Material> materials;
   std::vector<SourceFileRecord> sources;
   std::vector<TriangleKey> keys;
@@ -137,6 +190,8 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   // What the readers make of the same file: v2, uniform vertex colours give way to material colours.
   content.text("readers-v2");
   content.f64(params.translate.x).f64(params.translate.y).f64(params.translate.z);
+  // v3: normals, textures stored with their size cap.
+  content.text("store-v3").u64(static_cast<std::uint64_t>(params.max_texture_size));
   for (const auto& model : models) {
     SourceFileRecord src;
     src.path = model.string();
@@ -166,7 +221,12 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
       if (progress && (report.triangles_read & 0xFFFF) == 0)
         progress("read " + model.filename().string(), report.triangles_read, 0);
     });
-    for (const auto& m : info.materials) materials.push_back(m);
+    for (std::uint32_t m = 0; m < info.materials.size(); ++m) {
+      Material material = info.materials[m];
+      if (!material.texture.empty())
+        attach_texture(material, m, info, model, params, writer, texture_ids, content, report);
+      materials.push_back(material);
+    }
     report.polygons_triangulated += info.polygons_triangulated;
     if (const std::string note = describe_vertex_colours(info); !note.empty())
       report.vertex_colour_notes.push_back(model.filename().string() + ": " + note);
@@ -185,7 +245,6 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   report.chunk_seconds = seconds_since(t_chunk);
 
   const auto t_write = Clock::now();
-  GeometryStoreWriter writer(store);
   for (std::size_t i = 0; i < materials.size(); ++i) writer.add_material(static_cast<std::uint32_t>(i), materials[i]);
   for (const auto& s : sources) writer.add_source(s);
   // Build chunks in parallel batches, write them in order (deterministic ids).

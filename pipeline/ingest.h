@@ -1,5 +1,8 @@
 // Ingest: reads model files, drops degenerate and duplicate triangles (counted),
 // splits the rest into spatially coherent chunks and writes a geometry store.
+// Textures the materials name are decoded (pipeline/texture_import.h), capped
+// in size and stored inside the store, so a bake needs nothing else; one that
+// cannot be read is a counted warning and its material keeps its colour.
 // Memory is bounded: triangles (112 bytes each) stay in memory up to a budget
 // and then go to a temporary spill file; only 40-byte sort keys per triangle
 // are always held in memory.
@@ -28,6 +31,7 @@ struct IngestParams {
   std::string units = "m";
   std::size_t memory_budget_bytes = std::size_t(6) << 30;  // triangles beyond this go to a spill file
   std::filesystem::path temp_dir;          // for the spill file; empty = next to the store
+  int max_texture_size = 2048;             // textures are halved until both sides fit (>= 1)
 };
 
 struct IngestReport {
@@ -44,6 +48,12 @@ struct IngestReport {
   // One line per model file with vertex colours: "FILE: vertex colours: ..."
   // (describe_vertex_colours in pipeline/readers/model_reader.h).
   std::vector<std::string> vertex_colour_notes;
+  // Textures stored (each distinct image once) and the RGBA8 bytes they decode to.
+  std::uint64_t textures = 0;
+  std::uint64_t texture_bytes = 0;
+  // One line per texture that could not be used, naming the material and the
+  // path or reference: "FILE: material 'M': texture 'T' ...: material colour used".
+  std::vector<std::string> texture_warnings;
 };
 
 // Ingests `models` into a new store at `store` (replacing an existing one only

@@ -15,6 +15,7 @@ void add_ingest_command(CLI::App& app) {
     std::size_t chunk = 4096;
     std::vector<double> translate;
     std::string units = "m";
+    int max_texture_size = 2048;
   };
   auto opt = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
@@ -26,11 +27,16 @@ void add_ingest_command(CLI::App& app) {
       ->check(CLI::Range(std::size_t(16), std::size_t(1) << 20));
   cmd->add_option("--translate", opt->translate, "Offset X,Y,Z added to every coordinate")->delimiter(',')->expected(3);
   cmd->add_option("--units", opt->units, "Unit name recorded in the store")->capture_default_str();
+  cmd->add_option("--max-texture-size", opt->max_texture_size,
+                  "Longest texture side kept in the store; larger textures are halved until they fit")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 16384));
   cmd->callback([opt] {
     std::vector<std::filesystem::path> models(opt->models.begin(), opt->models.end());
     IngestParams params;
     params.max_chunk_triangles = opt->chunk;
     params.units = opt->units;
+    params.max_texture_size = opt->max_texture_size;
     if (opt->translate.size() == 3) params.translate = {opt->translate[0], opt->translate[1], opt->translate[2]};
     const IngestReport r = ingest_models(models, opt->store, params, tbb_parallel_for(), ingest_progress());
     print_ingest_summary(r, opt->store);

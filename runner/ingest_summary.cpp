@@ -35,6 +35,12 @@ void print_ingest_summary(const IngestReport& r, const std::string& store) {
   std::printf("  time: read %.2f s, chunk %.2f s, write %.2f s, total %.2f s (%.2f M triangles/s)\n", r.read_seconds,
               r.chunk_seconds, r.write_seconds, total, total > 0 ? r.triangles_read / total / 1e6 : 0.0);
   for (const std::string& note : r.vertex_colour_notes) std::printf("  %s\n", note.c_str());
+  if (r.textures > 0)
+    std::printf("  %llu textures stored (%.1f MB decoded)\n", (unsigned long long)r.textures, r.texture_bytes / 1e6);
+  if (!r.texture_warnings.empty()) {
+    std::printf("  warning: %zu texture(s) could not be used:\n", r.texture_warnings.size());
+    for (const std::string& w : r.texture_warnings) std::printf("    %s\n", w.c_str());
+  }
   std::printf("  content hash %s\n", r.content_hash.c_str());
 }
 

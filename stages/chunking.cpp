@@ -1,5 +1,7 @@
 #include "stages/chunking.h"
 
+#include "stages/normal_packing.h"
+
 #include <xxhash.h>
 
 #include <algorithm>
@@ -70,19 +72,33 @@ struct VertexKey {
   double x, y, z;
   Rgba8 c;
   Uv uv;
+  Vec3f n;
   bool operator==(const VertexKey& o) const {
-    return std::memcmp(&x, &o.x, 24) == 0 && c == o.c && uv == o.uv;
+    return std::memcmp(&x, &o.x, 24) == 0 && c == o.c && uv == o.uv && n == o.n;
   }
 };
 struct VertexKeyHash {
   std::size_t operator()(const VertexKey& k) const {
-    unsigned char buf[24 + 4 + 8];
+    unsigned char buf[24 + 4 + 8 + 12];
     std::memcpy(buf, &k.x, 24);
     std::memcpy(buf + 24, &k.c, 4);
     std::memcpy(buf + 28, &k.uv, 8);
+    std::memcpy(buf + 36, &k.n, 12);
     return static_cast<std::size_t>(XXH3_64bits(buf, sizeof buf));
   }
 };
+
+// The unit normal of corner `c` as stored: the source's normal when it gave a
+// usable one, else the face normal; quantised as the store keeps it.
+Vec3f corner_normal(const Triangle& t, int c) {
+  if (t.has_normals) {
+    const Vec3f& n = t.normal[c];
+    const float len2 = n.x * n.x + n.y * n.y + n.z * n.z;
+    if (len2 > 1e-12f && std::isfinite(len2)) return quantise_normal(n);
+  }
+  const Vec3d f = cross(t.p[1] - t.p[0], t.p[2] - t.p[0]);
+  return quantise_normal({static_cast<float>(f.x), static_cast<float>(f.y), static_cast<float>(f.z)});
+}
 
 }  // namespace
 
@@ -124,9 +140,10 @@ Chunk build_chunk(const std::vector<const Triangle*>& triangles) {
   for (const Triangle* t : triangles)
     for (const Vec3d& p : t->p) chunk.bounds.expand(p);
   chunk.origin = chunk.bounds.center();
-  bool any_uv = false, any_material = false;
+  bool any_uv = false, any_material = false, any_normal = false;
   for (const Triangle* t : triangles) {
     any_material |= t->material != 0;
+    any_normal |= t->has_normals;
     for (const Uv& uv : t->uv) any_uv |= (uv.u != 0 || uv.v != 0);
   }
   std::unordered_map<VertexKey, std::uint32_t, VertexKeyHash> index_of;
@@ -134,7 +151,8 @@ Chunk build_chunk(const std::vector<const Triangle*>& triangles) {
   chunk.indices.reserve(triangles.size() * 3);
   for (const Triangle* t : triangles) {
     for (int c = 0; c < 3; ++c) {
-      VertexKey key{t->p[c].x, t->p[c].y, t->p[c].z, t->color[c], any_uv ? t->uv[c] : Uv{}};
+      const Vec3f normal = any_normal ? corner_normal(*t, c) : Vec3f{};
+      VertexKey key{t->p[c].x, t->p[c].y, t->p[c].z, t->color[c], any_uv ? t->uv[c] : Uv{}, normal};
       auto [it, inserted] = index_of.try_emplace(key, static_cast<std::uint32_t>(chunk.positions.size()));
       if (inserted) {
         const Vec3d local = t->p[c] - chunk.origin;
@@ -142,6 +160,7 @@ Chunk build_chunk(const std::vector<const Triangle*>& triangles) {
                                    static_cast<float>(local.z)});
         chunk.colors.push_back(t->color[c]);
         if (any_uv) chunk.uvs.push_back(t->uv[c]);
+        if (any_normal) chunk.normals.push_back(normal);
       }
       chunk.indices.push_back(it->second);
     }

@@ -45,9 +45,12 @@ bool is_degenerate(const Triangle& t);
 bool same_corners(const Triangle& a, const Triangle& b);
 
 // Builds a chunk from triangles given in their final order: vertices shared by
-// identical (position, colour, uv), origin = centre of the chunk's bounds,
-// materials kept only when some triangle has a non-zero material, uvs only
-// when some corner has a non-zero uv.
+// identical (position, colour, uv, normal), origin = centre of the chunk's
+// bounds, materials kept only when some triangle has a non-zero material, uvs
+// only when some corner has a non-zero uv, normals only when some triangle
+// has them (then every corner gets one: the source's, or its face normal when
+// the triangle has none or a zero one), quantised to the store's octahedral
+// 16-bit code (stages/normal_packing.h) so a stored chunk reads back exactly.
 Chunk build_chunk(const std::vector<const Triangle*>& triangles);
 
 }  // namespace cellbake

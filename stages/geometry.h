@@ -107,6 +107,7 @@ struct Material {
   std::string texture;
   std::int64_t texture_id = 0;
   bool alpha_test = false;  // fragments whose texel alpha is below 0.5 are dropped
+  friend bool operator==(const Material&, const Material&) = default;
 };
 
 // A chunk of spatially coherent triangles: positions are float32 relative to a

@@ -123,6 +123,7 @@ CubeFace downsample_face(const std::vector<Rgba8>& color, const std::vector<floa
 CubeSample sample_cube(const Vec3d& eye, const Box3d& cull_box, const SampleParams& params,
                        const ChunkSource& source, ChunkRenderer& renderer) {
   validate_sample_inputs(eye, params);
+  renderer.use_materials_of(source);
   const int render_size = params.face_size * params.supersample;
   const ChunkLoader load = [&source](std::int64_t id) { return source.load(id); };
   CubeSample sample;

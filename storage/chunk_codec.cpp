@@ -2,6 +2,9 @@
 
 #include <meshoptimizer.h>
 
+#include "stages/normal_packing.h"
+
+#include <array>
 #include <cstring>
 #include <stdexcept>
 
@@ -12,6 +15,7 @@ constexpr std::uint32_t kMagic = 0x4B434243;  // "CBCK" little-endian
 constexpr std::uint16_t kVersion = 1;
 constexpr std::uint16_t kHasUvs = 1;
 constexpr std::uint16_t kHasMaterials = 2;
+constexpr std::uint16_t kHasNormals = 4;
 constexpr std::uint32_t kMaxVertices = 1u << 24;
 
 struct PackedVertex {
@@ -75,6 +79,8 @@ std::vector<std::uint8_t> encode_chunk_blob(const Chunk& chunk) {
   if (nv > kMaxVertices) throw std::invalid_argument("encode_chunk_blob: too many vertices");
   const bool has_uvs = !chunk.uvs.empty();
   const bool has_materials = !chunk.materials.empty();
+  const bool has_normals = !chunk.normals.empty();
+  if (has_normals && chunk.normals.size() != nv) throw std::invalid_argument("encode_chunk_blob: normal count");
 
   std::vector<std::uint8_t> vertex_bytes;
   if (has_uvs) {
@@ -98,11 +104,20 @@ std::vector<std::uint8_t> encode_chunk_blob(const Chunk& chunk) {
   index_bytes.resize(
       meshopt_encodeIndexBuffer(index_bytes.data(), index_bytes.size(), chunk.indices.data(), chunk.indices.size()));
 
+  std::vector<std::uint8_t> normal_bytes;
+  if (has_normals) {
+    std::vector<std::array<std::int16_t, 2>> packed(nv);
+    for (std::size_t i = 0; i < nv; ++i) packed[i] = pack_normal_oct16(chunk.normals[i]);
+    normal_bytes = encode_vertices(packed);
+  }
+
   std::vector<std::uint8_t> out;
-  out.reserve(32 + vertex_bytes.size() + index_bytes.size() + (has_materials ? chunk.materials.size() * 4 : 0));
+  out.reserve(36 + vertex_bytes.size() + index_bytes.size() + normal_bytes.size() +
+              (has_materials ? chunk.materials.size() * 4 : 0));
   put<std::uint32_t>(out, kMagic);
   put<std::uint16_t>(out, kVersion);
-  put<std::uint16_t>(out, static_cast<std::uint16_t>((has_uvs ? kHasUvs : 0) | (has_materials ? kHasMaterials : 0)));
+  put<std::uint16_t>(out, static_cast<std::uint16_t>((has_uvs ? kHasUvs : 0) | (has_materials ? kHasMaterials : 0) |
+                                                     (has_normals ? kHasNormals : 0)));
   put<std::uint32_t>(out, static_cast<std::uint32_t>(nv));
   put<std::uint32_t>(out, static_cast<std::uint32_t>(chunk.indices.size()));
   put<std::uint32_t>(out, static_cast<std::uint32_t>(vertex_bytes.size()));
@@ -114,6 +129,10 @@ std::vector<std::uint8_t> encode_chunk_blob(const Chunk& chunk) {
       throw std::invalid_argument("encode_chunk_blob: material count must match triangles");
     for (std::uint32_t m : chunk.materials) put<std::uint32_t>(out, m);
   }
+  if (has_normals) {
+    put<std::uint32_t>(out, static_cast<std::uint32_t>(normal_bytes.size()));
+    out.insert(out.end(), normal_bytes.begin(), normal_bytes.end());
+  }
   return out;
 }
 
@@ -124,7 +143,7 @@ void decode_chunk_blob(const std::uint8_t* data, std::size_t size, Chunk& chunk)
   const auto version = in.get<std::uint16_t>("version");
   if (version != kVersion) throw std::runtime_error("chunk blob: unsupported version " + std::to_string(version));
   const auto flags = in.get<std::uint16_t>("flags");
-  if (flags & ~(kHasUvs | kHasMaterials)) throw std::runtime_error("chunk blob: unknown flags");
+  if (flags & ~(kHasUvs | kHasMaterials | kHasNormals)) throw std::runtime_error("chunk blob: unknown flags");
   const auto nv = in.get<std::uint32_t>("vertex count");
   const auto ni = in.get<std::uint32_t>("index count");
   if (nv > kMaxVertices) throw std::runtime_error("chunk blob: vertex count out of range");
@@ -171,6 +190,16 @@ void decode_chunk_blob(const std::uint8_t* data, std::size_t size, Chunk& chunk)
     const std::uint8_t* m = in.take(std::size_t(ni / 3) * 4, "materials");
     chunk.materials.resize(ni / 3);
     std::memcpy(chunk.materials.data(), m, chunk.materials.size() * 4);
+  }
+  chunk.normals.clear();
+  if (flags & kHasNormals) {
+    const auto nbytes = in.get<std::uint32_t>("normal data size");
+    const std::uint8_t* ndata = in.take(nbytes, "normal data");
+    std::vector<std::array<std::int16_t, 2>> packed(nv);
+    if (nv && meshopt_decodeVertexBuffer(packed.data(), nv, sizeof(packed[0]), ndata, nbytes) != 0)
+      throw std::runtime_error("chunk blob: corrupt normal data");
+    chunk.normals.resize(nv);
+    for (std::size_t i = 0; i < nv; ++i) chunk.normals[i] = unpack_normal_oct16(packed[i]);
   }
   if (!in.at_end()) throw std::runtime_error("chunk blob: trailing bytes");
 }

@@ -1,6 +1,8 @@
 // Compact, validated blob encoding of one chunk's geometry: float32 positions
 // relative to the chunk origin + RGBA8 (+ optional uv), compressed with
-// meshoptimizer's vertex and index codecs, plus per-triangle material ids.
+// meshoptimizer's vertex and index codecs, plus per-triangle material ids and
+// optional per-vertex normals (octahedral 2 x int16, stages/normal_packing.h,
+// through the vertex codec).
 #pragma once
 
 #include <cstdint>

@@ -2,16 +2,20 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <stdexcept>
 
+#include "stages/encode.h"
 #include "storage/chunk_codec.h"
 #include "storage/sqlite_db.h"
 
 namespace cellbake {
 namespace {
 
-constexpr int kStoreSchemaVersion = 1;
+// 2: materials carry texture_id and alpha_test, textures live in `textures`,
+// chunk blobs may carry normals. Version 1 stores are still read (no textures).
+constexpr int kStoreSchemaVersion = 2;
 constexpr std::size_t kChunksPerTransaction = 256;
 
 const char* kSchema = R"sql(
@@ -19,7 +23,10 @@ CREATE TABLE meta(key TEXT PRIMARY KEY, value TEXT NOT NULL);
 CREATE TABLE sources(id INTEGER PRIMARY KEY, path TEXT NOT NULL, bytes INTEGER NOT NULL,
                      hash TEXT NOT NULL, triangles INTEGER NOT NULL);
 CREATE TABLE materials(id INTEGER PRIMARY KEY, name TEXT NOT NULL, r INTEGER, g INTEGER, b INTEGER, a INTEGER,
-                       texture TEXT NOT NULL);
+                       texture TEXT NOT NULL, texture_id INTEGER NOT NULL, alpha_test INTEGER NOT NULL);
+CREATE TABLE textures(id INTEGER PRIMARY KEY, source TEXT NOT NULL, width INTEGER NOT NULL, height INTEGER NOT NULL,
+                      wrap_u INTEGER NOT NULL, wrap_v INTEGER NOT NULL, has_alpha INTEGER NOT NULL,
+                      image BLOB NOT NULL);
 CREATE TABLE chunks(id INTEGER PRIMARY KEY,
                     origin_x REAL NOT NULL, origin_y REAL NOT NULL, origin_z REAL NOT NULL,
                     min_x REAL NOT NULL, min_y REAL NOT NULL, min_z REAL NOT NULL,
@@ -63,10 +70,32 @@ GeometryStoreWriter::~GeometryStoreWriter() {
 }
 
 void GeometryStoreWriter::add_material(std::uint32_t index, const Material& m) {
-  SqliteStatement s(*db_, "INSERT INTO materials VALUES(?,?,?,?,?,?,?)");
+  SqliteStatement s(*db_, "INSERT INTO materials VALUES(?,?,?,?,?,?,?,?,?)");
   s.bind(1, std::int64_t(index)).bind(2, m.name).bind(3, std::int64_t(m.color.r)).bind(4, std::int64_t(m.color.g));
   s.bind(5, std::int64_t(m.color.b)).bind(6, std::int64_t(m.color.a)).bind(7, m.texture);
+  s.bind(8, m.texture_id).bind(9, std::int64_t(m.alpha_test ? 1 : 0));
   s.run();
+}
+
+std::int64_t GeometryStoreWriter::add_texture(const TextureImage& image, const std::string& source) {
+  if (image.width <= 0 || image.height <= 0 ||
+      image.texels.size() != std::size_t(image.width) * std::size_t(image.height))
+    throw std::invalid_argument("add_texture: texels do not match the size of " + source);
+  // Stored as PNG, top row first like any image file (the texels are bottom row first).
+  std::vector<Rgba8> top_down(image.texels.size());
+  for (int y = 0; y < image.height; ++y)
+    std::copy_n(image.texels.begin() + std::ptrdiff_t(image.height - 1 - y) * image.width, image.width,
+                top_down.begin() + std::ptrdiff_t(y) * image.width);
+  ImageEncodeParams png;
+  png.format = "png";
+  const std::vector<std::uint8_t> blob = encode_image(top_down, image.width, image.height, png);
+  const std::int64_t id = next_texture_id_++;
+  SqliteStatement s(*db_, "INSERT INTO textures VALUES(?,?,?,?,?,?,?,?)");
+  s.bind(1, id).bind(2, source).bind(3, std::int64_t(image.width)).bind(4, std::int64_t(image.height));
+  s.bind(5, std::int64_t(image.wrap_u)).bind(6, std::int64_t(image.wrap_v)).bind(7, std::int64_t(image.has_alpha));
+  s.bind_blob(8, blob.data(), blob.size());
+  s.run();
+  return id;
 }
 
 void GeometryStoreWriter::add_source(const SourceFileRecord& src) {
@@ -158,8 +187,13 @@ GeometryStore::GeometryStore(const std::filesystem::path& path, std::size_t cach
   }
   if (meta["kind"] != "cellbake-geometry-store")
     throw std::runtime_error(path.string() + ": not a cellbake geometry store");
-  if (meta["schema_version"] != std::to_string(kStoreSchemaVersion))
-    throw std::runtime_error(path.string() + ": unsupported geometry store schema version " + meta["schema_version"]);
+  if (meta["schema_version"] == "1") {
+    schema_version_ = 1;
+  } else if (meta["schema_version"] != std::to_string(kStoreSchemaVersion)) {
+    throw std::runtime_error(path.string() + ": unsupported geometry store schema version " + meta["schema_version"] +
+                             " (this cellbake reads 1 and " + std::to_string(kStoreSchemaVersion) +
+                             "; re-ingest the model)");
+  }
   double b[6] = {0, 0, 0, 0, 0, 0};
   if (std::sscanf(meta["bounds"].c_str(), "%lf %lf %lf %lf %lf %lf", &b[0], &b[1], &b[2], &b[3], &b[4], &b[5]) != 6)
     throw std::runtime_error(path.string() + ": geometry store metadata has no bounds");
@@ -171,7 +205,66 @@ GeometryStore::GeometryStore(const std::filesystem::path& path, std::size_t cach
   summary_.skipped_duplicate = std::stoull(meta["skipped_duplicate"]);
   summary_.units = meta["units"];
   summary_.content_hash = meta["content_hash"];
+  materials_ = read_materials(c->db);
   release(std::move(c));
+}
+
+std::vector<Material> GeometryStore::read_materials(SqliteDb& db) const {
+  std::vector<Material> out;
+  const bool textured = schema_version_ >= 2;
+  SqliteStatement s(db, textured ? "SELECT name, r, g, b, a, texture, texture_id, alpha_test FROM materials ORDER BY id"
+                                 : "SELECT name, r, g, b, a, texture FROM materials ORDER BY id");
+  while (s.step()) {
+    Material m;
+    m.name = s.column_text(0);
+    m.color = {std::uint8_t(s.column_int(1)), std::uint8_t(s.column_int(2)), std::uint8_t(s.column_int(3)),
+               std::uint8_t(s.column_int(4))};
+    m.texture = s.column_text(5);
+    if (textured) {
+      m.texture_id = s.column_int(6);
+      m.alpha_test = s.column_int(7) != 0;
+    }
+    out.push_back(m);
+  }
+  return out;
+}
+
+std::shared_ptr<const TextureImage> GeometryStore::load_texture(std::int64_t id) const {
+  const std::string where = path_.string() + ": texture " + std::to_string(id);
+  if (schema_version_ < 2) throw std::runtime_error(where + " does not exist (schema 1 store has no textures)");
+  auto image = std::make_shared<TextureImage>();
+  image->id = id;
+  auto c = acquire();
+  try {
+    SqliteStatement s(c->db, "SELECT width, height, wrap_u, wrap_v, has_alpha, image FROM textures WHERE id = ?");
+    s.bind(1, id);
+    if (!s.step()) throw std::runtime_error("does not exist");
+    const auto wrap = [](std::int64_t w) {
+      if (w < 0 || w > 2) throw std::runtime_error("bad wrap mode " + std::to_string(w));
+      return static_cast<TextureWrap>(w);
+    };
+    image->wrap_u = wrap(s.column_int(2));
+    image->wrap_v = wrap(s.column_int(3));
+    image->has_alpha = s.column_int(4) != 0;
+    std::size_t size = 0;
+    const std::uint8_t* data = s.column_blob_data(5, size);
+    DecodedImage decoded = decode_image(data, size);
+    if (decoded.width != s.column_int(0) || decoded.height != s.column_int(1))
+      throw std::runtime_error("image is " + std::to_string(decoded.width) + "x" + std::to_string(decoded.height) +
+                               ", the row says " + std::to_string(s.column_int(0)) + "x" +
+                               std::to_string(s.column_int(1)));
+    image->width = decoded.width;
+    image->height = decoded.height;
+    image->texels.resize(decoded.pixels.size());
+    for (int y = 0; y < image->height; ++y)
+      std::copy_n(decoded.pixels.begin() + std::ptrdiff_t(image->height - 1 - y) * image->width, image->width,
+                  image->texels.begin() + std::ptrdiff_t(y) * image->width);
+  } catch (const std::exception& e) {
+    release(std::move(c));
+    throw std::runtime_error(where + ": " + e.what());
+  }
+  release(std::move(c));
+  return image;
 }
 
 GeometryStore::~GeometryStore() = default;
@@ -248,7 +341,8 @@ std::shared_ptr<const Chunk> GeometryStore::load(std::int64_t id) const {
     q.reset();
     release(std::move(c));
   }
-  const std::size_t bytes = chunk->positions.size() * (sizeof(Vec3f) + sizeof(Rgba8) + sizeof(Uv)) +
+  const std::size_t bytes = chunk->positions.size() * (sizeof(Vec3f) + sizeof(Rgba8)) +
+                            chunk->uvs.size() * sizeof(Uv) + chunk->normals.size() * sizeof(Vec3f) +
                             chunk->indices.size() * 4 + chunk->materials.size() * 4 + sizeof(Chunk);
   std::lock_guard<std::mutex> lock(cache_mutex_);
   auto it = cache_.find(id);
@@ -277,23 +371,7 @@ std::vector<SourceFileRecord> GeometryStore::sources() const {
   return out;
 }
 
-std::vector<Material> GeometryStore::materials() const {
-  auto c = acquire();
-  std::vector<Material> out;
-  {
-    SqliteStatement s(c->db, "SELECT name, r, g, b, a, texture FROM materials ORDER BY id");
-    while (s.step()) {
-      Material m;
-      m.name = s.column_text(0);
-      m.color = {std::uint8_t(s.column_int(1)), std::uint8_t(s.column_int(2)), std::uint8_t(s.column_int(3)),
-                 std::uint8_t(s.column_int(4))};
-      m.texture = s.column_text(5);
-      out.push_back(m);
-    }
-  }
-  release(std::move(c));
-  return out;
-}
+std::vector<Material> GeometryStore::materials() const { return materials_; }
 
 std::vector<ChunkRef> GeometryStore::all_chunks() const {
   auto c = acquire();

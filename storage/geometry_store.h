@@ -48,6 +48,9 @@ class GeometryStoreWriter {
   ~GeometryStoreWriter();  // removes the temporary file unless finished
 
   void add_material(std::uint32_t index, const Material& material);
+  // Stores `image` (losslessly, as PNG) and returns its id (1, 2, 3 ... in
+  // call order) for Material::texture_id; `source` names where it came from.
+  std::int64_t add_texture(const TextureImage& image, const std::string& source);
   void add_source(const SourceFileRecord& source);
   // Adds a chunk (its id is assigned here, 1, 2, 3 ... in call order).
   std::int64_t add_chunk(const Chunk& chunk);
@@ -59,6 +62,7 @@ class GeometryStoreWriter {
   std::unique_ptr<SqliteDb> db_;
   std::unique_ptr<SqliteStatement> insert_chunk_, insert_rtree_;
   std::int64_t next_id_ = 1;
+  std::int64_t next_texture_id_ = 1;
   std::size_t pending_ = 0;
   bool finished_ = false;
 };
@@ -76,7 +80,13 @@ class GeometryStore : public ChunkSource {
 
   const StoreSummary& summary() const { return summary_; }
   std::vector<SourceFileRecord> sources() const;
+  // The material table (read once at open).
   std::vector<Material> materials() const override;
+  // Decodes texture `id` from the store (no cache here: renderers keep their
+  // own bounded caches of what they upload).
+  std::shared_ptr<const TextureImage> load_texture(std::int64_t id) const override;
+  // 1 or 2 (docs/database.md).
+  int schema_version() const { return schema_version_; }
   std::vector<ChunkRef> all_chunks() const;
   const std::filesystem::path& path() const { return path_; }
 
@@ -85,8 +95,12 @@ class GeometryStore : public ChunkSource {
   std::unique_ptr<Connection> acquire() const;
   void release(std::unique_ptr<Connection> c) const;
 
+  std::vector<Material> read_materials(SqliteDb& db) const;
+
   std::filesystem::path path_;
   StoreSummary summary_;
+  int schema_version_ = 2;
+  std::vector<Material> materials_;
   mutable std::mutex pool_mutex_;
   mutable std::vector<std::unique_ptr<Connection>> pool_;
 

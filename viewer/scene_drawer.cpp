@@ -38,7 +38,9 @@ SceneDrawer::SceneDrawer(std::shared_ptr<GlContext> context, const ChunkSource& 
       params_(params),
       chunks_(std::make_unique<SharedGlContext>(context_), ChunkRendererParams{params.chunk_cache_bytes}),
       tdm_(context_),
-      gl_(load_functions(*context_)) {}
+      gl_(load_functions(*context_)) {
+  chunks_.use_materials_of(source_);  // textures and alpha tests of the truth and the near field
+}
 
 SceneDrawer::~SceneDrawer() = default;
 

@@ -4,13 +4,19 @@
 // triangulated, points and lines are dropped. Material i of the scene becomes
 // material i + 1 of ours (0 stays the default grey). Vertex colours (set 0)
 // multiply material colours only when they vary across the scene; all equal,
-// the material colour wins (model_reader.h).
+// the material colour wins (model_reader.h). Normals are the file's when it
+// has them (none are generated: faces without stay flat). A material's base
+// colour (glTF) or else diffuse texture is returned as a TextureInput: the
+// embedded image's bytes or texels, or the external file resolved against the
+// model's folder, with the material's wrap modes; a glTF material whose alpha
+// mode is OPAQUE never alpha-tests.
 #include <assimp/config.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
 #include <assimp/Importer.hpp>
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -25,6 +31,50 @@ namespace {
 
 constexpr unsigned kImportFlags =
     aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType;
+
+TextureWrap wrap_of(int mode) {
+  switch (mode) {
+    case aiTextureMapMode_Clamp:
+    case aiTextureMapMode_Decal:
+      return TextureWrap::clamp;
+    case aiTextureMapMode_Mirror:
+      return TextureWrap::mirror;
+    default:
+      return TextureWrap::repeat;
+  }
+}
+
+// The texture `reference` of a material of `scene` read from `file`.
+TextureInput texture_input(const aiScene& scene, const aiMaterial& material, aiTextureType type,
+                           const std::string& reference, const std::filesystem::path& file) {
+  TextureInput input;
+  int mode = aiTextureMapMode_Wrap;
+  if (material.Get(AI_MATKEY_MAPPINGMODE_U(type, 0), mode) == AI_SUCCESS) input.wrap_u = wrap_of(mode);
+  if (material.Get(AI_MATKEY_MAPPINGMODE_V(type, 0), mode) == AI_SUCCESS) input.wrap_v = wrap_of(mode);
+  aiString alpha_mode;
+  if (material.Get("$mat.gltf.alphaMode", 0, 0, alpha_mode) == AI_SUCCESS)
+    input.alpha_allowed = std::string(alpha_mode.C_Str()) != "OPAQUE";
+  if (const aiTexture* embedded = scene.GetEmbeddedTexture(reference.c_str())) {
+    if (embedded->mHeight == 0) {  // compressed: mWidth is the byte count
+      const auto* bytes = reinterpret_cast<const std::uint8_t*>(embedded->pcData);
+      input.encoded.assign(bytes, bytes + embedded->mWidth);
+      input.format_hint = embedded->achFormatHint;
+    } else {
+      input.width = static_cast<int>(embedded->mWidth);
+      input.height = static_cast<int>(embedded->mHeight);
+      input.texels.reserve(std::size_t(embedded->mWidth) * embedded->mHeight);
+      for (unsigned i = 0; i < embedded->mWidth * embedded->mHeight; ++i) {
+        const aiTexel& t = embedded->pcData[i];
+        input.texels.push_back({t.r, t.g, t.b, t.a});
+      }
+    }
+    return input;
+  }
+  std::string path = reference;
+  std::replace(path.begin(), path.end(), '\\', '/');  // Windows exporters
+  input.file = (file.parent_path() / path).lexically_normal();
+  return input;
+}
 
 Material convert_material(const aiMaterial& source) {
   Material material;
@@ -91,7 +141,9 @@ bool emit_mesh(const std::string& file, unsigned mesh_index, const aiMesh& mesh,
       t.color[i] = corner_colour(material_colour, t.material, colours ? &vertex_colour : nullptr, colours_vary);
       ignored |= colours && t.material != 0 && !colours_vary;
       if (texcoords) t.uv[i] = {texcoords[v].x, texcoords[v].y};
+      if (mesh.mNormals) t.normal[i] = {mesh.mNormals[v].x, mesh.mNormals[v].y, mesh.mNormals[v].z};
     }
+    t.has_normals = mesh.mNormals != nullptr;
     emit(t);
     ++info.triangles_emitted;
   }
@@ -125,8 +177,16 @@ ModelInfo read_with_assimp(const std::filesystem::path& file, const std::string&
   ModelInfo info;
   info.format = "assimp:" + extension;
   info.materials.push_back(default_material());
-  for (unsigned m = 0; m < scene->mNumMaterials; ++m)
-    info.materials.push_back(convert_material(*scene->mMaterials[m]));
+  for (unsigned m = 0; m < scene->mNumMaterials; ++m) {
+    const aiMaterial& material = *scene->mMaterials[m];
+    info.materials.push_back(convert_material(material));
+    for (aiTextureType type : {aiTextureType_BASE_COLOR, aiTextureType_DIFFUSE}) {
+      aiString reference;
+      if (material.GetTexture(type, 0, &reference) != AI_SUCCESS) continue;
+      info.textures[m + 1] = texture_input(*scene, material, type, reference.C_Str(), file);
+      break;
+    }
+  }
   // The scene-wide rule: do the vertex colours vary anywhere?
   const ColourVariation variation = scene_colour_variation(*scene);
   bool ignored = false;

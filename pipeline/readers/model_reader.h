@@ -10,9 +10,11 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "stages/geometry.h"
+#include "stages/texture.h"
 
 namespace cellbake {
 
@@ -24,8 +26,26 @@ enum class VertexColourUse {
   uniform_kept,     // all equal, but no face had a material colour to use instead: they are the colour
 };
 
+// A texture a material refers to, as the reader found it: a file (path
+// resolved against the model's folder) or an image the model file embeds
+// (GLB buffers, assimp's "*N" references): encoded bytes with a format hint,
+// or raw texels (top row first, as assimp holds them).
+struct TextureInput {
+  std::filesystem::path file;           // external file; empty when embedded
+  std::vector<std::uint8_t> encoded;    // embedded, compressed (PNG, JPEG, ...)
+  std::string format_hint;              // embedded: "png", "jpg", ... (may be empty)
+  std::vector<Rgba8> texels;            // embedded, uncompressed
+  int width = 0, height = 0;            // of `texels`
+  TextureWrap wrap_u = TextureWrap::repeat, wrap_v = TextureWrap::repeat;
+  bool alpha_allowed = true;            // false when the file says the material is opaque
+};
+
 struct ModelInfo {
   std::vector<Material> materials;  // index 0 is always the default material
+  // Textures by material index, for materials whose `texture` names one.
+  // Materials with a texture but no entry here refer to the file
+  // Material::texture (absolute or relative to the model's folder).
+  std::unordered_map<std::uint32_t, TextureInput> textures;
   VertexColourUse vertex_colours = VertexColourUse::none;
   Rgba8 uniform_vertex_colour{};    // the one colour, when vertex_colours is uniform_*
   std::uint64_t triangles_emitted = 0;

@@ -1,5 +1,6 @@
 #include "pipeline/readers/mtl_reader.h"
 
+#include <algorithm>
 #include <memory>
 
 #include "pipeline/input_error.h"
@@ -69,7 +70,9 @@ bool read_mtl(const std::filesystem::path& mtl_file, std::vector<Material>& mate
       current->color.a = unit_to_byte(key == "d" ? value : 1.0 - value);
     } else if (key == "map_Kd") {
       const std::string texture = texture_operand(scan);
-      if (!texture.empty()) current->texture = (mtl_file.parent_path() / texture).lexically_normal().string();
+      std::string path = texture;
+      std::replace(path.begin(), path.end(), '\\', '/');  // Windows exporters
+      if (!path.empty()) current->texture = (mtl_file.parent_path() / path).lexically_normal().string();
     }
   }
   for (Material& material : parsed) {

@@ -29,11 +29,12 @@
 namespace cellbake {
 namespace {
 
-// One face corner after index resolution: a position index and an optional
-// texcoord index (-1 when absent).
+// One face corner after index resolution: a position index and optional
+// texcoord and normal indices (-1 when absent).
 struct ObjCorner {
   std::uint32_t vertex = 0;
   std::int64_t texcoord = -1;
+  std::int64_t normal = -1;
 };
 
 class ObjReader {
@@ -62,7 +63,8 @@ class ObjReader {
         scan.p += 2;
         parse_texcoord(scan);
       } else if (c0 == 'v' && c1 == 'n') {
-        ++normal_count_;
+        scan.p += 2;
+        parse_normal(scan);
       } else if (c0 == 'u' || c0 == 'm') {
         const std::string_view key = scan.token();
         if (key == "usemtl") use_material(std::string(scan.rest()));
@@ -114,6 +116,13 @@ class ObjReader {
     texcoords_.push_back({static_cast<float>(u), static_cast<float>(v)});
   }
 
+  void parse_normal(TextScan& scan) {
+    double x = 0, y = 0, z = 0;
+    if (!scan.number(x) || !scan.number(y) || !scan.number(z)) fail("malformed normal (expected 'vn x y z')");
+    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) fail("non-finite normal");
+    normals_.push_back({static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)});
+  }
+
   // Resolves a 1-based (or negative, relative) OBJ index against `count` items.
   std::uint64_t resolve(std::int64_t raw, std::uint64_t count, const char* what) const {
     if (raw == 0) fail(std::string(what) + " index 0 is invalid (OBJ indices start at 1)");
@@ -143,7 +152,7 @@ class ObjReader {
       if (scan.p < scan.end && *scan.p == '/') {
         ++scan.p;
         if (!scan.integer_prefix(raw)) fail("malformed face corner");
-        resolve(raw, normal_count_, "normal");
+        corner.normal = static_cast<std::int64_t>(resolve(raw, normals_.size(), "normal"));
       }
     }
     if (scan.p < scan.end && !is_blank(*scan.p)) fail("malformed face corner");
@@ -209,6 +218,10 @@ class ObjReader {
       t.color[i] = corner_colour(material_colour, material_, coloured ? &vertex_colours_[v] : nullptr, vary);
       if (corners[i]->texcoord >= 0) t.uv[i] = texcoords_[static_cast<std::size_t>(corners[i]->texcoord)];
     }
+    // Normals only when every corner names one; a face without them is flat.
+    t.has_normals = a.normal >= 0 && b.normal >= 0 && c.normal >= 0;
+    if (t.has_normals)
+      for (int i = 0; i < 3; ++i) t.normal[i] = normals_[static_cast<std::size_t>(corners[i]->normal)];
     emit_(t);
     ++info_.triangles_emitted;
   }
@@ -240,7 +253,7 @@ class ObjReader {
   std::optional<bool> file_colours_vary_;    // settled by scan_vertex_colours()
   bool ignored_colours_ = false;             // some corner's uniform colour gave way to its material's
   std::vector<Uv> texcoords_;
-  std::uint64_t normal_count_ = 0;
+  std::vector<Vec3f> normals_;
   std::unordered_map<std::string, std::uint32_t> material_by_name_;
   std::uint32_t material_ = 0;
 };

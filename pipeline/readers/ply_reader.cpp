@@ -214,7 +214,7 @@ class AsciiSource {
 };
 
 // What a vertex property feeds.
-enum class VertexRole : std::uint8_t { none, x, y, z, red, green, blue, alpha, u, v };
+enum class VertexRole : std::uint8_t { none, x, y, z, red, green, blue, alpha, u, v, nx, ny, nz };
 
 VertexRole vertex_role(const std::string& name) {
   if (name == "x") return VertexRole::x;
@@ -226,6 +226,9 @@ VertexRole vertex_role(const std::string& name) {
   if (name == "alpha" || name == "a" || name == "diffuse_alpha") return VertexRole::alpha;
   if (name == "s" || name == "u" || name == "texture_u" || name == "texture_s") return VertexRole::u;
   if (name == "t" || name == "v" || name == "texture_v" || name == "texture_t") return VertexRole::v;
+  if (name == "nx") return VertexRole::nx;
+  if (name == "ny") return VertexRole::ny;
+  if (name == "nz") return VertexRole::nz;
   return VertexRole::none;
 }
 
@@ -241,6 +244,7 @@ struct VertexTable {
   std::vector<Vec3d> positions;
   std::vector<Rgba8> colours;  // empty or one per vertex
   std::vector<Uv> uvs;         // empty or one per vertex
+  std::vector<Vec3f> normals;  // empty or one per vertex
 };
 
 class PlyReader {
@@ -339,6 +343,7 @@ class PlyReader {
   void read_vertices(Source& source, BufferedInput& in, const PlyElement& element) {
     std::vector<VertexRole> roles;
     bool has_x = false, has_y = false, has_z = false, has_colour = false, has_u = false, has_v = false;
+    int normal_axes = 0;
     for (const PlyProperty& property : element.properties) {
       const VertexRole role = property.is_list ? VertexRole::none : vertex_role(property.name);
       roles.push_back(role);
@@ -348,7 +353,9 @@ class PlyReader {
       has_colour |= role == VertexRole::red || role == VertexRole::green || role == VertexRole::blue;
       has_u |= role == VertexRole::u;
       has_v |= role == VertexRole::v;
+      normal_axes += role == VertexRole::nx || role == VertexRole::ny || role == VertexRole::nz;
     }
+    has_normals_ = normal_axes == 3;
     if (!has_x || !has_y || !has_z) throw InputError(in.name(), "", "PLY vertex element lacks x, y or z");
     const bool has_uv = has_u && has_v;
 
@@ -358,6 +365,7 @@ class PlyReader {
     vertices_.positions.reserve(reserve);
     if (has_colour) vertices_.colours.reserve(reserve);
     if (has_uv) vertices_.uvs.reserve(reserve);
+    if (has_normals_) vertices_.normals.reserve(reserve);
 
     if constexpr (std::is_same_v<Source, BinarySource>) {
       if (!element.has_lists()) return read_fixed_vertices(source, in, element, roles, has_colour, has_uv);
@@ -412,6 +420,7 @@ class PlyReader {
     Vec3d p;
     Rgba8 colour{0, 0, 0, 255};
     Uv uv;
+    Vec3f n;
     void assign(VertexRole role, double value, PlyType type) {
       switch (role) {
         case VertexRole::x:
@@ -441,6 +450,15 @@ class PlyReader {
         case VertexRole::v:
           uv.v = static_cast<float>(value);
           break;
+        case VertexRole::nx:
+          n.x = static_cast<float>(value);
+          break;
+        case VertexRole::ny:
+          n.y = static_cast<float>(value);
+          break;
+        case VertexRole::nz:
+          n.z = static_cast<float>(value);
+          break;
         case VertexRole::none:
           break;
       }
@@ -456,6 +474,7 @@ class PlyReader {
     vertices_.positions.push_back(values.p);
     if (has_colour) vertices_.colours.push_back(values.colour);
     if (has_uv) vertices_.uvs.push_back(values.uv);
+    if (has_normals_) vertices_.normals.push_back(values.n);
   }
 
   template <class Source>
@@ -502,7 +521,9 @@ class PlyReader {
       t.p[i] = vertices_.positions[corners[i]];
       t.color[i] = vertices_.colours.empty() ? grey : vertices_.colours[corners[i]];
       if (!vertices_.uvs.empty()) t.uv[i] = vertices_.uvs[corners[i]];
+      if (!vertices_.normals.empty()) t.normal[i] = vertices_.normals[corners[i]];
     }
+    t.has_normals = !vertices_.normals.empty();
     emit_(t);
     ++info_.triangles_emitted;
   }
@@ -512,6 +533,7 @@ class PlyReader {
   ModelInfo info_;
   VertexTable vertices_;
   std::size_t index_property_ = 0;
+  bool has_normals_ = false;  // the vertex element has nx, ny and nz
 };
 
 }  // namespace

@@ -1,12 +1,14 @@
 #include "stages/render/chunk_renderer.h"
 
 #include "stages/render/gl_functions.h"
+#include "stages/render/gl_texture_cache.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstring>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -20,28 +22,39 @@ namespace {
 constexpr const char* kVertexShader = R"(#version 330 core
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec4 a_color;
+layout(location = 2) in vec2 a_uv;      // (0, 0) when the chunk has none
+layout(location = 3) in vec4 a_normal;  // (0, 0, 0) when the chunk has none: flat
 uniform vec3 u_offset;      // chunk origin - eye, world axes
 uniform mat4 u_view_projection;
 uniform vec3 u_forward;     // camera forward axis, unit length
 out vec3 v_relative;        // world position - eye
 out float v_view_depth;     // planar distance along the camera's forward axis
 out vec4 v_color;
+out vec2 v_uv;
+out vec3 v_normal;
 void main() {
   v_relative = a_position + u_offset;
   v_view_depth = dot(v_relative, u_forward);
   v_color = a_color;
+  v_uv = a_uv;
+  v_normal = a_normal.xyz;
   gl_Position = u_view_projection * vec4(v_relative, 1.0);
 }
 )";
 
-// The light model of stages/render/shading.h: a flat face normal from the
-// screen-space derivatives of the eye-relative position (exact for planar
-// triangles, in world axes), two-sided Lambert over two lights plus ambient.
-// A fragment whose derivatives give no normal keeps its base colour.
+// The light model of stages/render/shading.h: the interpolated vertex normal
+// when the chunk has normals, else a flat face normal from the screen-space
+// derivatives of the eye-relative position (exact for planar triangles, in
+// world axes); two-sided Lambert over two lights plus ambient. A fragment
+// whose derivatives give no normal keeps its base colour. The base colour is
+// the vertex colour times the material's texel (trilinear, mipmapped) when the
+// material has a texture; alpha-tested materials drop texels below 0.5 alpha.
 constexpr const char* kFragmentShader = R"(#version 330 core
 in vec3 v_relative;
 in float v_view_depth;
 in vec4 v_color;
+in vec2 v_uv;
+in vec3 v_normal;
 uniform vec3 u_discard_lo;  // discard box relative to the eye
 uniform vec3 u_discard_hi;
 uniform int u_keep_inside;  // 0: drop fragments inside the box, 1: keep only those
@@ -49,21 +62,33 @@ uniform int u_lit;          // 0: base colour as it is
 uniform vec3 u_key;         // unit light directions, world axes, times their strengths
 uniform vec3 u_fill;
 uniform float u_ambient;
+uniform int u_textured;     // 1: multiply by u_texture at v_uv
+uniform int u_alpha_test;   // 1: drop fragments whose texel alpha < 0.5
+uniform sampler2D u_texture;
 layout(location = 0) out vec4 o_color;
 layout(location = 1) out float o_view_depth;
 void main() {
+  // Derivatives and texture lookups before any discard (uniform control flow).
+  vec3 flat_normal = cross(dFdx(v_relative), dFdy(v_relative));
+  vec4 texel = u_textured != 0 ? texture(u_texture, v_uv) : vec4(1.0);
   bool inside = all(greaterThan(v_relative, u_discard_lo)) && all(lessThan(v_relative, u_discard_hi));
   if (inside != (u_keep_inside != 0)) discard;
-  vec3 color = v_color.rgb;
+  if (u_alpha_test != 0 && texel.a < 0.5) discard;
+  vec4 base = v_color * vec4(texel.rgb, 1.0);
+  vec3 color = base.rgb;
   if (u_lit != 0) {
-    vec3 n = cross(dFdx(v_relative), dFdy(v_relative));
+    vec3 n = v_normal;
     float n2 = dot(n, n);
+    if (!(n2 > 1e-6)) {
+      n = flat_normal;
+      n2 = dot(n, n);
+    }
     if (n2 > 0.0 && !isinf(n2)) {
       n *= inversesqrt(n2);
       color = clamp(color * (u_ambient + abs(dot(n, u_key)) + abs(dot(n, u_fill))), 0.0, 1.0);
     }
   }
-  o_color = vec4(color, v_color.a);
+  o_color = vec4(color, base.a);
   o_view_depth = v_view_depth;
 }
 )";
@@ -98,6 +123,48 @@ struct Vertex {
   Rgba8 color;
 };
 static_assert(sizeof(Vertex) == 16);
+
+// The layout of chunks with texture coordinates or normals: the normal packed
+// as GL_INT_2_10_10_10_REV (signed normalised, w unused).
+struct VertexExtended {
+  float x, y, z;
+  Rgba8 color;
+  float u, v;
+  std::uint32_t normal;
+};
+static_assert(sizeof(VertexExtended) == 28);
+
+std::uint32_t pack_normal_2_10_10_10(const Vec3f& n) {
+  const auto component = [](float v) {
+    const long q = std::lround(std::clamp(std::isfinite(v) ? v : 0.f, -1.f, 1.f) * 511.f);
+    return static_cast<std::uint32_t>(q) & 0x3FFu;
+  };
+  return component(n.x) | (component(n.y) << 10) | (component(n.z) << 20);
+}
+
+// Triangle order of a chunk's draw: grouped by material (stable), as ranges.
+std::vector<std::uint32_t> order_by_material(const Chunk& chunk, std::vector<ChunkDrawRange>& ranges) {
+  const std::size_t triangles = chunk.indices.size() / 3;
+  ranges.clear();
+  if (chunk.materials.empty()) {
+    ranges.push_back({0, 0, static_cast<int>(chunk.indices.size())});
+    return chunk.indices;
+  }
+  std::vector<std::uint32_t> order(triangles);
+  for (std::size_t t = 0; t < triangles; ++t) order[t] = static_cast<std::uint32_t>(t);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::uint32_t a, std::uint32_t b) { return chunk.materials[a] < chunk.materials[b]; });
+  std::vector<std::uint32_t> indices;
+  indices.reserve(chunk.indices.size());
+  for (std::size_t k = 0; k < triangles; ++k) {
+    const std::uint32_t t = order[k];
+    if (ranges.empty() || ranges.back().material != chunk.materials[t])
+      ranges.push_back({chunk.materials[t], static_cast<int>(indices.size()), 0});
+    for (int c = 0; c < 3; ++c) indices.push_back(chunk.indices[3 * t + c]);
+    ranges.back().count += 3;
+  }
+  return indices;
+}
 
 // Column-major 4x4 matrices as GL expects them; built in double.
 using Mat4 = std::array<double, 16>;
@@ -173,12 +240,14 @@ ChunkRenderer::ChunkRenderer(std::unique_ptr<GlContext> context, ChunkRendererPa
       gl_(*gl_functions_) {
   build_program();
   build_occlusion_program();
+  textures_ = std::make_unique<GlTextureCache>(gl_, params_.texture_cache_bytes);
 }
 
 ChunkRenderer::~ChunkRenderer() {
   try {
     make_current();
     clear_cache();
+    textures_.reset();
     release_framebuffer();
     if (program_) gl_.DeleteProgram(program_);
     if (occlusion_program_) {
@@ -209,6 +278,9 @@ void ChunkRenderer::build_program() {
   u_key_ = gl_.GetUniformLocation(program_, "u_key");
   u_fill_ = gl_.GetUniformLocation(program_, "u_fill");
   u_ambient_ = gl_.GetUniformLocation(program_, "u_ambient");
+  u_textured_ = gl_.GetUniformLocation(program_, "u_textured");
+  u_alpha_test_ = gl_.GetUniformLocation(program_, "u_alpha_test");
+  u_texture_ = gl_.GetUniformLocation(program_, "u_texture");
   check_gl_error(gl_, "chunk_renderer: build_program");
 }
 
@@ -358,42 +430,73 @@ const ChunkRenderer::CachedChunk& ChunkRenderer::upload(const Chunk& chunk) {
   for (std::uint32_t i : chunk.indices)
     if (i >= n) throw std::runtime_error(where + " index " + std::to_string(i) + " out of range");
 
-  std::vector<Vertex> vertices(n);
+  if (!chunk.uvs.empty() && chunk.uvs.size() != n)
+    throw std::runtime_error(where + " has " + std::to_string(chunk.uvs.size()) + " uvs for " + std::to_string(n) +
+                             " positions");
+  if (!chunk.normals.empty() && chunk.normals.size() != n)
+    throw std::runtime_error(where + " has " + std::to_string(chunk.normals.size()) + " normals for " +
+                             std::to_string(n) + " positions");
+  if (!chunk.materials.empty() && chunk.materials.size() != chunk.indices.size() / 3)
+    throw std::runtime_error(where + " has " + std::to_string(chunk.materials.size()) + " materials for " +
+                             std::to_string(chunk.indices.size() / 3) + " triangles");
+  const bool extended = !chunk.uvs.empty() || !chunk.normals.empty();
+  std::vector<std::uint8_t> vertex_bytes(n * (extended ? sizeof(VertexExtended) : sizeof(Vertex)));
   for (std::size_t i = 0; i < n; ++i) {
     const Vec3f& p = chunk.positions[i];
-    vertices[i] = {p.x, p.y, p.z, chunk.colors.empty() ? Rgba8{} : chunk.colors[i]};
+    const Rgba8 color = chunk.colors.empty() ? Rgba8{} : chunk.colors[i];
+    if (extended) {
+      const Uv uv = chunk.uvs.empty() ? Uv{} : chunk.uvs[i];
+      const VertexExtended v{p.x, p.y, p.z, color, uv.u, uv.v,
+                             chunk.normals.empty() ? 0u : pack_normal_2_10_10_10(chunk.normals[i])};
+      std::memcpy(vertex_bytes.data() + i * sizeof v, &v, sizeof v);
+    } else {
+      const Vertex v{p.x, p.y, p.z, color};
+      std::memcpy(vertex_bytes.data() + i * sizeof v, &v, sizeof v);
+    }
   }
+  CachedChunk entry;
+  const std::vector<std::uint32_t> ordered = order_by_material(chunk, entry.ranges);
   const bool short_indices = n <= 65536;
   std::vector<std::uint16_t> indices16;
-  if (short_indices) indices16.assign(chunk.indices.begin(), chunk.indices.end());
-  const std::size_t index_bytes = chunk.indices.size() * (short_indices ? 2 : 4);
+  if (short_indices) indices16.assign(ordered.begin(), ordered.end());
+  const std::size_t index_bytes = ordered.size() * (short_indices ? 2 : 4);
 
   if (auto old = cache_.find(chunk.id); old != cache_.end()) {
     lru_.erase(old->second.recency);
     release(old->second);
     cache_.erase(old);
   }
-  CachedChunk entry;
   entry.origin = chunk.origin;
   entry.index_count = static_cast<int>(chunk.indices.size());
   entry.index_type = short_indices ? GL_UNSIGNED_SHORT : GL_UNSIGNED_INT;
-  entry.bytes = vertices.size() * sizeof(Vertex) + index_bytes;
+  entry.bytes = vertex_bytes.size() + index_bytes;
   gl_.GenVertexArrays(1, &entry.vertex_array);
   gl_.BindVertexArray(entry.vertex_array);
   gl_.GenBuffers(1, &entry.vertex_buffer);
   gl_.BindBuffer(GL_ARRAY_BUFFER, entry.vertex_buffer);
-  gl_.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(Vertex)), vertices.data(),
-                 GL_STATIC_DRAW);
+  gl_.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertex_bytes.size()), vertex_bytes.data(), GL_STATIC_DRAW);
+  const GLsizei stride = extended ? sizeof(VertexExtended) : sizeof(Vertex);
   gl_.EnableVertexAttribArray(0);
-  gl_.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vertex), reinterpret_cast<const void*>(0));
+  gl_.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<const void*>(0));
   gl_.EnableVertexAttribArray(1);
-  gl_.VertexAttribPointer(1, 4, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(Vertex),
+  gl_.VertexAttribPointer(1, 4, GL_UNSIGNED_BYTE, GL_TRUE, stride,
                           reinterpret_cast<const void*>(offsetof(Vertex, color)));
+  if (extended) {
+    // Attributes left disabled read GL's default (0, 0, 0, 1): no uv, no normal.
+    gl_.EnableVertexAttribArray(2);
+    gl_.VertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, stride,
+                            reinterpret_cast<const void*>(offsetof(VertexExtended, u)));
+    if (!chunk.normals.empty()) {
+      gl_.EnableVertexAttribArray(3);
+      gl_.VertexAttribPointer(3, 4, GL_INT_2_10_10_10_REV, GL_TRUE, stride,
+                              reinterpret_cast<const void*>(offsetof(VertexExtended, normal)));
+    }
+  }
   gl_.GenBuffers(1, &entry.index_buffer);
   gl_.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, entry.index_buffer);
   gl_.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(index_bytes),
                  short_indices ? static_cast<const void*>(indices16.data())
-                               : static_cast<const void*>(chunk.indices.data()),
+                               : static_cast<const void*>(ordered.data()),
                  GL_STATIC_DRAW);
   gl_.BindVertexArray(0);
   check_gl_error(gl_, where.c_str());
@@ -417,6 +520,12 @@ void ChunkRenderer::set_camera_uniforms(const RenderCamera& camera, const Box3d&
   gl_.Uniform3f(u_key_, static_cast<float>(key.x), static_cast<float>(key.y), static_cast<float>(key.z));
   gl_.Uniform3f(u_fill_, static_cast<float>(fill.x), static_cast<float>(fill.y), static_cast<float>(fill.z));
   gl_.Uniform1f(u_ambient_, static_cast<float>(lights_.ambient));
+  gl_.Uniform1i(u_texture_, 0);
+  gl_.Uniform1i(u_textured_, 0);
+  gl_.Uniform1i(u_alpha_test_, 0);
+  gl_.ActiveTexture(GL_TEXTURE0);
+  textured_uniform_ = alpha_test_uniform_ = false;
+  bound_texture_ = 0;
   gl_.Uniform3f(u_forward_, static_cast<float>(camera.forward.x), static_cast<float>(camera.forward.y),
                 static_cast<float>(camera.forward.z));
   if (discard_box.empty()) {
@@ -435,10 +544,48 @@ void ChunkRenderer::draw_cached(const CachedChunk& entry, const Vec3d& eye) {
   gl_.Uniform3f(u_offset_, static_cast<float>(offset.x), static_cast<float>(offset.y), static_cast<float>(offset.z));
   if (entry.index_count > 0) {
     gl_.BindVertexArray(entry.vertex_array);
-    gl_.DrawElements(GL_TRIANGLES, entry.index_count, entry.index_type, nullptr);
+    const std::size_t index_size = entry.index_type == GL_UNSIGNED_SHORT ? 2 : 4;
+    for (const ChunkDrawRange& range : entry.ranges) {
+      apply_material(range.material);
+      gl_.DrawElements(GL_TRIANGLES, range.count, entry.index_type,
+                       reinterpret_cast<const void*>(static_cast<std::uintptr_t>(range.first) * index_size));
+    }
   }
   ++stats_.chunks_drawn;
   stats_.triangles_drawn += static_cast<std::uint64_t>(entry.index_count / 3);
+}
+
+void ChunkRenderer::apply_material(std::uint32_t index) {
+  const Material* material = index < materials_.size() ? &materials_[index] : nullptr;
+  const std::int64_t texture = material ? material->texture_id : 0;
+  const bool alpha_test = texture > 0 && material->alpha_test;
+  if (texture > 0 && texture != bound_texture_) {
+    textures_->bind(texture, load_texture_);
+    bound_texture_ = texture;
+  }
+  if ((texture > 0) != textured_uniform_) {
+    textured_uniform_ = texture > 0;
+    gl_.Uniform1i(u_textured_, textured_uniform_ ? 1 : 0);
+  }
+  if (alpha_test != alpha_test_uniform_) {
+    alpha_test_uniform_ = alpha_test;
+    gl_.Uniform1i(u_alpha_test_, alpha_test ? 1 : 0);
+  }
+}
+
+void ChunkRenderer::set_materials(std::vector<Material> materials, TextureLoader load_texture) {
+  make_current();
+  materials_ = std::move(materials);
+  load_texture_ = std::move(load_texture);
+  textures_->clear();
+  bound_texture_ = 0;
+}
+
+void ChunkRenderer::use_materials_of(const ChunkSource& source) {
+  std::vector<Material> materials = source.materials();
+  if (material_source_ == &source && materials == materials_) return;
+  set_materials(std::move(materials), [&source](std::int64_t id) { return source.load_texture(id); });
+  material_source_ = &source;
 }
 
 void ChunkRenderer::draw(const RenderCamera& camera, const Box3d& discard_box, std::span<const std::int64_t> ids,
@@ -619,6 +766,9 @@ bool ChunkRenderer::reversed_z() const { return gl_.ClipControl != nullptr; }
 
 ChunkRendererStats ChunkRenderer::stats() const {
   ChunkRendererStats s = stats_;
+  s.texture_uploads = textures_->uploads();
+  s.cached_textures = textures_->size();
+  s.cached_texture_bytes = textures_->bytes();
   s.cached_chunks = cache_.size();
   s.cached_bytes = cached_bytes_;
   return s;

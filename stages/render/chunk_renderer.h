@@ -13,9 +13,12 @@
 // A discard box removes every fragment whose world position lies strictly
 // inside it (the far field of a view cell is everything outside its cull box);
 // with BoxClip::keep_inside it keeps exactly those instead (the near field).
-// Colours: the chunk's vertex colours under the fixed light model of
-// stages/render/shading.h (flat face normals from screen-space derivatives),
-// or as they are when the shading is unlit.
+// Colours: the chunk's vertex colours, times the texel of the triangle's
+// material texture when it has one (trilinear mipmapping, the file's wrap
+// modes; alpha-tested materials drop texels with alpha < 0.5), under the fixed
+// light model of stages/render/shading.h (the chunk's vertex normals when it
+// has them, else flat face normals from screen-space derivatives), or as they
+// are when the shading is unlit.
 #pragma once
 
 #include <array>
@@ -36,6 +39,8 @@
 namespace cellbake {
 
 struct GlFunctions;  // stages/render/gl_functions.h; kept out of this header so users need no GL headers
+class GlTextureCache;  // stages/render/gl_texture_cache.h
+using TextureLoader = std::function<std::shared_ptr<const TextureImage>(std::int64_t id)>;
 
 // A pinhole camera. The basis must be orthonormal and right-handed like an
 // OpenGL camera (right x up = -forward); the image's x axis runs along
@@ -70,6 +75,15 @@ struct ChunkRendererParams {
   // recently drawn chunks are evicted beyond it. A single chunk larger than the
   // cap is still drawn (it is then the only one cached).
   std::size_t cache_bytes = std::size_t{1} << 30;
+  // Cap on the GL memory of cached textures (mip chains included).
+  std::size_t texture_cache_bytes = std::size_t{512} << 20;
+};
+
+// A run of a cached chunk's indices that share one material.
+struct ChunkDrawRange {
+  std::uint32_t material = 0;
+  int first = 0;  // first index
+  int count = 0;  // indices
 };
 
 struct ChunkRendererStats {
@@ -81,6 +95,9 @@ struct ChunkRendererStats {
   std::uint64_t occlusion_tests = 0;  // bounding boxes tested by draw_unoccluded()
   std::size_t cached_chunks = 0;
   std::size_t cached_bytes = 0;
+  std::uint64_t texture_uploads = 0;
+  std::size_t cached_textures = 0;
+  std::size_t cached_texture_bytes = 0;
 };
 
 // Loads a chunk by id; the renderer calls it only for chunks it has not cached.
@@ -110,6 +127,13 @@ class ChunkRenderer {
   // for non-unit directions or negative or non-finite strengths.
   void set_shading(const ShadingLights& lights);
   const ShadingLights& shading() const { return lights_; }
+  // The material table chunks' `materials` index (textures and alpha tests;
+  // colours are already in the vertex colours) and where textures come from.
+  // Drops cached textures. Without a table every triangle is untextured.
+  void set_materials(std::vector<Material> materials, TextureLoader load_texture);
+  // set_materials(source.materials(), source.load_texture) unless `source`'s
+  // table is already in use; `source` must outlive the draws that follow.
+  void use_materials_of(const ChunkSource& source);
   // True when chunk `id` has cached buffers.
   bool is_cached(std::int64_t id) const;
   // Drops every cached chunk (call when the ids' geometry changed).
@@ -161,6 +185,7 @@ class ChunkRenderer {
     Vec3d origin;
     std::size_t bytes = 0;
     std::list<std::int64_t>::iterator recency;  // position in lru_ (front = most recent)
+    std::vector<ChunkDrawRange> ranges;         // the index buffer's runs per material
   };
 
   void make_current();
@@ -172,6 +197,8 @@ class ChunkRenderer {
   void release(CachedChunk& entry);
   void set_camera_uniforms(const RenderCamera& camera, const Box3d& discard_box, BoxClip clip);
   void draw_cached(const CachedChunk& entry, const Vec3d& eye);
+  // Sets the texture and alpha-test state of material `index` (unknown = untextured).
+  void apply_material(std::uint32_t index);
   void draw_ids(const RenderCamera& camera, std::span<const std::int64_t> ids, const ChunkLoader& load);
   void build_occlusion_program();
   // Which of `boxes` (eye-relative lo/hi pairs) have a sample passing the depth
@@ -186,6 +213,13 @@ class ChunkRenderer {
   unsigned program_ = 0;
   int u_offset_ = -1, u_view_projection_ = -1, u_forward_ = -1, u_discard_lo_ = -1, u_discard_hi_ = -1, u_keep_inside_ = -1;
   int u_lit_ = -1, u_key_ = -1, u_fill_ = -1, u_ambient_ = -1;
+  int u_textured_ = -1, u_alpha_test_ = -1, u_texture_ = -1;
+  std::vector<Material> materials_;
+  TextureLoader load_texture_;
+  const ChunkSource* material_source_ = nullptr;  // whose table use_materials_of() installed
+  std::unique_ptr<GlTextureCache> textures_;
+  std::int64_t bound_texture_ = 0;  // texture bound to unit 0 for this draw (0 = unknown)
+  bool textured_uniform_ = false, alpha_test_uniform_ = false;
   ShadingLights lights_ = shading_lights(ShadingParams{}, Vec3d{0, 0, 1});
   unsigned framebuffer_ = 0, color_buffer_ = 0, view_depth_buffer_ = 0, depth_buffer_ = 0;
   int frame_width_ = 0, frame_height_ = 0;

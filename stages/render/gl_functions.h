@@ -71,6 +71,7 @@ namespace cellbake {
   X(PFNGLACTIVETEXTUREPROC, ActiveTexture, "glActiveTexture")                           \
   X(PFNGLTEXIMAGE2DPROC, TexImage2D, "glTexImage2D")                                    \
   X(PFNGLTEXPARAMETERIPROC, TexParameteri, "glTexParameteri")                           \
+  X(PFNGLGENERATEMIPMAPPROC, GenerateMipmap, "glGenerateMipmap")                        \
   X(PFNGLPOLYGONMODEPROC, PolygonMode, "glPolygonMode")                                 \
   X(PFNGLBLITFRAMEBUFFERPROC, BlitFramebuffer, "glBlitFramebuffer")                   \
   X(PFNGLCOLORMASKPROC, ColorMask, "glColorMask")                                       \

@@ -1,0 +1,29 @@
+// Texture images as ingest stores them: any format OpenImageIO reads (PNG,
+// JPEG, TGA, BMP, TIFF, ...) from a file or from bytes a model embeds, or raw
+// texels, converted to RGBA8 bottom row first (stages/texture.h) and
+// box-filtered by halving until both sides fit the size cap.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "pipeline/readers/model_reader.h"
+#include "stages/texture.h"
+
+namespace cellbake {
+
+struct TextureImportParams {
+  int max_size = 2048;  // longest side after import (>= 1); larger images are halved until they fit
+};
+
+// Decodes `input` (TextureInput from a reader: file, embedded bytes or texels)
+// into a TextureImage with its wrap modes and has_alpha set. `name` names the
+// texture in errors. Throws std::runtime_error naming it when the image is
+// missing, unreadable, empty or larger than 65536 pixels a side.
+TextureImage import_texture(const TextureInput& input, const std::string& name, const TextureImportParams& params);
+
+// Halves `image` (2x2 box filter; an odd last row or column is averaged with
+// its neighbour) until width and height are both <= max_size. Exposed for tests.
+void shrink_to_fit(TextureImage& image, int max_size);
+
+}  // namespace cellbake
