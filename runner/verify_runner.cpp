@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <map>
@@ -29,6 +30,17 @@
 
 namespace cellbake {
 namespace {
+
+// The light model the truth and the samples were drawn with, for the report:
+// "unlit" or "lit: key (x y z) x s, fill (x y z) x s, ambient a" in world axes.
+std::string describe_lighting(const ShadingLights& l) {
+  if (!l.lit) return "unlit (colours as stored)";
+  char text[256];
+  std::snprintf(text, sizeof text,
+                "lit, two-sided Lambert: key (%.3f %.3f %.3f) x %.2f, fill (%.3f %.3f %.3f) x %.2f, ambient %.2f",
+                l.key.x, l.key.y, l.key.z, l.key_strength, l.fill.x, l.fill.y, l.fill.z, l.fill_strength, l.ambient);
+  return text;
+}
 
 constexpr int kCacheVersion = 2;  // 2: views record truth_blank
 
@@ -114,7 +126,8 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
                         {"near_plane", options.near_plane},         {"seed", options.seed},
                         {"up", up_name},                            {"store_hash", db.meta("store_hash").value_or("")},
                         {"far_budget", far_budget},         {"max_samples", options.max_samples},
-                        {"sample_views", options.sample_views}};
+                        {"sample_views", options.sample_views},
+                        {"lighting", describe_lighting(shading)}};
   const std::string params_key = params.dump();
 
   // Selected done cells, in id order.

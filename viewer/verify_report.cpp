@@ -380,6 +380,9 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
     << escape_xml(input.params.dump()) << "</code>. " << summary["cells"].get<std::size_t>() << " cells ("
     << summary["cells_failed"].get<std::size_t>() << " could not be verified), " << summary["views"].get<std::size_t>()
     << " views: each rendered as the cell's impostor (near field + textured depth meshes) and as ground truth.</p>\n";
+  if (input.params.contains("lighting"))
+    h << "<p>Lighting (truth and samples alike): " << escape_xml(input.params["lighting"].get<std::string>())
+      << ".</p>\n";
   if (const std::size_t blank = summary["truth_blank_views"].get<std::size_t>(); blank > 0)
     h << "<p><b>Warning: " << blank << " of " << summary["views"].get<std::size_t>()
       << " truth views are blank</b> (one colour over every covered pixel, or nothing covered): their PSNR and SSIM "
