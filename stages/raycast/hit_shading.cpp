@@ -40,7 +40,8 @@ std::array<float, 4> HitShader::base_color(const SurfaceHit& hit) const {
   const std::size_t i = 3 * std::size_t(hit.triangle);
   const Rgba8 &c0 = c.colors[c.indices[i]], &c1 = c.colors[c.indices[i + 1]], &c2 = c.colors[c.indices[i + 2]];
   const float w0 = 1.0f - hit.u - hit.v, w1 = hit.u, w2 = hit.v;
-  const auto mix = [&](std::uint8_t a, std::uint8_t b, std::uint8_t d) { return (w0 * a + w1 * b + w2 * d) / 255.0f; };
+  constexpr float kUnorm = 1.0f / 255.0f;
+  const auto mix = [&](std::uint8_t a, std::uint8_t b, std::uint8_t d) { return (w0 * a + w1 * b + w2 * d) * kUnorm; };
   return {mix(c0.r, c1.r, c2.r), mix(c0.g, c1.g, c2.g), mix(c0.b, c1.b, c2.b), mix(c0.a, c1.a, c2.a)};
 }
 
