@@ -13,7 +13,7 @@
 //     [robust|fast] [low|medium|high] [group_triangles] [flat]
 // (CELLBAKE_BENCH_EYES="x,y,z;..." picks the eyes, as for bench_sample). The
 // third and fourth arguments pick the chunk scenes' flags and build quality
-// (default: robust, medium, as the sampler), the fifth the triangles per chunk
+// (default: fast = not robust, medium, as the sampler), the fifth the triangles per chunk
 // group (default 1048576, as the sampler; 1: one instance per chunk); `flat` also traces a one-level
 // scene per cell holding every needed chunk's triangles directly (the cost of
 // instancing).
@@ -191,10 +191,10 @@ int run(int argc, char** argv) {
 
   // BVH builds: every chunk the cells need, once (cold cache).
   ChunkBvhCacheParams cache_params;
-  const std::string flags = argc > 3 ? argv[3] : "robust", quality = argc > 4 ? argv[4] : "medium";
+  const std::string flags = argc > 3 ? argv[3] : "fast", quality = argc > 4 ? argv[4] : "medium";
   const bool flat = argc > 6 && std::string(argv[6]) == "flat";
   if (argc > 5) cache_params.group_triangles = std::size_t(std::atoll(argv[5]));
-  cache_params.scene_flags = flags == "fast" ? RTC_SCENE_FLAG_NONE : RTC_SCENE_FLAG_ROBUST;
+  cache_params.scene_flags = flags == "robust" ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE;
   cache_params.build_quality = quality == "high"  ? RTC_BUILD_QUALITY_HIGH
                                : quality == "low" ? RTC_BUILD_QUALITY_LOW
                                                   : RTC_BUILD_QUALITY_MEDIUM;
