@@ -2,8 +2,8 @@
 // and the factory that gives each bake worker thread its CubeSampler
 // (stages/cube_sampler.h): "osmesa" and "egl" rasterise with ChunkRenderer on
 // a GL context of that kind, "embree" ray-casts on the CPU through one BVH
-// cache shared by all of a bake's samplers, "auto" picks Embree (the GL
-// backends are for GPUs; see README.md "Sampling backends").
+// cache shared by all of a bake's samplers, "auto" picks EGL when EGL
+// enumerates a hardware (GPU) device, else Embree (README.md "Sampling backends").
 #pragma once
 
 #include <cstddef>
@@ -23,7 +23,8 @@ const char* sample_backend_name(SampleBackend backend);
 SampleBackend parse_sample_backend(const std::string& name);
 
 // The backend `backend` stands for on this machine: itself, or for
-// `automatic` Embree.
+// `automatic` EGL when a GPU device is present (probed once per process,
+// creating no context), else Embree.
 SampleBackend resolve_sample_backend(SampleBackend backend);
 
 // What the backend's pixels depend on, for the bake hash: "gl" for osmesa and
@@ -35,8 +36,8 @@ const char* sample_backend_pixels(SampleBackend backend);
 class CubeSamplerFactory {
  public:
   // `embree_cache_bytes`: the byte cap of the Embree BVH cache (unused by the
-  // GL backends). Throws std::runtime_error when the backend is unavailable
-  // in this build or Embree fails to start.
+  // GL backends). Throws std::runtime_error when the backend is not in this
+  // build (OSMesa is optional) or Embree fails to start.
   CubeSamplerFactory(SampleBackend backend, std::size_t embree_cache_bytes);
   // A new sampler (for GL backends: a new context, current on the calling
   // thread). Throws std::runtime_error when the context cannot be created.
