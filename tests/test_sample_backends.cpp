@@ -240,6 +240,26 @@ TEST(SampleBackends, OffCentreEyeAndEyeOutsideTheCullBoxMatch) {
   b.check({-6, 0.5, 0.2}, Box3d{{-3, -3, -3}, {3, 3, 3}}, params(128), source, "eye outside the cull box");
 }
 
+TEST(SampleBackends, PerVertexNormalsMatch) {
+  // The room with a random unit normal at every vertex: both backends light
+  // with the normalised barycentric interpolation of the corner normals.
+  const auto owned = room({0, 0, 0}, 13);
+  InMemoryChunkSource source;
+  std::mt19937_64 rng(17);
+  std::normal_distribution<double> gauss;
+  for (const ChunkRef& ref : owned->query(owned->model_bounds())) {
+    Chunk c = *owned->load(ref.id);
+    for (std::size_t v = 0; v < c.positions.size(); ++v) {
+      Vec3d n{gauss(rng), gauss(rng), gauss(rng)};
+      n = n * (1.0 / length(n));
+      c.normals.push_back({float(n.x), float(n.y), float(n.z)});
+    }
+    source.add(std::move(c));
+  }
+  Backends b;
+  b.check({0.3, -0.2, 0.1}, Box3d::cube({0, 0, 0}, 1.0), params(128), source, "room, per-vertex normals");
+}
+
 TEST(SampleBackends, EyeOutsideTheCullBoxHidesOnlyItsInterior) {
   // A wall at x = 5 behind the cull box [1, 3]^3-ish, and a wall at x = 2 inside it.
   InMemoryChunkSource source;
