@@ -450,6 +450,36 @@ TEST(ChunkBvhCache, GroupSizeChangesNoPixel) {
   }
 }
 
+// A source whose model has a textured material.
+class TexturedSource final : public ChunkSource {
+ public:
+  explicit TexturedSource(const ChunkSource& inner) : inner_(inner) {}
+  std::vector<ChunkRef> query(const Box3d& box) const override { return inner_.query(box); }
+  std::shared_ptr<const Chunk> load(std::int64_t id) const override { return inner_.load(id); }
+  Box3d model_bounds() const override { return inner_.model_bounds(); }
+  std::vector<Material> materials() const override {
+    Material m;
+    m.name = "checker";
+    m.texture_id = 1;
+    return {Material{}, m};
+  }
+
+ private:
+  const ChunkSource& inner_;
+};
+
+TEST(SampleBackends, EmbreeRefusesTexturedModelsUntilItSamplesTextures) {
+  const auto owned = room({0, 0, 0});
+  const TexturedSource source(*owned);
+  EmbreeCubeSampler sampler(std::make_shared<ChunkBvhCache>());
+  try {
+    sampler.sample({0, 0, 0}, Box3d::cube({0, 0, 0}, 1.0), params(8), source);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("checker"), std::string::npos) << e.what();
+  }
+}
+
 TEST(SampleBackendConfig, NamesParseAndAutoResolvesToARealBackend) {
   for (SampleBackend b : {SampleBackend::osmesa, SampleBackend::egl, SampleBackend::embree, SampleBackend::automatic})
     EXPECT_EQ(parse_sample_backend(sample_backend_name(b)), b);

@@ -60,6 +60,13 @@ EmbreeCubeSampler::EmbreeCubeSampler(std::shared_ptr<ChunkBvhCache> cache)
 CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box, const SampleParams& params,
                                          const ChunkSource& source) {
   validate_sample_inputs(eye, params);
+  // Textures are not sampled yet (hit_shading.h says where they go): refuse
+  // rather than bake untextured colours for a textured model.
+  for (const Material& m : source.materials())
+    if (m.texture_id > 0)
+      throw std::runtime_error("embree: material \"" + m.name +
+                               "\" is textured and the Embree backend does not sample textures yet; use "
+                               "sample.backend = \"osmesa\" or \"egl\"");
   auto t0 = Clock::now();
   const std::vector<ChunkRef> refs = cube_chunks(eye, cull_box, params.near_plane, source);
   std::vector<std::shared_ptr<const ChunkGroupBvh>> bvhs = cache_->acquire(refs, source);

@@ -49,6 +49,8 @@ class EmbreeCubeSampler final : public CubeSampler {
   explicit EmbreeCubeSampler(std::shared_ptr<ChunkBvhCache> cache);
 
   void set_shading(const ShadingLights& lights) override { shader_ = HitShader(lights); }
+  // As CubeSampler::sample; also throws std::runtime_error when the model has
+  // a textured material (textures are not sampled by this backend yet).
   CubeSample sample(const Vec3d& eye, const Box3d& cull_box, const SampleParams& params,
                     const ChunkSource& source) override;
   std::string backend_name() const override { return "embree"; }
