@@ -19,7 +19,7 @@ namespace {
 // Vertex shader: positions arrive relative to the chunk origin; u_offset moves
 // them to eye-relative world axes; u_view_projection = projection * rotation
 // into the camera frame.
-constexpr const char* kVertexShader = R"(#version 330 core
+constexpr const char* kVertexShader = R"(
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec4 a_color;
 layout(location = 2) in vec2 a_uv;      // (0, 0) when the chunk has none
@@ -49,7 +49,10 @@ void main() {
 // whose derivatives give no normal keeps its base colour. The base colour is
 // the vertex colour times the material's texel (trilinear, mipmapped) when the
 // material has a texture; alpha-tested materials drop texels below 0.5 alpha.
-constexpr const char* kFragmentShader = R"(#version 330 core
+// Built twice: with APPEARANCE 1 for chunks with texture coordinates or
+// normals, and with APPEARANCE 0 (no texture lookup, flat normals only) for
+// the rest, where llvmpipe would otherwise pay for the unused paths.
+constexpr const char* kFragmentShader = R"(
 in vec3 v_relative;
 in float v_view_depth;
 in vec4 v_color;
@@ -68,21 +71,24 @@ uniform sampler2D u_texture;
 layout(location = 0) out vec4 o_color;
 layout(location = 1) out float o_view_depth;
 void main() {
-  // Derivatives and texture lookups before any discard (uniform control flow).
+  // Derivatives and texture lookups before any discard (uniform control flow;
+  // an if on a uniform, not a select, so untextured draws skip the lookup).
   vec3 flat_normal = cross(dFdx(v_relative), dFdy(v_relative));
-  vec4 texel = u_textured != 0 ? texture(u_texture, v_uv) : vec4(1.0);
+  vec4 texel = vec4(1.0);
+#if APPEARANCE
+  if (u_textured != 0) texel = texture(u_texture, v_uv);
+#endif
   bool inside = all(greaterThan(v_relative, u_discard_lo)) && all(lessThan(v_relative, u_discard_hi));
   if (inside != (u_keep_inside != 0)) discard;
   if (u_alpha_test != 0 && texel.a < 0.5) discard;
   vec4 base = v_color * vec4(texel.rgb, 1.0);
   vec3 color = base.rgb;
   if (u_lit != 0) {
-    vec3 n = v_normal;
+    vec3 n = flat_normal;
+#if APPEARANCE
+    if (dot(v_normal, v_normal) > 1e-6) n = v_normal;
+#endif
     float n2 = dot(n, n);
-    if (!(n2 > 1e-6)) {
-      n = flat_normal;
-      n2 = dot(n, n);
-    }
     if (n2 > 0.0 && !isinf(n2)) {
       n *= inversesqrt(n2);
       color = clamp(color * (u_ambient + abs(dot(n, u_key)) + abs(dot(n, u_fill))), 0.0, 1.0);
@@ -249,7 +255,8 @@ ChunkRenderer::~ChunkRenderer() {
     clear_cache();
     textures_.reset();
     release_framebuffer();
-    if (program_) gl_.DeleteProgram(program_);
+    for (const DrawProgram& p : programs_)
+      if (p.id) gl_.DeleteProgram(p.id);
     if (occlusion_program_) {
       gl_.DeleteProgram(occlusion_program_);
       gl_.DeleteVertexArrays(1, &occlusion_vertex_array_);
@@ -267,21 +274,32 @@ ChunkRenderer::~ChunkRenderer() {
 void ChunkRenderer::make_current() { context_->make_current(); }
 
 void ChunkRenderer::build_program() {
-  program_ = build_gl_program(gl_, kVertexShader, kFragmentShader, "chunk_renderer");
-  u_offset_ = gl_.GetUniformLocation(program_, "u_offset");
-  u_view_projection_ = gl_.GetUniformLocation(program_, "u_view_projection");
-  u_forward_ = gl_.GetUniformLocation(program_, "u_forward");
-  u_discard_lo_ = gl_.GetUniformLocation(program_, "u_discard_lo");
-  u_discard_hi_ = gl_.GetUniformLocation(program_, "u_discard_hi");
-  u_keep_inside_ = gl_.GetUniformLocation(program_, "u_keep_inside");
-  u_lit_ = gl_.GetUniformLocation(program_, "u_lit");
-  u_key_ = gl_.GetUniformLocation(program_, "u_key");
-  u_fill_ = gl_.GetUniformLocation(program_, "u_fill");
-  u_ambient_ = gl_.GetUniformLocation(program_, "u_ambient");
-  u_textured_ = gl_.GetUniformLocation(program_, "u_textured");
-  u_alpha_test_ = gl_.GetUniformLocation(program_, "u_alpha_test");
-  u_texture_ = gl_.GetUniformLocation(program_, "u_texture");
+  for (int appearance = 0; appearance < 2; ++appearance) {
+    const std::string header = std::string("#version 330 core\n#define APPEARANCE ") + (appearance ? "1" : "0") + "\n";
+    DrawProgram& p = programs_[appearance];
+    p.id = build_gl_program(gl_, (header + kVertexShader).c_str(), (header + kFragmentShader).c_str(), "chunk_renderer");
+    const auto at = [&](const char* name) { return gl_.GetUniformLocation(p.id, name); };
+    p.u_offset = at("u_offset");
+    p.u_view_projection = at("u_view_projection");
+    p.u_forward = at("u_forward");
+    p.u_discard_lo = at("u_discard_lo");
+    p.u_discard_hi = at("u_discard_hi");
+    p.u_keep_inside = at("u_keep_inside");
+    p.u_lit = at("u_lit");
+    p.u_key = at("u_key");
+    p.u_fill = at("u_fill");
+    p.u_ambient = at("u_ambient");
+    p.u_textured = at("u_textured");
+    p.u_alpha_test = at("u_alpha_test");
+    p.u_texture = at("u_texture");
+  }
   check_gl_error(gl_, "chunk_renderer: build_program");
+}
+
+void ChunkRenderer::use_program(int appearance) {
+  if (active_program_ == appearance) return;
+  active_program_ = appearance;
+  gl_.UseProgram(programs_[appearance].id);
 }
 
 void ChunkRenderer::build_occlusion_program() {
@@ -467,6 +485,7 @@ const ChunkRenderer::CachedChunk& ChunkRenderer::upload(const Chunk& chunk) {
     cache_.erase(old);
   }
   entry.origin = chunk.origin;
+  entry.appearance = extended;
   entry.index_count = static_cast<int>(chunk.indices.size());
   entry.index_type = short_indices ? GL_UNSIGNED_SHORT : GL_UNSIGNED_INT;
   entry.bytes = vertex_bytes.size() + index_bytes;
@@ -512,41 +531,46 @@ const ChunkRenderer::CachedChunk& ChunkRenderer::upload(const Chunk& chunk) {
 
 void ChunkRenderer::set_camera_uniforms(const RenderCamera& camera, const Box3d& discard_box, BoxClip clip) {
   const std::array<float, 16> matrix = camera_view_projection(camera, reversed_z());
-  gl_.UseProgram(program_);
-  gl_.UniformMatrix4fv(u_view_projection_, 1, GL_FALSE, matrix.data());
-  gl_.Uniform1i(u_keep_inside_, clip == BoxClip::keep_inside ? 1 : 0);
   const Vec3d key = lights_.key * lights_.key_strength, fill = lights_.fill * lights_.fill_strength;
-  gl_.Uniform1i(u_lit_, lights_.lit ? 1 : 0);
-  gl_.Uniform3f(u_key_, static_cast<float>(key.x), static_cast<float>(key.y), static_cast<float>(key.z));
-  gl_.Uniform3f(u_fill_, static_cast<float>(fill.x), static_cast<float>(fill.y), static_cast<float>(fill.z));
-  gl_.Uniform1f(u_ambient_, static_cast<float>(lights_.ambient));
-  gl_.Uniform1i(u_texture_, 0);
-  gl_.Uniform1i(u_textured_, 0);
-  gl_.Uniform1i(u_alpha_test_, 0);
+  Vec3d lo{1, 1, 1}, hi{-1, -1, -1};  // an empty box: lo > hi on every axis, nothing strictly inside
+  if (!discard_box.empty()) {
+    lo = discard_box.lo - camera.eye;
+    hi = discard_box.hi - camera.eye;
+  }
+  const auto put3 = [&](int location, const Vec3d& v) {
+    gl_.Uniform3f(location, static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z));
+  };
+  for (int appearance = 1; appearance >= 0; --appearance) {
+    const DrawProgram& p = programs_[appearance];
+    gl_.UseProgram(p.id);
+    gl_.UniformMatrix4fv(p.u_view_projection, 1, GL_FALSE, matrix.data());
+    gl_.Uniform1i(p.u_keep_inside, clip == BoxClip::keep_inside ? 1 : 0);
+    gl_.Uniform1i(p.u_lit, lights_.lit ? 1 : 0);
+    put3(p.u_key, key);
+    put3(p.u_fill, fill);
+    gl_.Uniform1f(p.u_ambient, static_cast<float>(lights_.ambient));
+    gl_.Uniform1i(p.u_texture, 0);
+    gl_.Uniform1i(p.u_textured, 0);
+    gl_.Uniform1i(p.u_alpha_test, 0);
+    put3(p.u_forward, camera.forward);
+    put3(p.u_discard_lo, lo);
+    put3(p.u_discard_hi, hi);
+  }
+  active_program_ = 0;  // the loop ends on the plain program
   gl_.ActiveTexture(GL_TEXTURE0);
   textured_uniform_ = alpha_test_uniform_ = false;
   bound_texture_ = 0;
-  gl_.Uniform3f(u_forward_, static_cast<float>(camera.forward.x), static_cast<float>(camera.forward.y),
-                static_cast<float>(camera.forward.z));
-  if (discard_box.empty()) {
-    // lo > hi on every axis: no position is strictly inside.
-    gl_.Uniform3f(u_discard_lo_, 1, 1, 1);
-    gl_.Uniform3f(u_discard_hi_, -1, -1, -1);
-  } else {
-    const Vec3d lo = discard_box.lo - camera.eye, hi = discard_box.hi - camera.eye;
-    gl_.Uniform3f(u_discard_lo_, static_cast<float>(lo.x), static_cast<float>(lo.y), static_cast<float>(lo.z));
-    gl_.Uniform3f(u_discard_hi_, static_cast<float>(hi.x), static_cast<float>(hi.y), static_cast<float>(hi.z));
-  }
 }
 
 void ChunkRenderer::draw_cached(const CachedChunk& entry, const Vec3d& eye) {
+  use_program(entry.appearance ? 1 : 0);
   const Vec3d offset = entry.origin - eye;  // double, then float: eye-relative
-  gl_.Uniform3f(u_offset_, static_cast<float>(offset.x), static_cast<float>(offset.y), static_cast<float>(offset.z));
+  gl_.Uniform3f(programs_[active_program_].u_offset, static_cast<float>(offset.x), static_cast<float>(offset.y), static_cast<float>(offset.z));
   if (entry.index_count > 0) {
     gl_.BindVertexArray(entry.vertex_array);
     const std::size_t index_size = entry.index_type == GL_UNSIGNED_SHORT ? 2 : 4;
     for (const ChunkDrawRange& range : entry.ranges) {
-      apply_material(range.material);
+      if (entry.appearance) apply_material(range.material);
       gl_.DrawElements(GL_TRIANGLES, range.count, entry.index_type,
                        reinterpret_cast<const void*>(static_cast<std::uintptr_t>(range.first) * index_size));
     }
@@ -565,11 +589,11 @@ void ChunkRenderer::apply_material(std::uint32_t index) {
   }
   if ((texture > 0) != textured_uniform_) {
     textured_uniform_ = texture > 0;
-    gl_.Uniform1i(u_textured_, textured_uniform_ ? 1 : 0);
+    gl_.Uniform1i(programs_[1].u_textured, textured_uniform_ ? 1 : 0);
   }
   if (alpha_test != alpha_test_uniform_) {
     alpha_test_uniform_ = alpha_test;
-    gl_.Uniform1i(u_alpha_test_, alpha_test ? 1 : 0);
+    gl_.Uniform1i(programs_[1].u_alpha_test, alpha_test ? 1 : 0);
   }
 }
 
@@ -649,7 +673,7 @@ void ChunkRenderer::test_boxes(const RenderCamera& camera, const std::vector<flo
                        visible.data());
   gl_.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   gl_.DepthMask(GL_TRUE);
-  gl_.UseProgram(program_);
+  gl_.UseProgram(programs_[active_program_].id);
   stats_.occlusion_tests += n;
   check_gl_error(gl_, "chunk_renderer: occlusion test");
 }

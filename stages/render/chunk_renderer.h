@@ -186,10 +186,19 @@ class ChunkRenderer {
     std::size_t bytes = 0;
     std::list<std::int64_t>::iterator recency;  // position in lru_ (front = most recent)
     std::vector<ChunkDrawRange> ranges;         // the index buffer's runs per material
+    bool appearance = false;                    // has uvs or normals: drawn with the full program
+  };
+  // One build of the drawing shaders and its uniform locations.
+  struct DrawProgram {
+    unsigned id = 0;
+    int u_offset = -1, u_view_projection = -1, u_forward = -1, u_discard_lo = -1, u_discard_hi = -1,
+        u_keep_inside = -1, u_lit = -1, u_key = -1, u_fill = -1, u_ambient = -1, u_textured = -1,
+        u_alpha_test = -1, u_texture = -1;
   };
 
   void make_current();
   void build_program();
+  void use_program(int appearance);
   void resize_framebuffer(int width, int height);
   void release_framebuffer();
   const CachedChunk& upload(const Chunk& chunk);
@@ -210,10 +219,8 @@ class ChunkRenderer {
   ChunkRendererParams params_;
   std::unique_ptr<GlFunctions> gl_functions_;
   const GlFunctions& gl_;  // *gl_functions_
-  unsigned program_ = 0;
-  int u_offset_ = -1, u_view_projection_ = -1, u_forward_ = -1, u_discard_lo_ = -1, u_discard_hi_ = -1, u_keep_inside_ = -1;
-  int u_lit_ = -1, u_key_ = -1, u_fill_ = -1, u_ambient_ = -1;
-  int u_textured_ = -1, u_alpha_test_ = -1, u_texture_ = -1;
+  DrawProgram programs_[2];  // [0]: plain (flat normals, no textures), [1]: with uvs and normals
+  int active_program_ = 0;
   std::vector<Material> materials_;
   TextureLoader load_texture_;
   const ChunkSource* material_source_ = nullptr;  // whose table use_materials_of() installed
