@@ -115,6 +115,9 @@ const std::map<std::string, Setter>& setters() {
       {"sample.embree_cache_mb", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.embree_cache_mb = static_cast<std::uint64_t>(integer(n, w, "sample.embree_cache_mb", 64, std::int64_t(1) << 24));
        }},
+      {"sample.texture_cache_mb", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.texture_cache_mb = static_cast<std::uint64_t>(integer(n, w, "sample.texture_cache_mb", 16, std::int64_t(1) << 24));
+       }},
       {"shading.mode", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.shading.mode = parse_shading_mode(text(n, w, "shading.mode", {"lit", "unlit"}));
        }},
@@ -303,6 +306,7 @@ std::string describe_bake_config(const BakeConfig& c) {
     << "\nsample.face_size=" << c.face_size << "\nsample.supersample=" << c.supersample
     << "\nsample.near_plane=" << c.near_plane << "\nsample.seam_shell_px=" << c.seam_shell_px
     << "\nsample.backend=" << c.sample_backend << "\nsample.embree_cache_mb=" << c.embree_cache_mb
+    << "\nsample.texture_cache_mb=" << c.texture_cache_mb
     << "\nshading.mode=" << shading_mode_name(c.shading.mode) << "\nshading.key_direction=" << c.shading.key_direction.x
     << "," << c.shading.key_direction.y << "," << c.shading.key_direction.z
     << "\nshading.key_strength=" << c.shading.key_strength << "\nshading.fill_direction=" << c.shading.fill_direction.x

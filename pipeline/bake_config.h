@@ -46,6 +46,10 @@ struct BakeConfig {
   // Byte cap of the Embree backend's shared BVH cache, MiB (not hashed: it
   // changes memory and speed, not pixels).
   std::uint64_t embree_cache_mb = 4096;
+  // Byte cap of the decoded textures a bake holds, MiB: the GL backends' texture
+  // cache per worker thread, the Embree backend's mip chains shared by all
+  // (not hashed: memory and speed, not pixels).
+  std::uint64_t texture_cache_mb = 512;
 
   // [shading]: the fixed light model every chunk drawing applies (the samples
   // bake it into their images; viewers read it back from the database's meta

@@ -38,8 +38,9 @@ const char* sample_backend_pixels(SampleBackend backend) {
   return resolve_sample_backend(backend) == SampleBackend::embree ? "embree" : "gl";
 }
 
-CubeSamplerFactory::CubeSamplerFactory(SampleBackend backend, std::size_t embree_cache_bytes)
-    : backend_(resolve_sample_backend(backend)) {
+CubeSamplerFactory::CubeSamplerFactory(SampleBackend backend, std::size_t embree_cache_bytes,
+                                       std::size_t texture_cache_bytes)
+    : backend_(resolve_sample_backend(backend)), texture_cache_bytes_(texture_cache_bytes) {
   if (backend_ == SampleBackend::osmesa && !gl_backend_compiled(GlBackend::osmesa))
     throw std::runtime_error(
         "sample.backend \"osmesa\": this build has no OSMesa (CELLBAKE_WITH_OSMESA=OFF); use \"egl\", \"embree\" or \"auto\"");
@@ -47,14 +48,17 @@ CubeSamplerFactory::CubeSamplerFactory(SampleBackend backend, std::size_t embree
     ChunkBvhCacheParams params;
     params.cache_bytes = embree_cache_bytes;
     cache_ = std::make_shared<ChunkBvhCache>(params);
+    textures_ = std::make_shared<MipTextureCache>(texture_cache_bytes);
   }
 }
 
 std::unique_ptr<CubeSampler> CubeSamplerFactory::make() const {
-  if (backend_ == SampleBackend::embree) return std::make_unique<EmbreeCubeSampler>(cache_);
+  if (backend_ == SampleBackend::embree) return std::make_unique<EmbreeCubeSampler>(cache_, textures_);
   const GlBackend gl = backend_ == SampleBackend::egl ? GlBackend::egl : GlBackend::osmesa;
   // Drawing goes to framebuffer objects; the default framebuffer is never used.
-  return std::make_unique<GlCubeSampler>(std::make_unique<ChunkRenderer>(create_gl_context(gl, 1, 1)),
+  ChunkRendererParams params;
+  params.texture_cache_bytes = texture_cache_bytes_;
+  return std::make_unique<GlCubeSampler>(std::make_unique<ChunkRenderer>(create_gl_context(gl, 1, 1), params),
                                          sample_backend_name(backend_));
 }
 

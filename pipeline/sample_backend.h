@@ -12,6 +12,7 @@
 
 #include "stages/cube_sampler.h"
 #include "stages/raycast/chunk_bvh_cache.h"
+#include "stages/raycast/hit_texturing.h"
 
 namespace cellbake {
 
@@ -38,7 +39,10 @@ class CubeSamplerFactory {
   // `embree_cache_bytes`: the byte cap of the Embree BVH cache (unused by the
   // GL backends). Throws std::runtime_error when the backend is not in this
   // build (OSMesa is optional) or Embree fails to start.
-  CubeSamplerFactory(SampleBackend backend, std::size_t embree_cache_bytes);
+  // `texture_cache_bytes`: the cap on decoded textures (per GL sampler; shared
+  // by all Embree samplers).
+  CubeSamplerFactory(SampleBackend backend, std::size_t embree_cache_bytes,
+                     std::size_t texture_cache_bytes = std::size_t{512} << 20);
   // A new sampler (for GL backends: a new context, current on the calling
   // thread). Throws std::runtime_error when the context cannot be created.
   std::unique_ptr<CubeSampler> make() const;
@@ -49,7 +53,9 @@ class CubeSamplerFactory {
 
  private:
   SampleBackend backend_;
+  std::size_t texture_cache_bytes_;
   std::shared_ptr<ChunkBvhCache> cache_;
+  std::shared_ptr<MipTextureCache> textures_;
 };
 
 }  // namespace cellbake

@@ -80,7 +80,8 @@ BakeSummary run_bake(const BakeConfig& config, const BakeOptions& options) {
   arena.execute([&] {
     // One sampler per worker thread; the Embree backend's BVH cache is shared by all of them.
     const CubeSamplerFactory samplers(parse_sample_backend(config.sample_backend),
-                                      std::size_t(config.embree_cache_mb) << 20);
+                                      std::size_t(config.embree_cache_mb) << 20,
+                                      std::size_t(config.texture_cache_mb) << 20);
     tbb::enumerable_thread_specific<std::unique_ptr<CubeSampler>> thread_samplers;
     tbb::flow::graph g;
     tbb::flow::input_node<WorkPtr> source(g, [&](tbb::flow_control& fc) -> WorkPtr {

@@ -450,33 +450,61 @@ TEST(ChunkBvhCache, GroupSizeChangesNoPixel) {
   }
 }
 
-// A source whose model has a textured material.
+// The inner source's model with every triangle under one textured material:
+// texture coordinates from a planar projection of world positions (the
+// texture repeats every few metres, seen magnified near the eye and minified
+// far away), a 64 x 64 texture of smooth colour waves with, when `holes`,
+// alpha 0 in a grid of round holes (alpha-tested).
 class TexturedSource final : public ChunkSource {
  public:
-  explicit TexturedSource(const ChunkSource& inner) : inner_(inner) {}
+  TexturedSource(const ChunkSource& inner, bool holes) : inner_(inner), holes_(holes) {}
   std::vector<ChunkRef> query(const Box3d& box) const override { return inner_.query(box); }
-  std::shared_ptr<const Chunk> load(std::int64_t id) const override { return inner_.load(id); }
+  std::shared_ptr<const Chunk> load(std::int64_t id) const override {
+    auto chunk = std::make_shared<Chunk>(*inner_.load(id));
+    chunk->uvs.clear();
+    for (std::uint32_t i = 0; i < chunk->positions.size(); ++i) {
+      const Vec3d w = chunk->world(i);
+      chunk->uvs.push_back({float((w.x + 0.6 * w.y) * 0.31), float((w.z - 0.4 * w.y) * 0.27)});
+    }
+    chunk->materials.assign(chunk->triangle_count(), 1);
+    return chunk;
+  }
   Box3d model_bounds() const override { return inner_.model_bounds(); }
   std::vector<Material> materials() const override {
     Material m;
-    m.name = "checker";
+    m.name = "waves";
     m.texture_id = 1;
+    m.alpha_test = holes_;
     return {Material{}, m};
+  }
+  std::shared_ptr<const TextureImage> load_texture(std::int64_t id) const override {
+    auto t = std::make_shared<TextureImage>();
+    t->id = id;
+    t->width = t->height = 64;
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 64; ++x) {
+        const double a = 2 * M_PI * x / 64, b = 2 * M_PI * y / 64;
+        const bool hole = holes_ && std::hypot(x % 16 - 7.5, y % 16 - 7.5) < 5;
+        t->texels.push_back({std::uint8_t(128 + 120 * std::sin(a)), std::uint8_t(128 + 120 * std::cos(b)),
+                             std::uint8_t(128 + 100 * std::sin(a + b)), std::uint8_t(hole ? 0 : 255)});
+      }
+    t->has_alpha = holes_;
+    return t;
   }
 
  private:
   const ChunkSource& inner_;
+  bool holes_;
 };
 
-TEST(SampleBackends, EmbreeRefusesTexturedModelsUntilItSamplesTextures) {
+TEST(SampleBackends, TexturedModelsMatchIncludingAlphaTestedHoles) {
   const auto owned = room({0, 0, 0});
-  const TexturedSource source(*owned);
-  EmbreeCubeSampler sampler(std::make_shared<ChunkBvhCache>());
-  try {
-    sampler.sample({0, 0, 0}, Box3d::cube({0, 0, 0}, 1.0), params(8), source);
-    FAIL() << "expected an error";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("checker"), std::string::npos) << e.what();
+  for (bool holes : {false, true}) {
+    const TexturedSource source(*owned, holes);
+    Backends backends;
+    backends.check({0.5, -0.3, 0.2}, Box3d::cube({0, 0, 0}, 1.0), params(128),
+                   source, holes ? "textured, alpha-tested holes" : "textured");
+    EXPECT_EQ(backends.embree.stats().alpha_retraces > 0, holes) << "alpha-tested hits are traced again";
   }
 }
 

@@ -39,6 +39,21 @@ void init_ray(RTCRayHit& r, const Vec3d& dir, float tnear, float tfar, unsigned 
   r.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
 }
 
+// Alpha-tested layers a ray passes through before it gives up (background).
+constexpr int kMaxAlphaLayers = 64;
+
+// The chunk triangle and barycentrics of a ray's hit in `scene`.
+SurfaceHit surface_hit(const InstanceScene& scene, const RTCRayHit& r) {
+  const ChunkGroupBvh& group = scene.instance(r.hit.instID[0]);
+  SurfaceHit hit;
+  hit.chunk = group.chunks[r.hit.geomID].get();
+  hit.triangle = r.hit.primID;
+  hit.u = r.hit.u;
+  hit.v = r.hit.v;
+  hit.geometric_normal = {r.hit.Ng_x, r.hit.Ng_y, r.hit.Ng_z};  // instances only translate
+  return hit;
+}
+
 }  // namespace
 
 std::vector<std::uint32_t> block_order(int size) {
@@ -52,21 +67,17 @@ std::vector<std::uint32_t> block_order(int size) {
   return order;
 }
 
-EmbreeCubeSampler::EmbreeCubeSampler(std::shared_ptr<ChunkBvhCache> cache)
-    : cache_(std::move(cache)), shader_(shading_lights(ShadingParams{}, Vec3d{0, 0, 1})) {
+EmbreeCubeSampler::EmbreeCubeSampler(std::shared_ptr<ChunkBvhCache> cache, std::shared_ptr<MipTextureCache> textures)
+    : cache_(std::move(cache)),
+      textures_(textures ? std::move(textures) : std::make_shared<MipTextureCache>(std::size_t{512} << 20)),
+      shader_(shading_lights(ShadingParams{}, Vec3d{0, 0, 1})) {
   if (!cache_) throw std::invalid_argument("embree_cube_sampler: null BVH cache");
 }
 
 CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box, const SampleParams& params,
                                          const ChunkSource& source) {
   validate_sample_inputs(eye, params);
-  // Textures are not sampled yet (hit_shading.h says where they go): refuse
-  // rather than bake untextured colours for a textured model.
-  for (const Material& m : source.materials())
-    if (m.texture_id > 0)
-      throw std::runtime_error("embree: material \"" + m.name +
-                               "\" is textured and the Embree backend does not sample textures yet; use "
-                               "sample.backend = \"osmesa\" or \"egl\"");
+  const HitTexturer texturer(source, *textures_);
   auto t0 = Clock::now();
   const std::vector<ChunkRef> refs = cube_chunks(eye, cull_box, params.near_plane, source);
   std::vector<std::shared_ptr<const ChunkGroupBvh>> bvhs = cache_->acquire(refs, source);
@@ -97,6 +108,8 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
   sample.eye = eye;
   for (int face = 0; face < kCubeFaces; ++face) {
     const FaceBasis b = cube_face_basis(face);
+    const auto to_float = [](const Vec3d& v) { return Vec3f{float(v.x), float(v.y), float(v.z)}; };
+    const Vec3f step_x = to_float(b.right * (2.0 / size)), step_y = to_float(b.up * (2.0 / size));
     color.assign(pixels, Rgba8{0, 0, 0, 0});
     depth.assign(pixels, kBackgroundDepth);
     for (std::size_t start = 0; start < pixels; start += kStream) {
@@ -130,19 +143,48 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
       for (unsigned k = 0; k < count; ++k) {
         const RTCRayHit& r = rays[k];
         if (r.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-        const ChunkGroupBvh& group = scene.instance(r.hit.instID[0]);
-        SurfaceHit hit;
-        hit.chunk = group.chunks[r.hit.geomID].get();
-        hit.triangle = r.hit.primID;
-        hit.u = r.hit.u;
-        hit.v = r.hit.v;
-        hit.geometric_normal = {r.hit.Ng_x, r.hit.Ng_y, r.hit.Ng_z};  // instances only translate
-        const float dir_length =
-            std::sqrt(r.ray.dir_x * r.ray.dir_x + r.ray.dir_y * r.ray.dir_y + r.ray.dir_z * r.ray.dir_z);
-        hit.footprint = r.ray.tfar * dir_length * 2.0f / float(size);
         const std::uint32_t p = order_[start + k];
-        color[p] = shader_.shade(hit);
-        depth[p] = r.ray.tfar;
+        SurfaceHit hit = surface_hit(scene, r);
+        if (texturer.untextured()) {
+          color[p] = shader_.shade(hit);
+          depth[p] = r.ray.tfar;
+          ++stats_.hits;
+          continue;
+        }
+        const Vec3f dir{r.ray.dir_x, r.ray.dir_y, r.ray.dir_z};
+        HitTexel texel = texturer.texel(hit, dir, r.ray.tfar, step_x, step_y);
+        float t = r.ray.tfar;
+        if (texel.dropped) {
+          // Alpha-tested away: go on behind it, one hit at a time, within the
+          // ray's segments (rare: foliage edges).
+          const RaySegments seg = ray_segments(Vec3d{dir.x, dir.y, dir.z}, box, params.near_plane);
+          RTCIntersectContext single;
+          rtcInitIntersectContext(&single);
+          for (int behind = 0; behind < kMaxAlphaLayers && texel.dropped; ++behind) {
+            RTCRayHit next;
+            const float from = std::nextafter(t, std::numeric_limits<float>::infinity());
+            bool found = false;
+            if (from < seg.t1) {
+              init_ray(next, Vec3d{dir.x, dir.y, dir.z}, std::max(from, seg.t0), seg.t1, p);
+              rtcIntersect1(scene.scene(), &single, &next);
+              found = next.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+            }
+            if (!found && seg.two) {
+              init_ray(next, Vec3d{dir.x, dir.y, dir.z}, std::max(from, seg.t2),
+                       std::numeric_limits<float>::infinity(), p);
+              rtcIntersect1(scene.scene(), &single, &next);
+              found = next.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+            }
+            ++stats_.alpha_retraces;
+            if (!found) break;
+            hit = surface_hit(scene, next);
+            t = next.ray.tfar;
+            texel = texturer.texel(hit, dir, t, step_x, step_y);
+          }
+          if (texel.dropped) continue;  // nothing opaque behind: background
+        }
+        color[p] = shader_.shade(hit, texel.textured ? &texel.texel : nullptr);
+        depth[p] = t;
         ++stats_.hits;
       }
     }

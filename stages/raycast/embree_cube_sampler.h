@@ -9,7 +9,9 @@
 // Each ray covers [near plane, inf) minus the part strictly inside the cull box
 // (ray_segments.h), so geometry of a group lying inside the box is never hit
 // (the GL path's fragment discard); its depth is the hit's t, which is planar depth because
-// the directions have forward component 1; its colour is hit_shading.h's.
+// the directions have forward component 1; its colour is hit_shading.h's,
+// times the material's texel (hit_texturing.h) when it has a texture; a hit
+// an alpha test drops is traced again from just behind it.
 // Supersampled faces go through downsample_face like the GL path's.
 //
 // Differences from the GL rasteriser are those of point sampling at pixel
@@ -29,6 +31,7 @@
 #include "stages/cube_sampler.h"
 #include "stages/raycast/chunk_bvh_cache.h"
 #include "stages/raycast/hit_shading.h"
+#include "stages/raycast/hit_texturing.h"
 
 namespace cellbake {
 
@@ -37,6 +40,7 @@ struct EmbreeSamplerStats {
   std::uint64_t rays = 0;           // primary segments traced
   std::uint64_t second_rays = 0;    // second segments (eye outside the cull box)
   std::uint64_t hits = 0;
+  std::uint64_t alpha_retraces = 0; // rays traced again behind alpha-tested texels
   std::uint64_t instances = 0;      // chunk instances over all cube maps
   double gather_seconds = 0;        // finding chunks + acquiring their BVHs (builds included)
   double scene_seconds = 0;         // building top-level scenes
@@ -45,12 +49,13 @@ struct EmbreeSamplerStats {
 
 class EmbreeCubeSampler final : public CubeSampler {
  public:
-  // Samples through `cache` (not null; shared with other threads' samplers).
-  explicit EmbreeCubeSampler(std::shared_ptr<ChunkBvhCache> cache);
+  // Samples through `cache` (not null; shared with other threads' samplers)
+  // and `textures` (shared likewise; null: a cache of its own of 512 MiB).
+  explicit EmbreeCubeSampler(std::shared_ptr<ChunkBvhCache> cache, std::shared_ptr<MipTextureCache> textures = nullptr);
 
   void set_shading(const ShadingLights& lights) override { shader_ = HitShader(lights); }
-  // As CubeSampler::sample; also throws std::runtime_error when the model has
-  // a textured material (textures are not sampled by this backend yet).
+  // As CubeSampler::sample. Textured materials are sampled as the GL path
+  // does (hit_texturing.h); alpha-tested hits let the ray go on behind them.
   CubeSample sample(const Vec3d& eye, const Box3d& cull_box, const SampleParams& params,
                     const ChunkSource& source) override;
   std::string backend_name() const override { return "embree"; }
@@ -63,6 +68,7 @@ class EmbreeCubeSampler final : public CubeSampler {
                         const ChunkSource& source);
 
   std::shared_ptr<ChunkBvhCache> cache_;
+  std::shared_ptr<MipTextureCache> textures_;
   HitShader shader_;
   EmbreeSamplerStats stats_;
   std::vector<std::uint32_t> order_;  // pixels of a render_size^2 face in 4 x 4 block order

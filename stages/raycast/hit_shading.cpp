@@ -45,8 +45,10 @@ std::array<float, 4> HitShader::base_color(const SurfaceHit& hit) const {
   return {mix(c0.r, c1.r, c2.r), mix(c0.g, c1.g, c2.g), mix(c0.b, c1.b, c2.b), mix(c0.a, c1.a, c2.a)};
 }
 
-Rgba8 HitShader::shade(const SurfaceHit& hit) const {
+Rgba8 HitShader::shade(const SurfaceHit& hit, const std::array<float, 4>* texel) const {
   std::array<float, 4> color = base_color(hit);
+  if (texel)
+    for (int k = 0; k < 3; ++k) color[std::size_t(k)] *= (*texel)[std::size_t(k)];
   if (lit_) {
     float n[3] = {hit.geometric_normal.x, hit.geometric_normal.y, hit.geometric_normal.z};
     const Chunk& c = *hit.chunk;

@@ -8,9 +8,8 @@
 //   rgb   = clamp(base * (ambient + |n . key| * key_strength + |n . fill| * fill_strength), 0, 1)
 //           (unlit: base as it is; a zero normal also keeps base), alpha = base alpha,
 // in float and rounded to 8 bits like a GL unorm colour attachment.
-// Textures (the appearance issue) are meant to enter in one place,
-// base_color(): material = chunk.materials[triangle] -> texture, uv from the
-// same barycentrics, mip level from SurfaceHit::footprint.
+// Textures enter as a texel multiplying the base colour's rgb
+// (stages/raycast/hit_texturing.h computes it).
 #pragma once
 
 #include <array>
@@ -29,7 +28,6 @@ struct SurfaceHit {
   std::uint32_t triangle = 0;
   float u = 0, v = 0;
   Vec3f geometric_normal;  // any length and orientation (Embree's Ng)
-  float footprint = 0;     // world-space width of the pixel at the hit, for a texture's mip level
 };
 
 class HitShader {
@@ -37,8 +35,10 @@ class HitShader {
   // Throws std::invalid_argument for non-unit directions or negative or
   // non-finite strengths (the checks of ChunkRenderer::set_shading).
   explicit HitShader(const ShadingLights& lights);
-  // The pixel colour of `hit` (chunk set, triangle in range).
-  Rgba8 shade(const SurfaceHit& hit) const;
+  // The pixel colour of `hit` (chunk set, triangle in range); with `texel`,
+  // the base colour's rgb is multiplied by its rgb first (a textured material,
+  // stages/raycast/hit_texturing.h), as the GL shader does.
+  Rgba8 shade(const SurfaceHit& hit, const std::array<float, 4>* texel = nullptr) const;
   // The unlit surface colour at the hit, RGBA in [0, 1].
   std::array<float, 4> base_color(const SurfaceHit& hit) const;
 
