@@ -9,9 +9,16 @@
 
 #include <GL/glcorearb.h>
 
+#include <unistd.h>
+
+#include <algorithm>
 #include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -292,6 +299,78 @@ TEST(EglContext, AlternatesWithOsmesaOnOneThread) {
     EXPECT_EQ(differing_pixels(render_cube(*egl), osmesa_frames()), 0u) << "round " << round;
     EXPECT_EQ(differing_pixels(render_cube(osmesa), osmesa_frames()), 0u) << "round " << round;
   }
+}
+
+// The bake's thread pattern (`--threads 2`, sample.backend=egl): two pool
+// threads each draw with their own EGL renderer and release it, a third
+// thread destroys the renderers, and the pool threads outlive exit()'s
+// library teardown (oneTBB's workers end while exit() runs the libraries'
+// destructors). libglvnd's destructor frees every thread's EGL state, yet a
+// live thread keeps a pointer to its own in a pthread key whose destructor
+// then frees it again ("double free or corruption" after a finished bake).
+// Releasing a context hands the thread's EGL state back (eglReleaseThread),
+// so no pool thread has any left by then.
+//
+// Deterministic: in a child process (glibc's malloc without its thread cache
+// and with freed memory overwritten, so the stale state's list links point
+// nowhere and the first touch faults), the pool threads wait on a pipe that only exit()'s final stdio flush
+// fills, which comes after every library destructor; a helper thread joins
+// them before draining the pipe, so their thread-exit destructors run
+// between libEGL's teardown and the process's end.
+void pool_threads_outlive_exit() {
+  int pipe_fds[2];
+  if (pipe(pipe_fds) != 0) std::abort();
+  FILE* late = fdopen(pipe_fds[1], "w");
+  constexpr std::size_t kBytes = 256 * 1024;  // more than a pipe holds: the flush waits for the drain
+  static char buffer[2 * kBytes];  // static storage: still there when exit() flushes it
+  if (!late || setvbuf(late, buffer, _IOFBF, sizeof buffer) != 0) std::abort();
+  for (std::size_t i = 0; i < kBytes; ++i) std::fputc('x', late);  // stays buffered until exit()
+
+  constexpr int kPool = 2;
+  std::vector<std::unique_ptr<ChunkRenderer>> renderers(kPool);
+  std::mutex mutex;
+  std::condition_variable cv;
+  int ready = 0;
+  std::vector<std::thread> pool;
+  for (int t = 0; t < kPool; ++t)
+    pool.emplace_back([&, t, read_fd = pipe_fds[0]] {
+      renderers[t] = egl_renderer(EglDevicePolicy::prefer_hardware);  // as CubeSamplerFactory::make
+      render_cube(*renderers[t]);
+      renderers[t]->release_context();  // GlCubeSampler::end_work
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        ++ready;
+      }
+      cv.notify_all();
+      char c;
+      if (read(read_fd, &c, 1) != 1) std::abort();  // exit() is past the library destructors
+    });
+  {
+    std::unique_lock<std::mutex> lock(mutex);
+    cv.wait(lock, [&] { return ready == kPool; });
+  }
+  renderers.clear();  // destroyed on a third thread, as the bake's enumerable_thread_specific is
+  std::thread([pool = std::move(pool), read_fd = pipe_fds[0]]() mutable {
+    for (auto& th : pool) th.join();  // their thread-exit destructors have run
+    std::vector<char> sink(64 * 1024);
+    std::size_t left = kBytes - kPool;
+    while (left > 0) {
+      const ssize_t n = read(read_fd, sink.data(), std::min(sink.size(), left));
+      if (n <= 0) std::abort();
+      left -= static_cast<std::size_t>(n);
+    }
+  }).detach();
+  std::exit(0);
+}
+
+TEST(EglContext, PoolThreadsThatOutliveExitLeaveNoEglStateBehind) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");  // a fresh child process, not a fork of this one
+  const char* old = std::getenv("GLIBC_TUNABLES");
+  const std::string saved = old ? old : "";
+  setenv("GLIBC_TUNABLES", "glibc.malloc.tcache_count=0:glibc.malloc.perturb=165", 1);
+  EXPECT_EXIT(pool_threads_outlive_exit(), ::testing::ExitedWithCode(0), "");
+  if (old) setenv("GLIBC_TUNABLES", saved.c_str(), 1);
+  else unsetenv("GLIBC_TUNABLES");
 }
 
 TEST(EglContext, HeadlessFallbackPrefersOsmesaThenEgl) {

@@ -128,9 +128,14 @@ std::string egl_error_text(EGLint code) {
   return std::string(name) + " (" + code_text + ")";
 }
 
+void release_idle_egl_thread() {
+  if (eglGetCurrentContext() == EGL_NO_CONTEXT) eglReleaseThread();
+}
+
 int egl_hardware_device_count() {
   int n = 0;
   for (const Device& d : enumerate_devices()) n += d.software ? 0 : 1;
+  release_idle_egl_thread();  // the probe may run on a pool thread
   return n;
 }
 

@@ -26,6 +26,17 @@ EglDisplayChoice open_egl_display(EglDevicePolicy policy);
 // The number of EGL devices that are not Mesa's software device.
 int egl_hardware_device_count();
 
+// Hands the calling thread's EGL state back (eglReleaseThread) when no EGL
+// context is current on it; does nothing while one is. Every EGL call may
+// allocate that per-thread state, and libglvnd's libEGL keeps it behind a
+// pthread key whose destructor frees it when the thread ends. At exit()
+// libEGL's library destructor frees every thread's state but leaves those
+// key values in place, so a thread that still holds state and ends during
+// exit() (oneTBB's workers do) frees it a second time: heap corruption after
+// the work is done. A thread that is done with EGL calls this last; EGL
+// allocates the state again on its next call.
+void release_idle_egl_thread();
+
 // "EGL_BAD_MATCH (0x3009)" for an eglGetError() code.
 std::string egl_error_text(EGLint code);
 

@@ -81,8 +81,9 @@ class EglContext final : public GlContext {
     }
   }
   ~EglContext() override {
-    release_current();
+    if (is_current()) eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     eglDestroyContext(display_, context_);
+    release_idle_egl_thread();
   }
   EglContext(const EglContext&) = delete;
   EglContext& operator=(const EglContext&) = delete;
@@ -98,8 +99,12 @@ class EglContext final : public GlContext {
     if (!eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_))
       throw egl_failure("eglMakeCurrent failed", description_);
   }
+  // Also hands the thread's EGL state back when nothing else of EGL is current
+  // on it (release_idle_egl_thread): a pool thread that releases its context
+  // after each job holds no EGL state when it ends during exit().
   void release_current() override {
     if (is_current()) eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    release_idle_egl_thread();
   }
   // Asks for the OpenGL API's current context, restoring the thread's bound API.
   bool is_current() const override {
@@ -128,7 +133,12 @@ std::unique_ptr<GlContext> create_egl_context(int width, int height, EglDevicePo
   if (width < 1 || height < 1)
     throw std::invalid_argument("gl_context(egl): size must be at least 1x1, got " + std::to_string(width) + "x" +
                                 std::to_string(height));
-  return std::make_unique<EglContext>(width, height, policy);
+  try {
+    return std::make_unique<EglContext>(width, height, policy);
+  } catch (...) {
+    release_idle_egl_thread();  // a failed creation leaves no EGL state on this thread either
+    throw;
+  }
 }
 
 bool egl_hardware_device_present() { return egl_hardware_device_count() > 0; }

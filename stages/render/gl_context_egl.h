@@ -10,6 +10,11 @@
 //     platform (EGL_MESA_platform_surfaceless); else the software device.
 //   software_only: the software device (EGL_MESA_device_software, llvmpipe);
 //     else Mesa's surfaceless platform (Mesa may pick a hardware driver there).
+//
+// Threads: release_current() (and destruction, and a failed creation) also
+// hands the calling thread's EGL state back with eglReleaseThread when no EGL
+// context stays current there, so pool threads that outlive exit()'s library
+// teardown hold none (egl_display.h, release_idle_egl_thread).
 #pragma once
 
 #include <memory>
