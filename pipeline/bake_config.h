@@ -42,7 +42,7 @@ struct BakeConfig {
   // Who renders the samples (pipeline/sample_backend.h): "osmesa" | "egl" |
   // "embree" | "auto". The pixels differ between the GL rasterisers and the
   // ray caster within the parity tolerance only; the bake hash tells them apart.
-  std::string sample_backend = "osmesa";
+  std::string sample_backend = "auto";
   // Byte cap of the Embree backend's shared BVH cache, MiB (not hashed: it
   // changes memory and speed, not pixels).
   std::uint64_t embree_cache_mb = 4096;

@@ -155,6 +155,11 @@ TEST(Bake, AFailingCellIsRecordedAndTheOthersFinish) {
   // Cell size 10 puts a cell on every cluster; only the cell whose cull box holds the
   // corrupt chunk whole never reads it.
   c.regions = {Box3d{{-5, -5, -5}, {55, 5, 5}}};
+  // The rasteriser loads only the chunks a face sees; the Embree backend loads
+  // whole groups of chunks (up to 1 M triangles each), so there one corrupt
+  // chunk fails every cell whose far field reaches its group. The pipeline's
+  // promise (a failed row per cell, the others finish) is what is tested here.
+  c.sample_backend = "osmesa";
   BakeSummary s = run_bake(c, quiet());
   EXPECT_EQ(s.cells_selected, 6u);
   EXPECT_GE(s.cells_failed, 1u);
