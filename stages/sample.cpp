@@ -81,6 +81,18 @@ std::vector<ChunkRef> chunks_in_face(int face, const Vec3d& eye, const Box3d& cu
   return result;
 }
 
+CubeFace finish_face(std::vector<Rgba8>& color, std::vector<float>& depth, const SampleParams& params) {
+  if (params.supersample != 1)
+    return downsample_face(color, depth, params.face_size, params.supersample, params.depth_agreement);
+  CubeFace out;
+  out.size = params.face_size;
+  out.color = std::move(color);
+  out.depth = std::move(depth);
+  color.clear();
+  depth.clear();
+  return out;
+}
+
 CubeFace downsample_face(const std::vector<Rgba8>& color, const std::vector<float>& depth, int size, int factor,
                          double depth_agreement) {
   const std::size_t big = static_cast<std::size_t>(size) * factor;
@@ -151,16 +163,7 @@ CubeSample sample_cube(const Vec3d& eye, const Box3d& cull_box, const SamplePara
     renderer.begin_frame(render_size, render_size);
     renderer.draw_unoccluded(camera, cull_box, nearest_first, load);
     renderer.read_frame(color, depth);
-    CubeFace& out = sample.faces[static_cast<std::size_t>(face)];
-    if (params.supersample == 1) {
-      out.size = params.face_size;
-      out.color = std::move(color);
-      out.depth = std::move(depth);
-      color.clear();
-      depth.clear();
-    } else {
-      out = downsample_face(color, depth, params.face_size, params.supersample, params.depth_agreement);
-    }
+    sample.faces[static_cast<std::size_t>(face)] = finish_face(color, depth, params);
   }
   return sample;
 }

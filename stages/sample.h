@@ -60,6 +60,11 @@ std::vector<ChunkRef> chunks_in_face(int face, const Vec3d& eye, const Box3d& cu
 CubeSample sample_cube(const Vec3d& eye, const Box3d& cull_box, const SampleParams& params,
                        const ChunkSource& source, ChunkRenderer& renderer);
 
+// The stored face of a (face_size * supersample)^2 rendering: the pixels as
+// they are (moved out of `color` and `depth`, which are left empty) or
+// downsample_face()'d. Shared by every sampling backend.
+CubeFace finish_face(std::vector<Rgba8>& color, std::vector<float>& depth, const SampleParams& params);
+
 // Box-filters a (size * factor)^2 rendering down to size^2 as SampleParams
 // describes (row-major, row 0 at the top). Exposed for tests.
 CubeFace downsample_face(const std::vector<Rgba8>& color, const std::vector<float>& depth, int size, int factor,

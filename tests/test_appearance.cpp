@@ -35,6 +35,7 @@
 #include "storage/cell_db.h"
 #include "storage/geometry_store.h"
 #include "storage/sqlite_db.h"
+#include "tests/fixture_cameras.h"
 #include "tests/fixture_room_obj.h"
 #include "tests/fixture_textured.h"
 #include "tests/test_support.h"
@@ -44,6 +45,8 @@
 
 namespace cellbake {
 namespace {
+
+using test::camera_down;
 
 using test::checker_square_colour;
 using test::checker_texels;
@@ -100,17 +103,6 @@ RenderCamera wall_camera(double tan_half = 0.6) {
   return c;
 }
 
-// Looking straight down -z from `eye`.
-RenderCamera camera_down(const Vec3d& eye, double tan_half) {
-  RenderCamera c;
-  c.eye = eye;
-  c.forward = {0, 0, -1};
-  c.right = {1, 0, 0};
-  c.up = {0, 1, 0};
-  c.tan_left = c.tan_bottom = -tan_half;
-  c.tan_right = c.tan_top = tan_half;
-  return c;
-}
 
 struct Frame {
   int width = 0, height = 0;

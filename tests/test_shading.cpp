@@ -22,6 +22,7 @@
 #include "storage/cell_db.h"
 #include "storage/geometry_store.h"
 #include "tests/fixture_chunk_source.h"
+#include "tests/fixture_cameras.h"
 #include "tests/fixture_room_obj.h"
 #include "tests/test_support.h"
 #include "viewer/decoded_cell.h"
@@ -30,6 +31,8 @@
 
 namespace cellbake {
 namespace {
+
+using test::camera_down;
 
 using test::chunk_from_triangles;
 using test::flat_triangle;
@@ -47,17 +50,6 @@ std::vector<Triangle> square(const Vec3d& centre, const Vec3d& u, const Vec3d& v
   return {flat_triangle(a, b, c, color), flat_triangle(a, c, d, color)};
 }
 
-// Looking straight down -z from `eye`.
-RenderCamera camera_down(const Vec3d& eye, double tan_half = 0.1) {
-  RenderCamera c;
-  c.eye = eye;
-  c.forward = {0, 0, -1};
-  c.right = {1, 0, 0};
-  c.up = {0, 1, 0};
-  c.tan_left = c.tan_bottom = -tan_half;
-  c.tan_right = c.tan_top = tan_half;
-  return c;
-}
 
 struct Frame {
   std::vector<Rgba8> color;

@@ -188,16 +188,7 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
         ++stats_.hits;
       }
     }
-    CubeFace& out = sample.faces[std::size_t(face)];
-    if (params.supersample == 1) {
-      out.size = params.face_size;
-      out.color = std::move(color);
-      out.depth = std::move(depth);
-      color.clear();
-      depth.clear();
-    } else {
-      out = downsample_face(color, depth, params.face_size, params.supersample, params.depth_agreement);
-    }
+    sample.faces[std::size_t(face)] = finish_face(color, depth, params);
   }
   cache_->check_device("tracing a cube map");
   stats_.trace_seconds += seconds_since(t0);
