@@ -58,6 +58,39 @@ int user_version(SqliteDb& db) {
   return static_cast<int>(s.column_int(0));
 }
 
+// Throws unless the file opened read-write is empty (no tables: a new
+// database) or one of ours: a geometry store, or any other SQLite file, is
+// never adopted and migrated into a cell database.
+void refuse_foreign_database(SqliteDb& db, const std::filesystem::path& path, int version) {
+  const std::string refusal = path.string() + ": is not a cellbake cell database (";
+  const std::string advice = "); refusing to write cells into it: choose another --out path";
+  if (version == 0) {
+    SqliteStatement tables(db, "SELECT count(*) FROM sqlite_master");
+    tables.step();
+    if (tables.column_int(0) != 0) {
+      std::string kind = "an SQLite file with other tables";
+      try {
+        SqliteStatement s(db, "SELECT value FROM meta WHERE key = 'kind'");
+        if (s.step()) kind = "its kind is '" + s.column_text(0) + "'";
+      } catch (const std::exception&) {
+      }
+      throw std::runtime_error(refusal + kind + advice);
+    }
+    return;
+  }
+  std::string kind;
+  try {
+    SqliteStatement s(db, "SELECT value FROM meta WHERE key = 'kind'");
+    if (s.step()) kind = s.column_text(0);
+  } catch (const std::exception&) {
+    kind = "";
+  }
+  // A bake writes `kind` right after creating the schema; a database killed
+  // in between has the schema and no kind yet, which is ours too.
+  if (!kind.empty() && kind != "cellbake-cell-database")
+    throw std::runtime_error(refusal + "its kind is '" + kind + "'" + advice);
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> pack_near_chunks(const std::vector<NearChunkRow>& rows) {
@@ -88,6 +121,14 @@ std::vector<NearChunkRow> unpack_near_chunks(const std::uint8_t* data, std::size
 CellDb::CellDb(const std::filesystem::path& path, Mode mode) {
   if (mode == Mode::read_only && !std::filesystem::exists(path))
     throw std::runtime_error(path.string() + ": cell database does not exist");
+  if (mode == Mode::read_write) {
+    std::error_code ec;
+    const auto st = std::filesystem::status(path, ec);
+    if (!ec && std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))
+      throw std::runtime_error(path.string() +
+                               ": is not a regular file (a directory, device or pipe); refusing to write a cell "
+                               "database there");
+  }
   db_ = std::make_unique<SqliteDb>(
       path, mode == Mode::read_only ? SqliteDb::Mode::read_only : SqliteDb::Mode::read_write_create);
   db_->exec("PRAGMA foreign_keys=ON");
@@ -99,8 +140,9 @@ CellDb::CellDb(const std::filesystem::path& path, Mode mode) {
                                std::to_string(kCellDbSchemaVersion));
     return;
   }
-  db_->exec("PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;");
   int version = user_version(*db_);
+  refuse_foreign_database(*db_, path, version);
+  db_->exec("PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;");
   if (version > kCellDbSchemaVersion)
     throw std::runtime_error(path.string() + ": cell database schema version " + std::to_string(version) +
                              " is newer than this cellbake (" + std::to_string(kCellDbSchemaVersion) + ")");

@@ -1,6 +1,11 @@
 #include "storage/geometry_store.h"
 
+#include <signal.h>
 #include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
 
 #include <algorithm>
 #include <cstdio>
@@ -36,6 +41,65 @@ CREATE TABLE chunks(id INTEGER PRIMARY KEY,
 CREATE VIRTUAL TABLE chunk_rtree USING rtree(id, min_x, max_x, min_y, max_y, min_z, max_z);
 )sql";
 
+// True when `path` is a finished geometry store of ours (any schema).
+bool is_geometry_store(const std::filesystem::path& path) {
+  try {
+    SqliteDb db(path, SqliteDb::Mode::read_only);
+    SqliteStatement s(db, "SELECT value FROM meta WHERE key = 'kind'");
+    return s.step() && s.column_text(0) == "cellbake-geometry-store";
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+// Refuses to let a new store replace anything but an absent path, an empty
+// file or an existing geometry store: a device node, a directory, a pipe, a
+// symbolic link, a cell database or any other file stays as it is.
+void check_store_target(const std::filesystem::path& path) {
+  std::error_code ec;
+  const auto link = std::filesystem::symlink_status(path, ec);
+  if (ec || !std::filesystem::exists(link)) return;
+  const std::string where = path.string() + ": ";
+  if (std::filesystem::is_symlink(link))
+    throw std::runtime_error(where + "is a symbolic link; refusing to replace it with a geometry store (name its target)");
+  if (!std::filesystem::is_regular_file(link))
+    throw std::runtime_error(where + "is not a regular file (a directory, device or pipe); refusing to replace it");
+  if (std::filesystem::file_size(path, ec) == 0 && !ec) return;
+  if (!is_geometry_store(path))
+    throw std::runtime_error(where + "exists and is not a cellbake geometry store (a cell database? another file?); "
+                                     "refusing to replace it: remove it or choose another --store path");
+}
+
+// Removes `STORE.tmp-PID` and `STORE.spill-PID` files next to `store` left by
+// ingests that were killed: the process PID is gone from this machine and the
+// file has not been written for 10 minutes (a live ingest on another machine
+// sharing the folder keeps writing it).
+void remove_stale_temporaries(const std::filesystem::path& store) {
+  std::error_code ec;
+  const std::filesystem::path folder = std::filesystem::absolute(store, ec).parent_path();
+  if (ec) return;
+  const std::string name = store.filename().string();
+  const auto now = std::filesystem::file_time_type::clock::now();
+  std::vector<std::filesystem::path> stale;  // collected first: no removal while the folder is listed
+  for (const auto& entry : std::filesystem::directory_iterator(folder, ec)) {
+    const std::string file = entry.path().filename().string();
+    std::string rest;
+    for (const char* suffix : {".tmp-", ".spill-"})
+      if (file.rfind(name + suffix, 0) == 0) rest = file.substr(name.size() + std::strlen(suffix));
+    if (rest.empty() || rest.size() > 9 || rest.find_first_not_of("0123456789") != std::string::npos) continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(rest));
+    if (pid == ::getpid() || ::kill(pid, 0) == 0 || errno != ESRCH) continue;
+    std::error_code time_ec;
+    const auto written = std::filesystem::last_write_time(entry.path(), time_ec);
+    if (time_ec || now - written < std::chrono::minutes(10)) continue;
+    stale.push_back(entry.path());
+  }
+  for (const auto& path : stale) {
+    std::error_code remove_ec;
+    std::filesystem::remove(path, remove_ec);
+  }
+}
+
 std::string fmt_double(double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.17g", v);
@@ -49,6 +113,8 @@ std::string fmt_double(double v) {
 GeometryStoreWriter::GeometryStoreWriter(const std::filesystem::path& final_path)
     : final_path_(final_path),
       temp_path_(final_path.string() + ".tmp-" + std::to_string(::getpid())) {
+  check_store_target(final_path);
+  remove_stale_temporaries(final_path);
   std::error_code ec;
   std::filesystem::remove(temp_path_, ec);
   db_ = std::make_unique<SqliteDb>(temp_path_, SqliteDb::Mode::read_write_create);

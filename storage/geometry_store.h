@@ -42,6 +42,11 @@ struct StoreSummary {
 // Writes a new store into a temporary file next to `final_path` and renames it
 // over `final_path` only in finish(): an interrupted ingest never leaves a
 // half-written store that looks valid, and an existing store stays untouched.
+// The constructor throws std::runtime_error naming the path when something
+// other than an empty file or a geometry store is there (a cell database, a
+// device, a directory, a symbolic link: never replaced), and removes
+// `STORE.tmp-PID` / `STORE.spill-PID` files of killed ingests (the process is
+// gone and the file untouched for 10 minutes).
 class GeometryStoreWriter {
  public:
   explicit GeometryStoreWriter(const std::filesystem::path& final_path);
