@@ -1,5 +1,6 @@
 #include "pipeline/cell_grid.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -7,9 +8,18 @@
 namespace cellbake {
 namespace {
 
+// Cells along one axis of a region; computed in double and checked before
+// any integer conversion, so a huge or non-finite region is an error, not
+// undefined behaviour.
+constexpr double kMaxCellsAlongAxis = 1e7;
+
 int cells_along(double extent, double size) {
   // Tolerate rounding: a 10 m region of 2 m cells is 5 cells, not 6.
   const double n = std::ceil(extent / size - 1e-9);
+  if (!(n <= kMaxCellsAlongAxis))
+    throw std::invalid_argument("a region " + std::to_string(extent) + " long holds more than " +
+                                std::to_string(static_cast<long long>(kMaxCellsAlongAxis)) + " cells of size " +
+                                std::to_string(size) + " along one axis (finite regions and a larger cell size, please)");
   return std::max(1, static_cast<int>(n));
 }
 
@@ -20,8 +30,13 @@ std::vector<CellSpec> enumerate_cells(const std::vector<Box3d>& regions, double 
   std::vector<CellSpec> cells;
   std::uint64_t total = 0;
   for (const auto& r : regions) {
+    if (!is_finite(r.lo) || !is_finite(r.hi)) throw std::invalid_argument("a region has a non-finite corner");
     const Vec3d e = r.extent();
-    total += std::uint64_t(cells_along(e.x, cell_size)) * cells_along(e.y, cell_size) * cells_along(e.z, cell_size);
+    const double count = double(cells_along(e.x, cell_size)) * cells_along(e.y, cell_size) * cells_along(e.z, cell_size);
+    if (count > double(max_cells))
+      throw std::invalid_argument("regions hold more than " + std::to_string(max_cells) + " cells of size " +
+                                  std::to_string(cell_size));
+    total += static_cast<std::uint64_t>(count);
     if (total > max_cells)
       throw std::invalid_argument("regions hold more than " + std::to_string(max_cells) + " cells of size " +
                                   std::to_string(cell_size));
@@ -81,6 +96,12 @@ std::vector<CellSpec> select_cells(const std::vector<CellSpec>& cells, const std
         out.push_back(c);
         break;
       }
+  if (out.empty() && !cells.empty()) {
+    std::int64_t lo = cells.front().id, hi = cells.front().id;
+    for (const auto& c : cells) lo = std::min(lo, c.id), hi = std::max(hi, c.id);
+    throw std::invalid_argument("--cells '" + selection + "' selects none of the " + std::to_string(cells.size()) +
+                                " cells (ids " + std::to_string(lo) + " to " + std::to_string(hi) + ")");
+  }
   return out;
 }
 

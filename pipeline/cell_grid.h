@@ -26,7 +26,8 @@ std::vector<CellSpec> enumerate_cells(const std::vector<Box3d>& regions, double 
                                       std::uint64_t max_cells = 50'000'000);
 
 // Parses a cell selection like "1-10,15,20-" (ranges inclusive, open end = to the
-// last id) and keeps only the cells it names. Throws std::invalid_argument on bad syntax.
+// last id) and keeps only the cells it names. Throws std::invalid_argument on bad
+// syntax and when a non-empty selection names none of a non-empty `cells`.
 std::vector<CellSpec> select_cells(const std::vector<CellSpec>& cells, const std::string& selection);
 
 }  // namespace cellbake

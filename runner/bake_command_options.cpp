@@ -1,5 +1,7 @@
 #include "runner/bake_command_options.h"
 
+#include <cmath>
+
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -43,6 +45,8 @@ BakeConfig bake_config_from_options(BakeCommandOptions& opt) {
         } catch (const std::exception&) {
           throw std::runtime_error("--region '" + text + "': '" + item + "' is not a number");
         }
+        if (!std::isfinite(r.back()))
+          throw std::runtime_error("--region '" + text + "': '" + item + "' is not a finite number");
       }
       if (r.size() != 6) throw std::runtime_error("--region needs 6 numbers X0,Y0,Z0,X1,Y1,Z1");
       Box3d b{{r[0], r[1], r[2]}, {r[3], r[4], r[5]}};
@@ -50,6 +54,8 @@ BakeConfig bake_config_from_options(BakeCommandOptions& opt) {
       config.regions.push_back(b);
     }
   }
+  if (std::isnan(opt.cell_size) || std::isinf(opt.cell_size))
+    throw std::runtime_error("--cell-size must be a finite number > 0");
   if (opt.cell_size > 0) config.cell_size = opt.cell_size;
   if (opt.near_budget >= 0) config.near_budget = static_cast<std::uint64_t>(opt.near_budget);
   if (opt.face_size > 0) config.face_size = opt.face_size;
