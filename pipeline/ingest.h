@@ -3,7 +3,7 @@
 // Textures the materials name are decoded (pipeline/texture_import.h), capped
 // in size and stored inside the store, so a bake needs nothing else; one that
 // cannot be read is a counted warning and its material keeps its colour.
-// Memory is bounded: triangles (112 bytes each) stay in memory up to a budget
+// Memory is bounded: triangles (sizeof(Triangle), ~150 bytes) stay in memory up to a budget
 // and then go to a temporary spill file; only 40-byte sort keys per triangle
 // are always held in memory.
 #pragma once

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "stages/texture_sampling.h"
+
 namespace cellbake {
 namespace {
 
@@ -54,33 +56,12 @@ TextureImage read_with_oiio(const std::string& path, OIIO::Filesystem::IOProxy* 
   return image;
 }
 
-std::uint8_t average(int a, int b, int c, int d) { return static_cast<std::uint8_t>((a + b + c + d + 2) / 4); }
-
 }  // namespace
 
 void shrink_to_fit(TextureImage& image, int max_size) {
   if (max_size < 1) throw std::invalid_argument("texture size cap must be >= 1");
-  while (image.width > max_size || image.height > max_size) {
-    const int w = std::max(1, image.width / 2), h = std::max(1, image.height / 2);
-    std::vector<Rgba8> out(std::size_t(w) * std::size_t(h));
-    const auto at = [&](int x, int y) -> const Rgba8& {
-      return image.texels[std::size_t(std::min(y, image.height - 1)) * std::size_t(image.width) +
-                          std::size_t(std::min(x, image.width - 1))];
-    };
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        // Source footprint: two texels per axis being halved, one otherwise.
-        const int x0 = image.width > 1 ? 2 * x : x, x1 = image.width > 1 ? 2 * x + 1 : x;
-        const int y0 = image.height > 1 ? 2 * y : y, y1 = image.height > 1 ? 2 * y + 1 : y;
-        const Rgba8 &a = at(x0, y0), &b = at(x1, y0), &c = at(x0, y1), &d = at(x1, y1);
-        out[std::size_t(y) * std::size_t(w) + std::size_t(x)] = {
-            average(a.r, b.r, c.r, d.r), average(a.g, b.g, c.g, d.g), average(a.b, b.b, c.b, d.b),
-            average(a.a, b.a, c.a, d.a)};
-      }
-    image.width = w;
-    image.height = h;
-    image.texels = std::move(out);
-  }
+  while (image.width > max_size || image.height > max_size)
+    image.texels = halve_texels(image.texels, image.width, image.height);
 }
 
 TextureImage import_texture(const TextureInput& input, const std::string& name, const TextureImportParams& params) {

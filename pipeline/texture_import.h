@@ -1,7 +1,7 @@
 // Texture images as ingest stores them: any format OpenImageIO reads (PNG,
 // JPEG, TGA, BMP, TIFF, ...) from a file or from bytes a model embeds, or raw
 // texels, converted to RGBA8 bottom row first (stages/texture.h) and
-// box-filtered by halving until both sides fit the size cap.
+// box-filtered by halving (as mip levels are) until both sides fit the size cap.
 #pragma once
 
 #include <filesystem>
@@ -22,8 +22,8 @@ struct TextureImportParams {
 // missing, unreadable, empty or larger than 65536 pixels a side.
 TextureImage import_texture(const TextureInput& input, const std::string& name, const TextureImportParams& params);
 
-// Halves `image` (2x2 box filter; an odd last row or column is averaged with
-// its neighbour) until width and height are both <= max_size. Exposed for tests.
+// Halves `image` (halve_texels in stages/texture_sampling.h: the box filter of
+// a GL mip level) until width and height are both <= max_size. Exposed for tests.
 void shrink_to_fit(TextureImage& image, int max_size);
 
 }  // namespace cellbake

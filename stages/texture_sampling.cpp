@@ -27,33 +27,37 @@ int wrap_index(int i, int size, TextureWrap wrap) {
 
 }  // namespace
 
+std::vector<Rgba8> halve_texels(const std::vector<Rgba8>& texels, int& width, int& height) {
+  const int w = std::max(1, width / 2), h = std::max(1, height / 2);
+  const int sx = width > 1 ? 2 : 1, sy = height > 1 ? 2 : 1;
+  std::vector<Rgba8> out(std::size_t(w) * std::size_t(h));
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      int sum[4] = {0, 0, 0, 0};
+      for (int dy = 0; dy < sy; ++dy)
+        for (int dx = 0; dx < sx; ++dx) {
+          const Rgba8& t = texels[std::size_t(y * sy + dy) * std::size_t(width) + std::size_t(x * sx + dx)];
+          sum[0] += t.r, sum[1] += t.g, sum[2] += t.b, sum[3] += t.a;
+        }
+      const int n = sx * sy;
+      out[std::size_t(y) * std::size_t(w) + std::size_t(x)] = {
+          static_cast<std::uint8_t>((sum[0] + n / 2) / n), static_cast<std::uint8_t>((sum[1] + n / 2) / n),
+          static_cast<std::uint8_t>((sum[2] + n / 2) / n), static_cast<std::uint8_t>((sum[3] + n / 2) / n)};
+    }
+  width = w;
+  height = h;
+  return out;
+}
+
 TextureMips::TextureMips(const TextureImage& image) : wrap_u_(image.wrap_u), wrap_v_(image.wrap_v) {
   if (image.width <= 0 || image.height <= 0 ||
       image.texels.size() != std::size_t(image.width) * std::size_t(image.height))
     throw std::invalid_argument("texture " + std::to_string(image.id) + ": texels do not match its size");
   levels_.push_back({image.width, image.height, image.texels});
   while (levels_.back().width > 1 || levels_.back().height > 1) {
-    const Level& src = levels_.back();
-    Level dst;
-    dst.width = std::max(1, src.width / 2);
-    dst.height = std::max(1, src.height / 2);
-    dst.texels.resize(std::size_t(dst.width) * std::size_t(dst.height));
-    // Box filter over the 2x2 (or 2x1 / 1x2) block each texel covers.
-    const int sx = src.width > 1 ? 2 : 1, sy = src.height > 1 ? 2 : 1;
-    for (int y = 0; y < dst.height; ++y)
-      for (int x = 0; x < dst.width; ++x) {
-        int sum[4] = {0, 0, 0, 0};
-        for (int dy = 0; dy < sy; ++dy)
-          for (int dx = 0; dx < sx; ++dx) {
-            const Rgba8& t = src.texels[std::size_t(y * sy + dy) * std::size_t(src.width) + std::size_t(x * sx + dx)];
-            sum[0] += t.r, sum[1] += t.g, sum[2] += t.b, sum[3] += t.a;
-          }
-        const int n = sx * sy;
-        dst.texels[std::size_t(y) * std::size_t(dst.width) + std::size_t(x)] = {
-            static_cast<std::uint8_t>((sum[0] + n / 2) / n), static_cast<std::uint8_t>((sum[1] + n / 2) / n),
-            static_cast<std::uint8_t>((sum[2] + n / 2) / n), static_cast<std::uint8_t>((sum[3] + n / 2) / n)};
-      }
-    levels_.push_back(std::move(dst));
+    Level next{levels_.back().width, levels_.back().height, {}};
+    next.texels = halve_texels(levels_.back().texels, next.width, next.height);
+    levels_.push_back(std::move(next));
   }
   for (const Level& l : levels_) bytes_ += l.texels.size() * sizeof(Rgba8);
 }

@@ -19,6 +19,12 @@ namespace cellbake {
 // An RGBA colour with components in [0, 1].
 using Rgbaf = std::array<float, 4>;
 
+// The next mip level of a width x height image (texels row by row): each side
+// halved (floor, at least 1) and each texel the rounded mean of the 2 x 2 (or
+// 2 x 1, 1 x 2) block it covers, as glGenerateMipmap's box filter; an odd
+// last row or column is dropped. Sets `width` and `height` to the new size.
+std::vector<Rgba8> halve_texels(const std::vector<Rgba8>& texels, int& width, int& height);
+
 class TextureMips {
  public:
   // Builds every level down to 1 x 1 from `image` (its texels, bottom row
