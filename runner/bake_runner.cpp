@@ -16,6 +16,7 @@
 #include "runner/shards.h"
 #include "pipeline/sample_backend.h"
 #include "storage/cell_db.h"
+#include "storage/cell_db_lock.h"
 #include "storage/geometry_store.h"
 
 namespace cellbake {
@@ -31,6 +32,7 @@ BakeSummary run_bake(const BakeConfig& config, const BakeOptions& options) {
   GeometryStore store(config.store);
   std::filesystem::create_directories(std::filesystem::absolute(config.database).parent_path());
   CellDb db(config.database, CellDb::Mode::read_write);
+  const CellDbLock lock(config.database, "baked");  // one bake per database; a second one stops here
   const std::string store_hash = store.summary().content_hash;
   if (auto existing = db.meta("store_hash"); existing && *existing != store_hash)
     std::fprintf(stderr, "note: %s was baked from a different geometry store; affected cells will be recomputed\n",
@@ -41,9 +43,13 @@ BakeSummary run_bake(const BakeConfig& config, const BakeOptions& options) {
   db.set_meta("up", config.up);
   db.set_meta("cell_size", std::to_string(config.cell_size));
 
-  std::vector<CellSpec> cells = select_cells(enumerate_cells(config.regions, config.cell_size), options.cells);
+  const std::vector<CellSpec> all_cells = enumerate_cells(config.regions, config.cell_size);
+  std::vector<CellSpec> cells = select_cells(all_cells, options.cells);
   if (options.shard_count > 1) cells = shard_cells(cells, options.shard_index, options.shard_count, store);
-  db.set_meta("cells_total", std::to_string(cells.size()));
+  // The configuration's cell count, not this run's selection: `status` counts
+  // what --cells or the other shards left out as pending.
+  db.set_meta("cells_total", std::to_string(all_cells.size()));
+  db.set_meta("cells_selected", std::to_string(cells.size()));  // this run's (shard's) cells, for merge
 
   BakeSummary summary;
   summary.cells_selected = cells.size();
@@ -54,7 +60,7 @@ BakeSummary run_bake(const BakeConfig& config, const BakeOptions& options) {
     work->cell = c;
     work->hashes = cell_hashes(c, config, store_hash);
     auto it = stamps.find(c.id);
-    if (it != stamps.end() && !options.force && it->second.status == "done") {
+    if (it != stamps.end() && !options.force && it->second.status == "done" && it->second.error.empty()) {
       if (it->second.input_hash == work->hashes.input) {
         ++summary.cells_up_to_date;
         continue;

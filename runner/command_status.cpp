@@ -1,57 +1,125 @@
-// `cellbake status DB... [--json]`: what is done, failed and pending, totals,
-// time per stage and a content hash over every finished cell.
+// `cellbake status DB... [--json] [--check | --repair]`: what is done, failed
+// and pending of the configuration's cells, totals, time per stage and a
+// content hash over every finished cell. --check recomputes each cell's
+// content hash from its rows and decodes every blob; --repair marks the
+// damaged cells pending so the next bake redoes them.
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
+#include <stdexcept>
 
 #include "runner/commands.h"
 #include "stages/hashing.h"
+#include "storage/cell_check.h"
 #include "storage/cell_db.h"
+#include "storage/cell_db_lock.h"
+#include "storage/meta_values.h"
 
 namespace cellbake {
+namespace {
+
+// The cells of one configuration (databases with the same `config` meta: a
+// bake and its shards or merge), counted once per id.
+struct ConfigCells {
+  std::uint64_t total = 0;                     // the configuration's cell count (cells_total meta)
+  std::map<std::int64_t, std::string> state;  // id -> "done" | "failed" | "damaged"
+};
+
+struct Damaged {
+  std::string database;
+  std::int64_t id;
+  std::string reason;
+};
+
+// A cell seen in several databases keeps its best state: done over failed over damaged.
+void note_state(std::string& have, const std::string& seen) {
+  auto rank = [](const std::string& s) { return s == "done" ? 3 : s == "failed" ? 2 : s == "damaged" ? 1 : 0; };
+  if (rank(seen) > rank(have)) have = seen;
+}
+
+}  // namespace
 
 void add_status_command(CLI::App& app) {
   struct Options {
     std::vector<std::string> dbs;
-    bool json = false;
+    bool json = false, check = false, repair = false;
   };
   auto opt = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("status", "Show the state of cell databases (one, or the shards of a bake)");
   cmd->add_option("databases", opt->dbs, "Cell database(s); several shards are summed")->required();
   cmd->add_flag("--json", opt->json, "Machine-readable output");
+  cmd->add_flag("--check", opt->check,
+                "Recompute every cell's content hash from its rows and decode every blob; list damaged cells "
+                "(exit 1 when there are any)");
+  cmd->add_flag("--repair", opt->repair, "As --check, then mark the damaged cells pending (the next bake redoes them)");
   cmd->callback([opt] {
-    std::uint64_t total = 0, done = 0, failed = 0, bytes = 0, far = 0, samples = 0, delta_covered = 0, delta_removed = 0;
+    std::uint64_t bytes = 0, far = 0, samples = 0, delta_covered = 0, delta_removed = 0;
     std::map<std::string, double> stage_seconds;
+    std::map<std::string, ConfigCells> configs;
+    std::vector<Damaged> damaged;
     // Per-cell content hashes from every database, combined in id order, so a
     // merged database and its shards hash alike.
     std::map<std::int64_t, std::string> cell_hashes;
     nlohmann::json per_db = nlohmann::json::array();
+    const bool check = opt->check || opt->repair;
     for (const auto& path : opt->dbs) {
       CellDb db(path, CellDb::Mode::read_only);
       const CellDbTotals t = db.totals();
-      const std::uint64_t db_total = std::stoull(db.meta("cells_total").value_or("0"));
-      total += std::max<std::uint64_t>(db_total, t.cells_done + t.cells_failed);
-      done += t.cells_done;
-      failed += t.cells_failed;
+      ConfigCells& cells = configs[db.meta("config").value_or("")];
+      cells.total = std::max(cells.total, meta_u64(db, "cells_total", 0));
       bytes += t.bytes;
       far += t.far_triangles;
       samples += t.samples;
       delta_covered += t.delta_covered_pixels;
       delta_removed += t.delta_removed_pixels;
       for (const auto& [k, v] : t.stage_seconds) stage_seconds[k] += v;
-      for (const auto& [id, stamp] : db.stamps())
-        if (stamp.status == "done") cell_hashes[id] = stamp.content_hash;
-      per_db.push_back({{"database", path}, {"cells_done", t.cells_done}, {"cells_failed", t.cells_failed}});
+      std::map<std::int64_t, std::string> reasons;  // this database's damaged cells
+      if (check)
+        for (auto& p : check_cells(db)) reasons[p.id] = std::move(p.reason);
+      for (const auto& [id, stamp] : db.stamps()) {
+        if (!stamp.error.empty() && !reasons.count(id)) reasons[id] = stamp.error.substr(stamp.error.find("near_chunks"));
+        const bool bad = reasons.count(id) > 0;
+        note_state(cells.state[id], bad ? "damaged" : stamp.status);
+        if (stamp.status == "done" && !bad) cell_hashes[id] = stamp.content_hash;
+      }
+      for (const auto& [id, reason] : reasons) {
+        damaged.push_back({path, id, reason});
+        std::fprintf(stderr, "%s: cell %lld: %s\n", path.c_str(), (long long)id, reason.c_str());
+      }
+      if (opt->repair && !reasons.empty()) {
+        const CellDbLock lock(path, "repaired");
+        std::vector<std::int64_t> ids;
+        for (const auto& [id, reason] : reasons) ids.push_back(id);
+        mark_cells_pending(path, ids);
+        std::fprintf(stderr, "%s: %zu damaged cell(s) marked pending; rerun its bake to redo them\n", path.c_str(),
+                     ids.size());
+      }
+      per_db.push_back({{"database", path},
+                        {"cells_done", t.cells_done},
+                        {"cells_failed", t.cells_failed},
+                        {"cells_damaged", reasons.size()}});
     }
+    std::uint64_t total = 0, done = 0, failed = 0, bad = 0;
+    for (const auto& [config, cells] : configs) {
+      total += std::max<std::uint64_t>(cells.total, cells.state.size());
+      for (const auto& [id, state] : cells.state) {
+        done += state == "done";
+        failed += state == "failed";
+        bad += state == "damaged";
+      }
+    }
+    // Repaired cells are pending now; unrepaired damaged ones are neither done nor pending.
+    if (opt->repair) bad = 0;
     Hasher h;
     for (const auto& [id, hash] : cell_hashes) h.u64(std::uint64_t(id)).text(hash);
-    const std::uint64_t pending = total - std::min(total, done + failed);
+    const std::uint64_t pending = total - std::min(total, done + failed + bad);
     if (opt->json) {
       nlohmann::json j;
       j["cells_total"] = total;
       j["cells_done"] = done;
       j["cells_failed"] = failed;
+      j["cells_damaged"] = bad;
       j["cells_pending"] = pending;
       j["stage_seconds"] = stage_seconds;
       j["content_hash"] = h.hex();
@@ -61,18 +129,26 @@ void add_status_command(CLI::App& app) {
       j["delta_covered_pixels"] = delta_covered;
       j["delta_removed_pixels"] = delta_removed;
       j["databases"] = per_db;
+      nlohmann::json list = nlohmann::json::array();
+      for (const auto& d : damaged) list.push_back({{"database", d.database}, {"cell", d.id}, {"reason", d.reason}});
+      j["damaged"] = list;
       std::printf("%s\n", j.dump(2).c_str());
-      return;
+    } else {
+      std::printf("cells: %llu total, %llu done, %llu failed, %llu pending", (unsigned long long)total,
+                  (unsigned long long)done, (unsigned long long)failed, (unsigned long long)pending);
+      if (bad) std::printf(", %llu damaged", (unsigned long long)bad);
+      std::printf("\n");
+      std::printf("stored: %.1f MB, %llu far-field triangles\n", bytes / 1e6, (unsigned long long)far);
+      if (done > 0 && samples > 0)
+        std::printf("samples: %.2f per done cell; delta scans: %.1f %% of their pixels removed (an ancestor holds them)\n",
+                    double(samples) / double(done),
+                    delta_covered ? 100.0 * double(delta_removed) / double(delta_covered) : 0.0);
+      for (const auto& [k, v] : stage_seconds) std::printf("  %-11s %9.2f s\n", k.c_str(), v);
+      std::printf("content hash: %s\n", h.hex().c_str());
     }
-    std::printf("cells: %llu total, %llu done, %llu failed, %llu pending\n", (unsigned long long)total,
-                (unsigned long long)done, (unsigned long long)failed, (unsigned long long)pending);
-    std::printf("stored: %.1f MB, %llu far-field triangles\n", bytes / 1e6, (unsigned long long)far);
-    if (done > 0 && samples > 0)
-      std::printf("samples: %.2f per done cell; delta scans: %.1f %% of their pixels removed (an ancestor holds them)\n",
-                  double(samples) / double(done),
-                  delta_covered ? 100.0 * double(delta_removed) / double(delta_covered) : 0.0);
-    for (const auto& [k, v] : stage_seconds) std::printf("  %-11s %9.2f s\n", k.c_str(), v);
-    std::printf("content hash: %s\n", h.hex().c_str());
+    if (check && !opt->repair && !damaged.empty())
+      throw std::runtime_error(std::to_string(damaged.size()) +
+                               " damaged cell(s) (listed above); `cellbake status --repair` marks them pending");
   });
 }
 

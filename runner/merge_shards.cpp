@@ -9,7 +9,9 @@
 
 #include "pipeline/cell_grid.h"
 #include "storage/cell_db.h"
+#include "storage/cell_db_lock.h"
 #include "storage/cell_db_merge.h"
+#include "storage/meta_values.h"
 
 namespace cellbake {
 namespace {
@@ -20,7 +22,7 @@ struct ShardInput {
   std::filesystem::path path;
   std::unique_ptr<CellDb> db;
   std::optional<std::string> store_hash, config;
-  std::uint64_t cells_total = 0, rows = 0;
+  std::uint64_t cells_total = 0, rows = 0;  // cells_total: the cells this shard's bake was given
 };
 
 std::vector<std::string> lines_of(const std::string& text) {
@@ -46,7 +48,7 @@ std::optional<std::vector<CellSpec>> cells_of_config_meta(const std::string& con
   double cell_size = 0;
   std::vector<Box3d> regions;
   for (const auto& line : lines_of(config)) {
-    if (line.rfind("cells.size=", 0) == 0) cell_size = std::stod(line.substr(11));
+    if (line.rfind("cells.size=", 0) == 0) cell_size = parse_meta_double("config", "cells.size", line.substr(11));
     if (line.rfind("region=", 0) == 0) {
       Box3d b;
       if (std::sscanf(line.c_str() + 7, "%lf,%lf,%lf,%lf,%lf,%lf", &b.lo.x, &b.lo.y, &b.lo.z, &b.hi.x, &b.hi.y,
@@ -67,7 +69,8 @@ std::optional<ShardInput> open_shard(const std::filesystem::path& path) {
   s.store_hash = s.db->meta("store_hash");
   s.config = s.db->meta("config");
   s.rows = s.db->cell_ids().size();
-  s.cells_total = std::stoull(s.db->meta("cells_total").value_or(std::to_string(s.rows)));
+  // A shard's own cells: `cells_selected` (older bakes wrote that count as cells_total).
+  s.cells_total = meta_u64(*s.db, "cells_selected", meta_u64(*s.db, "cells_total", s.rows));
   return s;
 }
 
@@ -142,6 +145,7 @@ MergeSummary merge_shards(const std::filesystem::path& out, const std::vector<st
 
   if (!out.parent_path().empty()) std::filesystem::create_directories(std::filesystem::absolute(out).parent_path());
   CellDb merged(out, CellDb::Mode::read_write);
+  const CellDbLock lock(out, "merged into");  // no bake or other merge writes it meanwhile
   if (!inputs.empty() && !merged.meta("store_hash")) {
     const CellDb& first = *inputs.front().db;
     for (const char* key : {"store", "store_hash", "config", "up", "cell_size"})
@@ -159,15 +163,23 @@ MergeSummary merge_shards(const std::filesystem::path& out, const std::vector<st
       warn(s.path.string() + ": " + std::to_string(s.cells_total - s.rows) + " of " + std::to_string(s.cells_total) +
            " cells not baked yet (rerun its bake to finish them)");
   }
-  for (const auto& [key, value] : metas_with_prefix(merged, kMergedShardPrefix)) summary.cells_total += std::stoull(value);
+  // The configuration's cell count, as a bake writes it; databases whose
+  // config names no regions fall back to the sum over the merged shards.
+  const auto config = merged.meta("config");
+  const auto grid = config ? cells_of_config_meta(*config) : std::nullopt;
+  if (grid) {
+    summary.cells_total = grid->size();
+  } else {
+    for (const auto& [key, value] : metas_with_prefix(merged, kMergedShardPrefix))
+      summary.cells_total += parse_meta_u64(out, key, value);
+  }
   merged.set_meta("cells_total", std::to_string(summary.cells_total));
 
   const CellDbTotals t = merged.totals();
   summary.cells_done = t.cells_done;
   summary.cells_failed = t.cells_failed;
   if (!summary.missing_shards.empty()) {
-    const auto config = merged.meta("config");
-    if (const auto grid = config ? cells_of_config_meta(*config) : std::nullopt) {
+    if (grid) {
       const auto present_ids = merged.cell_ids();
       const std::set<std::int64_t> present(present_ids.begin(), present_ids.end());
       for (const auto& c : *grid)

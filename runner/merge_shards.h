@@ -28,8 +28,10 @@ struct MergeSummary {
 // difference, before anything is written. A missing shard file is reported
 // through `warn` and skipped. Cells are copied one transaction each (see
 // copy_cells): idempotent, and done cells are never replaced by failed ones.
-// The merged cells_total meta is the sum of the cells_total of every shard
-// ever merged into `out` (each shard counted once, by absolute path).
+// The merged cells_total meta is the configuration's cell count (from the
+// regions in the config meta); when the config names no regions, the sum of
+// the cells_selected of every shard ever merged into `out` (each shard
+// counted once, by absolute path). Takes the output's bake lock (CellDbLock).
 MergeSummary merge_shards(const std::filesystem::path& out, const std::vector<std::filesystem::path>& shards,
                           const std::function<void(const std::string&)>& warn);
 

@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -19,6 +20,7 @@
 #include "runner/progress.h"
 #include "stages/render/gl_context.h"
 #include "storage/cell_db.h"
+#include "storage/meta_values.h"
 #include "storage/geometry_store.h"
 #include "viewer/cell_index.h"
 #include "viewer/decoded_cell.h"
@@ -114,7 +116,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
   GeometryStore store(options.store.empty() ? std::filesystem::path(*store_meta) : options.store);
   const std::string up_name = db.meta("up").value_or("z");
   const Vec3d up = up_axis(up_name);
-  const double cell_size = std::stod(db.meta("cell_size").value_or("0"));
+  const double cell_size = meta_double(db, "cell_size", 0);
   const std::string config_text = db.meta("config").value_or("");
   const std::vector<Box3d> regions = regions_of_config_text(config_text);
   const ShadingLights shading = shading_lights(shading_of_config_text(config_text), up);
@@ -135,8 +137,12 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
   std::vector<CellSpec> specs;
   for (const auto& e : index.cells())
     if (e.done) specs.push_back({e.id, 0, e.gx, e.gy, e.gz, e.bounds});
-  specs = select_cells(specs, options.cells);
   const auto stamps = db.stamps();
+  // Done cells whose rows CellIndex could not read: verified too, so they fail located in the report.
+  for (const auto& [id, stamp] : stamps)
+    if (!stamp.error.empty() && stamp.status == "done") specs.push_back({id, 0, 0, 0, 0, Box3d{}});
+  std::sort(specs.begin(), specs.end(), [](const CellSpec& a, const CellSpec& b) { return a.id < b.id; });
+  specs = select_cells(specs, options.cells);
 
   std::filesystem::create_directories(report_dir / "views");
   const std::filesystem::path cache_file = report_dir / "verify-cells.json";
@@ -168,11 +174,11 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
     result.id = task.id;
     result.key = task.key;
     std::optional<CellRow> row;
-    {
-      std::lock_guard lock(mutex);
-      row = db.get_cell(task.id, true);
-    }
     try {
+      {
+        std::lock_guard lock(mutex);
+        row = db.get_cell(task.id, true);  // throws naming database and cell for an unreadable row
+      }
       if (!row) throw std::runtime_error("cell " + std::to_string(task.id) + " is not in the database");
       result.bounds = row->bounds;
       result.bake_seconds = row->stage_seconds;
@@ -268,7 +274,10 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
       result.views.clear();
       result.worst_view = -1;
       result.triptych.clear();
-      result.error = std::string("cell ") + std::to_string(task.id) + ": " + e.what();
+      const std::string what = e.what();  // located: database, cell, what
+      result.error = what.rfind(database.string() + ": cell ", 0) == 0
+                         ? what
+                         : database.string() + ": cell " + std::to_string(task.id) + ": " + what;
     }
     std::lock_guard lock(mutex);
     if (!result.error.empty()) {

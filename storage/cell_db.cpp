@@ -140,21 +140,22 @@ CellDb::CellDb(const std::filesystem::path& path, Mode mode) {
                                std::to_string(kCellDbSchemaVersion));
     return;
   }
+  refuse_foreign_database(*db_, path, user_version(*db_));
+  db_->exec("PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;");
+  // Schema creation and migrations in one write transaction, the version read
+  // inside it: of two processes opening a new file at once, the second waits
+  // and then finds the schema made (never "table cells already exists").
+  SqliteTransaction tx(*db_);
   int version = user_version(*db_);
   refuse_foreign_database(*db_, path, version);
-  db_->exec("PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;");
   if (version > kCellDbSchemaVersion)
     throw std::runtime_error(path.string() + ": cell database schema version " + std::to_string(version) +
                              " is newer than this cellbake (" + std::to_string(kCellDbSchemaVersion) + ")");
-  while (version < kCellDbSchemaVersion) {
-    SqliteTransaction tx(*db_);
-    db_->exec(kMigrations[version]);
-    ++version;
-    db_->exec("PRAGMA user_version=" + std::to_string(version));
-    tx.commit();
-  }
+  for (; version < kCellDbSchemaVersion; ++version) db_->exec(kMigrations[version]);
+  db_->exec("PRAGMA user_version=" + std::to_string(version));
   schema_version_ = version;
   set_meta("kind", "cellbake-cell-database");
+  tx.commit();
 }
 
 CellDb::~CellDb() = default;
@@ -226,7 +227,11 @@ std::map<std::int64_t, CellStamp> CellDb::stamps() const {
     st.cull_half_size = s.column_double(5);
     std::size_t n = 0;
     const std::uint8_t* p = s.column_blob_data(6, n);
-    if (p) st.near_chunks = unpack_near_chunks(p, n);
+    try {
+      if (p) st.near_chunks = unpack_near_chunks(p, n);
+    } catch (const std::exception& e) {
+      st.error = path().string() + ": cell " + std::to_string(st.id) + ": near_chunks: " + e.what();
+    }
     st.near_triangles = static_cast<std::uint64_t>(s.column_int(7));
     out[st.id] = std::move(st);
   }
@@ -264,7 +269,11 @@ std::optional<CellRow> CellDb::get_cell(std::int64_t id, bool with_blobs) const 
   c.near_triangles = std::uint64_t(s.column_int(16));
   std::size_t n = 0;
   const std::uint8_t* p = s.column_blob_data(17, n);
-  if (p) c.near_chunks = unpack_near_chunks(p, n);
+  try {
+    if (p) c.near_chunks = unpack_near_chunks(p, n);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(path().string() + ": cell " + std::to_string(id) + ": near_chunks: " + e.what());
+  }
   c.far_triangles = std::uint64_t(s.column_int(18));
   c.bytes = std::uint64_t(s.column_int(19));
   c.max_boundary_error_px = s.column_double(20);

@@ -73,6 +73,7 @@ struct CellStamp {
   double cull_half_size = 0;
   std::vector<NearChunkRow> near_chunks;
   std::uint64_t near_triangles = 0;
+  std::string error;  // non-empty when the row's near_chunks blob is unreadable (names database and cell)
 };
 
 struct CellDbTotals {
@@ -98,7 +99,11 @@ class CellDb {
 
   // Replaces the cell (and its samples and faces) in one transaction.
   void put_cell(const CellRow& cell);
+  // Every cell's stamp; a row with an unreadable near_chunks blob gets `error`
+  // set instead of throwing, so one damaged cell never hides the others.
   std::map<std::int64_t, CellStamp> stamps() const;
+  // The cell, or nullopt when absent. Throws std::runtime_error naming the
+  // database and cell when a stored blob (near_chunks) is unreadable.
   std::optional<CellRow> get_cell(std::int64_t id, bool with_blobs = true) const;
   std::vector<std::int64_t> cell_ids() const;
   CellDbTotals totals() const;

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "storage/cell_check.h"
 #include "storage/sqlite_db.h"
 
 namespace cellbake {
@@ -20,6 +21,9 @@ CopyDecision decide(const CellStamp* existing, const CellStamp& incoming) {
   if (existing->status == "done" && incoming.status != "done") return CopyDecision::keep_done;
   return CopyDecision::copy;
 }
+
+// Copies the rows of cells `to_copy` from `source` into `target`, one transaction per cell.
+void copy_rows(CellDb& target, const CellDb& source, const std::vector<std::int64_t>& to_copy, CellCopyCounts& counts);
 
 }  // namespace
 
@@ -42,6 +46,28 @@ CellCopyCounts copy_cells(CellDb& target, const CellDb& source) {
     }
   }
   if (to_copy.empty()) return counts;
+  // Verified before anything is written: hashes recomputed, blobs decoded.
+  std::string damaged;
+  std::size_t n_damaged = 0;
+  for (std::int64_t id : to_copy)
+    if (const std::string reason = check_cell(source, id); !reason.empty() && ++n_damaged <= 5)
+      damaged += "\n  cell " + std::to_string(id) + ": " + reason;
+  if (n_damaged)
+    throw std::runtime_error(source.path().string() + ": " + std::to_string(n_damaged) +
+                             " damaged cell(s); refusing to merge this shard (`cellbake status --repair " +
+                             source.path().string() + "` marks them pending, then rerun its bake):" + damaged);
+  try {
+    copy_rows(target, source, to_copy, counts);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(source.path().string() + ": merging its cells into " + target.path().string() +
+                             " failed: " + e.what());
+  }
+  return counts;
+}
+
+namespace {
+
+void copy_rows(CellDb& target, const CellDb& source, const std::vector<std::int64_t>& to_copy, CellCopyCounts& counts) {
 
   // A second connection to the target (WAL allows it) with the source
   // attached; both are the same schema version, so SELECT * matches column
@@ -68,8 +94,9 @@ CellCopyCounts copy_cells(CellDb& target, const CellDb& source) {
     }
   }
   db.exec("DETACH DATABASE source");
-  return counts;
 }
+
+}  // namespace
 
 std::map<std::string, std::string> metas_with_prefix(const CellDb& cells, const std::string& prefix) {
   SqliteDb db(cells.path(), SqliteDb::Mode::read_only);

@@ -23,7 +23,10 @@ struct CellCopyCounts {
 // source twice changes nothing; a done cell is never replaced by a failed one;
 // otherwise the source's row replaces the target's. Both databases must be of
 // this cellbake's schema (CellDb checks on open). Metadata is not copied.
-// Throws std::runtime_error naming the file on SQLite errors.
+// Every cell to be copied is verified first (check_cell: content hash
+// recomputed, blobs decoded); a damaged one throws std::runtime_error naming
+// the source file and the cells, before anything is written. Other errors
+// throw naming the source file too.
 CellCopyCounts copy_cells(CellDb& target, const CellDb& source);
 
 // Every metadata entry whose key starts with `prefix` (key -> value; may be empty).

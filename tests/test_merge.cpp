@@ -13,6 +13,7 @@
 #include "runner/merge_shards.h"
 #include "runner/parallel.h"
 #include "runner/shards.h"
+#include "storage/cell_content_hash.h"
 #include "storage/cell_db.h"
 #include "storage/geometry_store.h"
 #include "fixture_room_obj.h"
@@ -225,7 +226,8 @@ TEST_F(Merge, AMissingShardIsReportedAndTheRestIsUsable) {
   EXPECT_FALSE(std::filesystem::exists(dir / "nothing.db"));
 }
 
-// A hand-made cell row; `done` cells carry a content hash, failed ones an error.
+// A hand-made cell row; `done` cells carry their content hash (merge verifies
+// it; no samples, so no blobs to decode), failed ones an error and a sample.
 CellRow cell(std::int64_t id, bool done, const std::string& tag) {
   CellRow c;
   c.id = id;
@@ -233,7 +235,11 @@ CellRow cell(std::int64_t id, bool done, const std::string& tag) {
   c.error = done ? "" : "cell " + std::to_string(id) + " failed in stage sample: " + tag;
   c.input_hash = "input-" + std::to_string(id);
   c.cull_hash = "cull-" + std::to_string(id);
-  c.content_hash = done ? "content-" + tag : "";
+  c.cull_half_size = double(tag.size()) + tag[0] / 256.0;  // the tag shows in the content
+  if (done) {
+    c.content_hash = cell_content_hash(c);
+    return c;
+  }
   SampleRow sample;
   sample.eye = {1, 2, 3};
   sample.faces = {FaceRow{0, "png", {1, 2, 3}, {4, 5}, 2, 0, 0}};
@@ -261,7 +267,7 @@ TEST(MergeCells, FailedCellsAreCopiedButNeverReplaceDoneOnes) {
   {
     CellDb m(dir / "merged.db", CellDb::Mode::read_only);
     EXPECT_EQ(m.get_cell(1)->status, "done");
-    EXPECT_EQ(m.get_cell(1)->content_hash, "content-a");
+    EXPECT_EQ(m.get_cell(1)->content_hash, cell(1, true, "a").content_hash);
     EXPECT_EQ(m.get_cell(2)->status, "failed");
     EXPECT_NE(m.get_cell(3)->error.find("stage sample"), std::string::npos);
     ASSERT_EQ(m.get_cell(3)->samples.size(), 1u);
@@ -272,7 +278,7 @@ TEST(MergeCells, FailedCellsAreCopiedButNeverReplaceDoneOnes) {
   s = merge_shards(dir / "merged.db", {dir / "c.db"}, [](const std::string&) {});
   EXPECT_EQ(s.cells_copied, 1u);
   EXPECT_EQ(s.cells_done, 2u);
-  EXPECT_EQ(CellDb(dir / "merged.db", CellDb::Mode::read_only).get_cell(2)->content_hash, "content-c");
+  EXPECT_EQ(CellDb(dir / "merged.db", CellDb::Mode::read_only).get_cell(2)->content_hash, cell(2, true, "c").content_hash);
   EXPECT_TRUE(CellDb(dir / "merged.db", CellDb::Mode::read_only).integrity_ok());
 }
 

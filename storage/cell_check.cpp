@@ -1,0 +1,64 @@
+#include "storage/cell_check.h"
+
+#include <exception>
+#include <set>
+
+#include "stages/encode.h"
+#include "storage/cell_content_hash.h"
+#include "storage/sqlite_db.h"
+
+namespace cellbake {
+
+std::string check_cell(const CellDb& db, std::int64_t id) {
+  std::optional<CellRow> row;
+  try {
+    row = db.get_cell(id, true);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  if (!row) return "not in the database";
+  if (row->status == "failed") return "";
+  if (row->status != "done") return "unknown status '" + row->status + "'";
+  for (const auto& s : row->samples) {
+    const std::string at = "sample " + std::to_string(s.index);
+    std::set<int> faces;
+    for (const auto& f : s.faces) faces.insert(f.face);
+    if (s.faces.size() != 6 || faces.size() != 6 || *faces.begin() != 0 || *faces.rbegin() != 5)
+      return at + " has " + std::to_string(s.faces.size()) + " faces (6 expected, one per cube face)";
+    for (const auto& f : s.faces) {
+      const std::string face = at + " face " + std::to_string(f.face);
+      try {
+        decode_image(f.image);
+      } catch (const std::exception& e) {
+        return face + " image: " + e.what();
+      }
+      try {
+        decode_face_mesh(f.mesh);
+      } catch (const std::exception& e) {
+        return face + " mesh: " + e.what();
+      }
+    }
+  }
+  const std::string hash = cell_content_hash(*row);
+  if (hash != row->content_hash)
+    return "content hash mismatch (stored " + row->content_hash + ", its rows hash to " + hash + ")";
+  return "";
+}
+
+std::vector<CellProblem> check_cells(const CellDb& db) {
+  std::vector<CellProblem> problems;
+  for (std::int64_t id : db.cell_ids())
+    if (std::string reason = check_cell(db, id); !reason.empty()) problems.push_back({id, std::move(reason)});
+  return problems;
+}
+
+void mark_cells_pending(const std::filesystem::path& path, const std::vector<std::int64_t>& ids) {
+  SqliteDb db(path, SqliteDb::Mode::read_write_create);
+  db.exec("PRAGMA foreign_keys=ON");  // as CellDb: every table of a cell's rows cascades from cells
+  SqliteTransaction tx(db);
+  SqliteStatement cells(db, "DELETE FROM cells WHERE id=?");
+  for (std::int64_t id : ids) cells.bind(1, id).run();
+  tx.commit();
+}
+
+}  // namespace cellbake

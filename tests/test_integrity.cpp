@@ -1,0 +1,272 @@
+// Status as an integrity check (issue #14, items 7-10): cells_total is the
+// configuration's count; `status --check` recomputes content hashes and
+// decodes blobs, `--repair` marks damaged cells pending; merge verifies shards
+// and names them; damaged rows and meta values give located errors and never
+// abort a whole status or verify; one bake per database (a lock file).
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <sstream>
+#include <thread>
+
+#include "pipeline/ingest.h"
+#include "stages/encode.h"
+#include "runner/merge_shards.h"
+#include "storage/cell_check.h"
+#include "storage/cell_content_hash.h"
+#include "storage/cell_db.h"
+#include "storage/cell_db_lock.h"
+#include "storage/sqlite_db.h"
+#include "tests/fixture_room_obj.h"
+#include "tests/test_support.h"
+
+namespace cellbake {
+namespace {
+
+// A 4 x 4 x 3 m box (19 200 triangles) with a pillar, and a 2 x 2 grid of
+// 1.5 m cells in it (ids 1..4), baked small.
+class Integrity : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::ostringstream o;
+    int next = 1;
+    test::obj_box(o, next, {0, 0, 0}, {4, 4, 3}, 40);  // a far field worth sampling (not drawn as geometry)
+    test::obj_box(o, next, {1.8, 1.8, 0}, {2.2, 2.2, 3}, 1);
+    test::write_text(dir_ / "box.obj", o.str());
+    ingest_models({dir_ / "box.obj"}, dir_ / "s.db", IngestParams{},
+                  [](std::size_t n, const std::function<void(std::size_t)>& fn) {
+                    for (std::size_t i = 0; i < n; ++i) fn(i);
+                  });
+  }
+  std::string db(const std::string& name) const { return (dir_ / name).string(); }
+  test::CommandResult bake(const std::string& out, const std::string& extra = "") {
+    return test::run_cellbake("bake --store " + db("s.db") + " --region=0.5,0.5,1,3.5,3.5,1 --cell-size 1.5 " +
+                              "--face-size 16 --quiet --threads 1 --out " + db(out) + " " + extra);
+  }
+  static void sql(const std::string& database, const std::string& statement) {
+    SqliteDb d(database, SqliteDb::Mode::read_write_create);
+    d.exec(statement);
+  }
+  test::TempDir dir_;
+};
+
+std::string json_field(const std::string& json, const std::string& key) {
+  const auto at = json.find("\"" + key + "\": ");
+  if (at == std::string::npos) return "(missing)";
+  const auto from = at + key.size() + 4;
+  return json.substr(from, json.find_first_of(",\n}", from) - from);
+}
+
+TEST_F(Integrity, CellsTotalIsTheConfigurationsCountAndStatusShowsPending) {
+  ASSERT_EQ(bake("part.db", "--cells 1-2").exit_code, 0);
+  EXPECT_EQ(CellDb(db("part.db"), CellDb::Mode::read_only).meta("cells_total"), "4");
+  const auto s = test::run_cellbake("status " + db("part.db") + " --json");
+  ASSERT_EQ(s.exit_code, 0) << s.output;
+  EXPECT_EQ(json_field(s.output, "cells_total"), "4") << s.output;
+  EXPECT_EQ(json_field(s.output, "cells_done"), "2") << s.output;
+  EXPECT_EQ(json_field(s.output, "cells_pending"), "2") << s.output;
+
+  // Two shards, one missing from the merge: its cells are pending in the merged database.
+  ASSERT_EQ(bake("shard0.db", "--shard 0/2").exit_code, 0);
+  ASSERT_EQ(bake("shard1.db", "--shard 1/2").exit_code, 0);
+  const auto m = test::run_cellbake("merge " + db("merged.db") + " " + db("shard0.db") + " " + db("absent.db"));
+  ASSERT_EQ(m.exit_code, 0) << m.output;
+  const std::uint64_t in_shard0 = CellDb(db("shard0.db"), CellDb::Mode::read_only).cell_ids().size();
+  const auto ms = test::run_cellbake("status " + db("merged.db") + " --json");
+  EXPECT_EQ(json_field(ms.output, "cells_total"), "4") << ms.output;
+  EXPECT_EQ(json_field(ms.output, "cells_pending"), std::to_string(4 - in_shard0)) << ms.output;
+  // Both shards given to status: counted once each, nothing pending.
+  const auto both = test::run_cellbake("status " + db("shard0.db") + " " + db("shard1.db") + " --json");
+  EXPECT_EQ(json_field(both.output, "cells_total"), "4") << both.output;
+  EXPECT_EQ(json_field(both.output, "cells_pending"), "0") << both.output;
+}
+
+TEST_F(Integrity, RecomputedContentHashesMatchTheBakesStamps) {
+  ASSERT_EQ(bake("cells.db").exit_code, 0);
+  CellDb cells(db("cells.db"), CellDb::Mode::read_only);
+  ASSERT_EQ(cells.cell_ids().size(), 4u);
+  for (std::int64_t id : cells.cell_ids()) {
+    EXPECT_EQ(check_cell(cells, id), "") << "cell " << id;
+    EXPECT_EQ(cell_content_hash(*cells.get_cell(id)), cells.get_cell(id)->content_hash);
+  }
+  const auto s = test::run_cellbake("status --check " + db("cells.db"));
+  EXPECT_EQ(s.exit_code, 0) << s.output;
+}
+
+// A done cell with one sample of six decodable faces and its true content hash.
+CellRow sound_cell(std::int64_t id) {
+  CellRow c;
+  c.id = id;
+  c.status = "done";
+  c.input_hash = c.cull_hash = "h" + std::to_string(id);
+  c.near_chunks = {{7, 12, true}};
+  SampleRow s;
+  for (int f = 0; f < 6; ++f) {
+    FaceMesh mesh;
+    mesh.positions = {{0, 0, 1}, {1, 0, 1}, {0, 1, 1}};
+    mesh.uvs = {{0, 0}, {1, 0}, {0, 1}};
+    mesh.indices = {0, 1, 2};
+    const std::vector<Rgba8> pixels(16, Rgba8{10, 20, 30, 255});
+    s.faces.push_back({f, "png", encode_image(pixels, 4, 4, {"png", 85}), encode_face_mesh(mesh, {}), 1, 0, 0});
+  }
+  c.samples = {s};
+  c.content_hash = cell_content_hash(c);
+  return c;
+}
+
+TEST_F(Integrity, CheckCellDecodesEveryBlobAndRecomputesTheHash) {
+  {
+    CellDb cells(db("cells.db"), CellDb::Mode::read_write);
+    for (std::int64_t id = 1; id <= 6; ++id) cells.put_cell(sound_cell(id));
+  }
+  sql(db("cells.db"), "UPDATE faces SET mesh = substr(mesh, 1, 20) WHERE cell_id = 1 AND face = 2");
+  sql(db("cells.db"), "DELETE FROM faces WHERE cell_id = 2");
+  sql(db("cells.db"), "UPDATE faces SET image = substr(image, 1, 30) WHERE cell_id = 3 AND face = 0");
+  sql(db("cells.db"), "UPDATE cells SET cull_half_size = 1 WHERE id = 4");  // decodes, but is not what was baked
+  sql(db("cells.db"), "UPDATE cells SET near_chunks = x'07000000000000000c00000009' WHERE id = 5");
+  CellDb cells(db("cells.db"), CellDb::Mode::read_only);
+  EXPECT_NE(check_cell(cells, 1).find("sample 0 face 2 mesh: face mesh blob"), std::string::npos) << check_cell(cells, 1);
+  EXPECT_EQ(check_cell(cells, 2), "sample 0 has 0 faces (6 expected, one per cube face)");
+  EXPECT_NE(check_cell(cells, 3).find("sample 0 face 0 image: image blob"), std::string::npos) << check_cell(cells, 3);
+  EXPECT_EQ(check_cell(cells, 4).rfind("content hash mismatch (stored ", 0), 0u) << check_cell(cells, 4);
+  EXPECT_NE(check_cell(cells, 5).find("cells.db: cell 5: near_chunks: near-chunk list: bad flag"), std::string::npos)
+      << check_cell(cells, 5);
+  EXPECT_EQ(check_cell(cells, 6), "");
+  EXPECT_EQ(check_cells(cells).size(), 5u);
+
+  const auto check = test::run_cellbake("status --check " + db("cells.db"));
+  EXPECT_NE(check.exit_code, 0) << check.output;
+  EXPECT_NE(check.output.find("cells.db: cell 2: sample 0 has 0 faces"), std::string::npos) << check.output;
+  EXPECT_NE(check.output.find("5 damaged cell(s)"), std::string::npos) << check.output;
+}
+
+TEST_F(Integrity, StatusRepairMarksDamagedCellsPendingAndTheBakeRedoesThem) {
+  ASSERT_EQ(bake("ref.db").exit_code, 0);
+  ASSERT_EQ(bake("cells.db").exit_code, 0);
+  std::int64_t sampled = 0;  // a cell with faces to damage
+  for (std::int64_t id : CellDb(db("cells.db"), CellDb::Mode::read_only).cell_ids())
+    if (!sampled && !CellDb(db("cells.db"), CellDb::Mode::read_only).get_cell(id, false)->samples.empty()) sampled = id;
+  ASSERT_NE(sampled, 0) << "no cell with samples";
+  const std::int64_t other = sampled == 1 ? 2 : 1;
+  sql(db("cells.db"), "DELETE FROM faces WHERE cell_id = " + std::to_string(sampled));
+  sql(db("cells.db"), "UPDATE cells SET cull_half_size = cull_half_size + 1 WHERE id = " + std::to_string(other));
+
+  const auto plain = test::run_cellbake("status " + db("cells.db") + " --json");
+  EXPECT_EQ(json_field(plain.output, "content_hash"),
+            json_field(test::run_cellbake("status " + db("ref.db") + " --json").output, "content_hash"))
+      << "without --check the stamps are trusted";
+  const auto check = test::run_cellbake("status --check " + db("cells.db"));
+  EXPECT_NE(check.exit_code, 0) << check.output;
+  EXPECT_NE(check.output.find("cell " + std::to_string(sampled) + ": sample 0 has 0 faces"), std::string::npos)
+      << check.output;
+  EXPECT_NE(check.output.find("cell " + std::to_string(other) + ": content hash mismatch"), std::string::npos)
+      << check.output;
+
+  const auto repair = test::run_cellbake("status --repair " + db("cells.db") + " --json");
+  EXPECT_EQ(repair.exit_code, 0) << repair.output;
+  EXPECT_EQ(json_field(repair.output, "cells_pending"), "2") << repair.output;
+  EXPECT_EQ(CellDb(db("cells.db"), CellDb::Mode::read_only).cell_ids().size(), 2u);
+
+  const auto rebake = bake("cells.db");
+  ASSERT_EQ(rebake.exit_code, 0) << rebake.output;
+  EXPECT_EQ(CellDb(db("cells.db"), CellDb::Mode::read_only).totals().content_hash,
+            CellDb(db("ref.db"), CellDb::Mode::read_only).totals().content_hash);
+  EXPECT_EQ(test::run_cellbake("status --check " + db("cells.db")).exit_code, 0);
+}
+
+TEST_F(Integrity, MergeRefusesADamagedShardNamingIt) {
+  ASSERT_EQ(bake("shard0.db", "--shard 0/2").exit_code, 0);
+  ASSERT_EQ(bake("shard1.db", "--shard 1/2").exit_code, 0);
+  const std::int64_t victim = CellDb(db("shard1.db"), CellDb::Mode::read_only).cell_ids().front();
+  sql(db("shard1.db"), "UPDATE cells SET cull_half_size = 0.125 WHERE id = " + std::to_string(victim));
+  const auto m = test::run_cellbake("merge " + db("merged.db") + " " + db("shard0.db") + " " + db("shard1.db"));
+  EXPECT_NE(m.exit_code, 0) << m.output;
+  EXPECT_NE(m.output.find("shard1.db: 1 damaged cell(s)"), std::string::npos) << m.output;
+  EXPECT_NE(m.output.find("cell " + std::to_string(victim) + ": content hash mismatch"), std::string::npos) << m.output;
+  EXPECT_EQ(m.output.find("merged.db:"), std::string::npos) << "names the shard, not the output: " << m.output;
+}
+
+TEST_F(Integrity, ADamagedNearChunkListOrMetaValueGivesALocatedError) {
+  ASSERT_EQ(bake("cells.db").exit_code, 0);
+  sql(db("cells.db"), "UPDATE cells SET near_chunks = x'01000000000000000100000007' WHERE id = 2");
+  const auto s = test::run_cellbake("status " + db("cells.db") + " --json");
+  EXPECT_EQ(s.exit_code, 0) << s.output;
+  EXPECT_NE(s.output.find("cells.db: cell 2: near_chunks: near-chunk list: bad flag"), std::string::npos) << s.output;
+  EXPECT_EQ(json_field(s.output, "cells_done"), "3") << s.output;
+  EXPECT_EQ(json_field(s.output, "cells_damaged"), "1") << s.output;
+
+  const auto v = test::run_cellbake("verify " + db("cells.db") + " --report " + db("report") +
+                                    " --views-per-cell 1 --size 16x16 --threads 1 --quiet");
+  EXPECT_NE(v.output.find("cells.db: cell 2: near_chunks"), std::string::npos) << v.output;
+  EXPECT_NE(v.output.find("1 failed"), std::string::npos) << v.output;
+
+  // A bake redoes the damaged cell rather than trusting its stamp.
+  ASSERT_EQ(bake("cells.db").exit_code, 0);
+  EXPECT_EQ(test::run_cellbake("status --check " + db("cells.db")).exit_code, 0);
+
+  sql(db("cells.db"), "UPDATE meta SET value = 'lots' WHERE key = 'cells_total'");
+  const auto garbage = test::run_cellbake("status " + db("cells.db"));
+  EXPECT_NE(garbage.exit_code, 0);
+  EXPECT_NE(garbage.output.find("cells.db: meta 'cells_total' is 'lots', not an unsigned integer"), std::string::npos)
+      << garbage.output;
+  sql(db("cells.db"), "UPDATE meta SET value = '2.0x' WHERE key = 'cell_size'");
+  const auto vg = test::run_cellbake("verify " + db("cells.db") + " --report " + db("report2") + " --quiet");
+  EXPECT_NE(vg.exit_code, 0);
+  EXPECT_NE(vg.output.find("meta 'cell_size' is '2.0x', not a finite number"), std::string::npos) << vg.output;
+}
+
+TEST_F(Integrity, ASecondBakeOfADatabaseIsRefusedNamingThePid) {
+  ASSERT_EQ(bake("cells.db", "--cells 1").exit_code, 0);
+  {
+    const CellDbLock held(db("cells.db"), "baked");
+    const auto second = bake("cells.db");
+    EXPECT_NE(second.exit_code, 0);
+    EXPECT_NE(second.output.find("database " + db("cells.db") + " is being baked by pid " + std::to_string(getpid())),
+              std::string::npos)
+        << second.output;
+    EXPECT_NE(test::run_cellbake("merge " + db("cells.db") + " " + db("other.db")).exit_code, 0);
+  }
+  EXPECT_FALSE(std::filesystem::exists(db("cells.db.lock")));  // removed on release
+  // A holder killed with -9 leaves its lock file, but not the lock.
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    const CellDbLock held(db("cells.db"), "baked");
+    pause();
+    _exit(0);
+  }
+  for (int i = 0; i < 200 && !std::filesystem::exists(db("cells.db.lock")); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  EXPECT_THROW(CellDbLock(db("cells.db"), "baked"), std::runtime_error);
+  kill(child, SIGKILL);
+  waitpid(child, nullptr, 0);
+  EXPECT_TRUE(std::filesystem::exists(db("cells.db.lock")));
+  const auto after = bake("cells.db");
+  EXPECT_EQ(after.exit_code, 0) << after.output;
+  EXPECT_EQ(CellDb(db("cells.db"), CellDb::Mode::read_only).totals().cells_done, 4u);
+}
+
+TEST_F(Integrity, ConcurrentOpensOfANewDatabaseCreateTheSchemaOnce) {
+  for (int round = 0; round < 10; ++round) {
+    const std::string path = db("new" + std::to_string(round) + ".db");
+    std::vector<std::string> errors(4);
+    std::vector<std::thread> threads;
+    for (int t = 0; t < 4; ++t)
+      threads.emplace_back([&, t] {
+        try {
+          CellDb opened(path, CellDb::Mode::read_write);
+        } catch (const std::exception& e) {
+          errors[t] = e.what();
+        }
+      });
+    for (auto& t : threads) t.join();
+    for (const auto& e : errors) EXPECT_EQ(e, "") << "round " << round;
+  }
+}
+
+}  // namespace
+}  // namespace cellbake
