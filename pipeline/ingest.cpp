@@ -195,7 +195,7 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   for (const auto& model : models) {
     SourceFileRecord src;
     src.path = model.string();
-    if (!std::filesystem::is_regular_file(model)) throw InputError(model.string(), "", "no such file");
+    require_regular_file(model);
     src.hash = hash_file(model, src.bytes);
     content.text(src.hash);
     const auto material_offset = static_cast<std::uint32_t>(materials.size());
@@ -228,6 +228,7 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
       materials.push_back(material);
     }
     report.polygons_triangulated += info.polygons_triangulated;
+    for (const std::string& w : info.warnings) report.input_warnings.push_back(model.filename().string() + ":" + w);
     if (const std::string note = describe_vertex_colours(info); !note.empty())
       report.vertex_colour_notes.push_back(model.filename().string() + ": " + note);
     src.triangles = file_triangles;

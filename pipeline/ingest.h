@@ -54,6 +54,8 @@ struct IngestReport {
   // One line per texture that could not be used, naming the material and the
   // path or reference: "FILE: material 'M': texture 'T' ...: material colour used".
   std::vector<std::string> texture_warnings;
+  // What the readers skipped, one line each: "FILE:line N: mtllib 'a.mtl': missing or unreadable; ...".
+  std::vector<std::string> input_warnings;
 };
 
 // Ingests `models` into a new store at `store` (replacing an existing one only

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 
@@ -17,5 +18,22 @@ class InputError : public std::runtime_error {
 
 inline std::string at_line(std::uint64_t line) { return "line " + std::to_string(line); }
 inline std::string at_byte(std::uint64_t offset) { return "byte " + std::to_string(offset); }
+
+// Throws InputError unless `file` is a regular file (or a link to one):
+// "no such file", or "not a regular file (a directory)" / "(a pipe)" /
+// "(a device)" / "(a socket)", so a FIFO is never opened (it would block).
+inline void require_regular_file(const std::filesystem::path& file) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status st = fs::status(file, ec);
+  if (fs::is_regular_file(st)) return;
+  if (!fs::exists(st)) throw InputError(file.string(), "", "no such file");
+  const char* kind = fs::is_directory(st) ? "a directory"
+                     : fs::is_fifo(st)    ? "a pipe"
+                     : fs::is_socket(st)  ? "a socket"
+                     : (fs::is_block_file(st) || fs::is_character_file(st)) ? "a device"
+                                                                             : "not a file";
+  throw InputError(file.string(), "", std::string("not a regular file (") + kind + ")");
+}
 
 }  // namespace cellbake

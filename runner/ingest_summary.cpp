@@ -41,6 +41,10 @@ void print_ingest_summary(const IngestReport& r, const std::string& store) {
     std::printf("  warning: %zu texture(s) could not be used:\n", r.texture_warnings.size());
     for (const std::string& w : r.texture_warnings) std::printf("    %s\n", w.c_str());
   }
+  if (!r.input_warnings.empty()) {
+    std::printf("  warning: %zu reference(s) in the model files were skipped:\n", r.input_warnings.size());
+    for (const std::string& w : r.input_warnings) std::printf("    %s\n", w.c_str());
+  }
   std::printf("  content hash %s\n", r.content_hash.c_str());
 }
 

@@ -18,6 +18,8 @@
 #include <assimp/Importer.hpp>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -31,6 +33,33 @@ namespace {
 
 constexpr unsigned kImportFlags =
     aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType;
+
+// A ".gz" model is decompressed into memory for assimp: at most this much.
+constexpr std::uint64_t kMaxDecompressedBytes = std::uint64_t{4} << 30;
+
+std::uint32_t u32_le(const unsigned char* p) { return p[0] | p[1] << 8 | p[2] << 16 | std::uint32_t(p[3]) << 24; }
+
+// Throws InputError unless the GLB's header length and every chunk length fit
+// in the `size` bytes it has; `read(offset, n, dst)` reads bytes of the file.
+// Run before assimp, which allocates what a chunk header declares.
+template <class Read>
+void check_glb_lengths(const std::string& name, std::uint64_t size, Read&& read) {
+  unsigned char head[12];
+  if (size < 12 || !read(0, 12, head) || std::memcmp(head, "glTF", 4) != 0) return;  // assimp reports it
+  const std::uint64_t declared = u32_le(head + 8);
+  if (declared > size)
+    throw InputError(name, at_byte(8), "GLB header declares " + std::to_string(declared) + " bytes but the file has " +
+                                           std::to_string(size));
+  for (std::uint64_t at = 12; at + 8 <= declared;) {
+    unsigned char chunk[8];
+    if (!read(at, 8, chunk)) break;
+    const std::uint64_t length = u32_le(chunk);
+    if (at + 8 + length > declared)
+      throw InputError(name, at_byte(at), "GLB chunk declares " + std::to_string(length) + " bytes but only " +
+                                              std::to_string(declared - at - 8) + " follow in the file");
+    at += 8 + length;
+  }
+}
 
 TextureWrap wrap_of(int mode) {
   switch (mode) {
@@ -165,11 +194,31 @@ ModelInfo read_with_assimp(const std::filesystem::path& file, const std::string&
   const aiScene* scene = nullptr;
   if (gzipped) {
     std::vector<char> bytes;
-    BufferedInput(file).read_rest(bytes);
+    BufferedInput in(file);
+    while (const char* p = in.fetch(1)) {
+      const std::size_t n = in.buffered();
+      if (bytes.size() + n > kMaxDecompressedBytes)
+        throw InputError(name, "", "decompresses to more than " + std::to_string(kMaxDecompressedBytes >> 30) +
+                                       " GiB, the cap for compressed models read whole");
+      bytes.insert(bytes.end(), p, p + n);
+      in.consume(n);
+    }
+    if (extension == "glb")
+      check_glb_lengths(name, bytes.size(), [&](std::uint64_t at, std::size_t n, unsigned char* dst) {
+        if (at + n > bytes.size()) return false;
+        std::memcpy(dst, bytes.data() + at, n);
+        return true;
+      });
     scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags, extension.c_str());
   } else {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(file, ec)) throw InputError(name, "", "cannot open: no such file");
+    require_regular_file(file);
+    if (extension == "glb") {
+      std::ifstream in(file, std::ios::binary);
+      check_glb_lengths(name, std::filesystem::file_size(file), [&](std::uint64_t at, std::size_t n, unsigned char* dst) {
+        in.seekg(std::streamoff(at));
+        return bool(in.read(reinterpret_cast<char*>(dst), std::streamsize(n)));
+      });
+    }
     scene = importer.ReadFile(name, kImportFlags);
   }
   if (!scene) throw InputError(name, "", std::string("assimp: ") + importer.GetErrorString());

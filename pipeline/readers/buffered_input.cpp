@@ -24,7 +24,7 @@ bool has_gz_extension(const std::filesystem::path& file) {
 
 BufferedInput::BufferedInput(const std::filesystem::path& file) : name_(file.string()), buf_(kInitialBuffer) {
   std::error_code ec;
-  if (std::filesystem::is_directory(file, ec)) throw InputError(name_, "", "cannot open: is a directory");
+  require_regular_file(file);
   if (has_gz_extension(file)) {
     gz_ = gzopen(name_.c_str(), "rb");
     if (!gz_) throw InputError(name_, "", std::string("cannot open: ") + std::strerror(errno));

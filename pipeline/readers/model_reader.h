@@ -51,6 +51,8 @@ struct ModelInfo {
   std::uint64_t triangles_emitted = 0;
   std::uint64_t polygons_triangulated = 0;  // faces with > 3 corners split into fans
   std::string format;                       // "obj", "ply", "off", "stl", "assimp:<ext>"
+  // What the reader skipped, one line each ("line 3: mtllib 'a.mtl': ..."), for the ingest summary.
+  std::vector<std::string> warnings;
 };
 
 using TriangleCallback = std::function<void(const Triangle&)>;

@@ -232,14 +232,17 @@ class ObjReader {
   }
 
   // "mtllib a.mtl [b.mtl ...]": names are resolved against the OBJ's folder; a
-  // single name containing blanks is tried first. Missing libraries are skipped.
+  // single name containing blanks is tried first. Missing or unreadable
+  // libraries are skipped with a warning (their materials stay default grey).
   void load_libraries(std::string_view operand) {
     const std::filesystem::path folder = file_.parent_path();
     if (operand.empty()) return;
     if (read_mtl(folder / std::string(operand), info_.materials, material_by_name_)) return;
     TextScan names(operand);
     for (std::string_view name = names.token(); !name.empty(); name = names.token())
-      read_mtl(folder / std::string(name), info_.materials, material_by_name_);
+      if (!read_mtl(folder / std::string(name), info_.materials, material_by_name_))
+        info_.warnings.push_back(at_line(in_.line_number()) + ": mtllib '" + std::string(name) +
+                                 "': missing or unreadable; its materials are default grey");
   }
 
   std::filesystem::path file_;

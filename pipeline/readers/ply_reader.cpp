@@ -146,6 +146,12 @@ class BinarySource {
     throw InputError(in_.name(), describe(position()), "unexpected end of file");
   }
 
+ public:
+  // Binary records have no lines to check.
+  void end_record(const PlyElement&, std::uint64_t, std::uint64_t) const {}
+
+ private:
+
   BufferedInput& in_;
   bool swap_;
 };
@@ -191,6 +197,14 @@ class AsciiSource {
     }
   }
   const std::string& name() const { return in_.name(); }
+  // An ASCII record is one line: a record that began on line `start` and
+  // needed tokens from a later one had too few values on its own line.
+  void end_record(const PlyElement& element, std::uint64_t index, std::uint64_t start) const {
+    if (in_.line_number() != start)
+      throw InputError(in_.name(), describe(start),
+                       element.name + " " + std::to_string(index) + ": fewer values on the line than the element's " +
+                           std::to_string(element.properties.size()) + " properties");
+  }
 
  private:
   // Moves to the line holding the next token; false at the end of the input.
@@ -383,6 +397,7 @@ class PlyReader {
           values.assign(roles[k], source.real(property.type), property.type);
         }
       }
+      source.end_record(element, i, start);
       store_vertex<Source>(values, has_colour, has_uv, in.name(), start, i);
     }
   }

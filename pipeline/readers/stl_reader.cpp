@@ -98,6 +98,20 @@ class StlReader {
       emit_(triangle_);
       ++info_.triangles_emitted;
     }
+    // More records than the header announces: refuse rather than drop them silently.
+    if (in_.fetch(1)) {
+      std::uint64_t extra = 0;
+      while (in_.fetch(1)) {
+        const std::size_t n = in_.buffered();
+        in_.consume(n);
+        extra += n;
+      }
+      throw InputError(in_.name(), at_byte(80),
+                       "binary STL header announces " + std::to_string(triangles) + " triangles (" +
+                           std::to_string(kBinaryHeader + kBinaryRecord * triangles) + " bytes) but the file has " +
+                           std::to_string(in_.offset()) + " bytes (" +
+                           std::to_string(triangles + extra / kBinaryRecord) + " whole triangle records)");
+    }
   }
 
   [[noreturn]] void fail(const std::string& what) const {
