@@ -179,10 +179,16 @@ const std::map<std::string, Setter>& setters() {
          c.max_face_triangles = int(integer(n, w, "simplify.max_triangles", 2, 1 << 24));
        }},
       {"encode.image_format", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.image_format = text(n, w, "encode.image_format", {"jpeg", "webp", "png"});
+         c.image_format = text(n, w, "encode.image_format", {"jpeg", "webp", "png", "avif", "jxl"});
        }},
       {"encode.quality", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.image_quality = int(integer(n, w, "encode.quality", 1, 100));
+       }},
+      {"encode.mesh_codec", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.mesh_codec = text(n, w, "encode.mesh_codec", {"grid", "quantized"});
+       }},
+      {"encode.mesh_depth_error", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.mesh_depth_error = number(n, w, "encode.mesh_depth_error", 1e-6, 0.1);
        }},
       {"encode.position_bits", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.position_bits = int(integer(n, w, "encode.position_bits", 8, 24));
@@ -320,7 +326,8 @@ std::string describe_bake_config(const BakeConfig& c) {
     << "\ndepth_mesh.depth_jump=" << c.depth_jump
     << "\nsimplify.depth_error_relative=" << c.depth_error_relative
     << "\nsimplify.boundary_error_px=" << c.boundary_error_px << "\nsimplify.max_triangles=" << c.max_face_triangles << "\nencode.image_format=" << c.image_format
-    << "\nencode.quality=" << c.image_quality << "\nencode.position_bits=" << c.position_bits << "\n";
+    << "\nencode.quality=" << c.image_quality << "\nencode.mesh_codec=" << c.mesh_codec
+    << "\nencode.mesh_depth_error=" << c.mesh_depth_error << "\nencode.position_bits=" << c.position_bits << "\n";
   for (const auto& r : c.regions)
     o << "region=" << r.lo.x << "," << r.lo.y << "," << r.lo.z << "," << r.hi.x << "," << r.hi.y << "," << r.hi.z
       << "\n";

@@ -83,9 +83,13 @@ struct BakeConfig {
   int max_face_triangles = 10000;      // per cube face (thesis VWALK cap)
 
   // [encode]
-  std::string image_format = "jpeg";   // jpeg | webp | png
-  int image_quality = 85;              // 1..100 (jpeg, webp)
-  int position_bits = 16;              // mesh position quantisation per axis
+  std::string image_format = "avif";   // jpeg | webp | png | avif | jxl (issue #16: avif is the measured best)
+  int image_quality = 55;              // 1..100 (lossy formats; 55 suits avif, jpeg used 85)
+  // Face meshes: "grid" (pixel corners + log depth, blob v2) or "quantized"
+  // (per-axis position_bits over the mesh bounds, blob v1).
+  std::string mesh_codec = "grid";
+  double mesh_depth_error = 0.001;     // grid: max relative depth error the coding adds (10 % of simplify's 1 %)
+  int position_bits = 16;              // quantized: mesh position quantisation per axis
 
   // [view]: what a viewer (render, verify, cellbake-view) draws; not part of the bake hash
   std::uint64_t far_budget = 100000;  // far-field triangles: nearest sample + ancestors, then more samples while under this

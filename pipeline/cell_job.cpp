@@ -69,7 +69,8 @@ CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::str
     hash_box(in, navigable_part(cell.bounds, c.regions[std::size_t(cell.region)]));
   in.text("depth_mesh").u64(StageVersions::depth_mesh).f64(c.skin_angle_deg).f64(c.depth_jump);
   in.text("simplify").u64(StageVersions::simplify).f64(c.depth_error_relative).f64(c.boundary_error_px).u64(c.max_face_triangles);
-  in.text("encode").u64(StageVersions::encode).text(c.image_format).u64(c.image_quality).u64(c.position_bits);
+  in.text("encode").u64(StageVersions::encode).text(c.image_format).u64(c.image_quality).u64(c.position_bits)
+      .text(c.mesh_codec).f64(c.mesh_depth_error);
   h.input = in.hex();
   return h;
 }
@@ -243,6 +244,7 @@ void run_encode(CellWork& work, const BakeConfig& config) {
   ip.quality = config.image_quality;
   MeshEncodeParams mp;
   mp.position_bits = config.position_bits;
+  mp.depth_error_relative = config.mesh_depth_error;
   CellRow& row = work.row;
   row.samples.clear();
   for (std::size_t i = 0; i < work.samples.size(); ++i) {
@@ -262,6 +264,7 @@ void run_encode(CellWork& work, const BakeConfig& config) {
       fr.face = f;
       fr.image_format = config.image_format;
       fr.image = encode_image(face.color, face.size, face.size, ip);
+      if (config.mesh_codec == "grid") mp.face = f, mp.face_size = face.size;
       fr.mesh = encode_face_mesh(s.simplified[f], mp);
       fr.triangles = static_cast<std::uint32_t>(s.simplified[f].triangle_count());
       fr.boundary_error_px = s.boundary_error_px[f];

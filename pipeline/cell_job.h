@@ -31,7 +31,7 @@ struct StageVersions {
   static constexpr int sample = 4;      // 3: several samples per cell (initial set + best-next-view); 4: lit ([shading])
   static constexpr int depth_mesh = 2;  // 2: delta scans lose the pixels their ancestors hold
   static constexpr int simplify = 3;
-  static constexpr int encode = 2;      // 2: background texels filled from their covered neighbours
+  static constexpr int encode = 3;      // 2: background texels filled from their covered neighbours; 3: grid mesh codec, avif
 };
 
 // The stage names, in order, as used in stage_seconds and error messages.

@@ -11,6 +11,7 @@ packages=(
   libgtest-dev libbenchmark-dev slurmctld slurmd slurm-client munge
   libglfw3-dev libimgui-dev libstb-dev xvfb xauth
   libembree-dev libegl-dev
+  libzstd-dev libavif-dev libjxl-dev
   assimp-testmodels
 )
 

@@ -1,6 +1,8 @@
 // Stage `encode`, colour images: JPEG / WebP / PNG through OpenImageIO with
-// in-memory I/O proxies (no files). Face meshes are in encode_face_mesh.cpp.
+// in-memory I/O proxies (no files); AVIF and JPEG XL through their libraries
+// (encode_image_codecs.cpp). Face meshes are in encode_face_mesh.cpp.
 #include "stages/encode.h"
+#include "stages/encode_image_codecs.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
@@ -20,8 +22,10 @@ std::string oiio_format(const std::string& format) {
   if (format == "jpeg") return "jpg";
   if (format == "webp") return "webp";
   if (format == "png") return "png";
+  if (format == "avif") return "avif";
+  if (format == "jxl") return "jxl";
   throw std::invalid_argument("encode_image: unknown image format '" + format +
-                              "' (expected jpeg, webp or png)");
+                              "' (expected jpeg, webp, png, avif or jxl)");
 }
 
 // Reads and clears OpenImageIO's pending global error text.
@@ -33,6 +37,10 @@ std::string sniff_format(const std::uint8_t* data, std::size_t size) {
   if (size >= 8 && std::memcmp(data, png, 8) == 0) return "png";
   if (size >= 3 && data[0] == 0xff && data[1] == 0xd8 && data[2] == 0xff) return "jpg";
   if (size >= 12 && std::memcmp(data, "RIFF", 4) == 0 && std::memcmp(data + 8, "WEBP", 4) == 0) return "webp";
+  if (size >= 12 && std::memcmp(data + 4, "ftypavif", 8) == 0) return "avif";
+  static constexpr std::uint8_t jxl_box[12] = {0, 0, 0, 0x0c, 'J', 'X', 'L', ' ', 0x0d, 0x0a, 0x87, 0x0a};
+  if ((size >= 2 && data[0] == 0xff && data[1] == 0x0a) || (size >= 12 && std::memcmp(data, jxl_box, 12) == 0))
+    return "jxl";
   return "";
 }
 
@@ -51,6 +59,8 @@ std::vector<std::uint8_t> encode_image(const std::vector<Rgba8>& pixels, int wid
     throw std::invalid_argument("encode_image: quality " + std::to_string(params.quality) +
                                 " is outside 1..100");
 
+  if (format == "avif") return encode_avif(pixels, width, height, params.quality);
+  if (format == "jxl") return encode_jxl(pixels, width, height, params.quality);
   const int channels = format == "jpg" ? 3 : 4;
   std::vector<std::uint8_t> raw(pixels.size() * static_cast<std::size_t>(channels));
   for (std::size_t i = 0; i < pixels.size(); ++i) {
@@ -85,7 +95,9 @@ std::vector<std::uint8_t> encode_image(const std::vector<Rgba8>& pixels, int wid
 DecodedImage decode_image(const std::uint8_t* data, std::size_t size) {
   if (data == nullptr || size == 0) throw std::runtime_error("image blob: empty");
   const std::string format = sniff_format(data, size);
-  if (format.empty()) throw std::runtime_error("image blob: not a PNG, JPEG or WebP image");
+  if (format.empty()) throw std::runtime_error("image blob: not a PNG, JPEG, WebP, AVIF or JPEG XL image");
+  if (format == "avif") return decode_avif(data, size, kMaxImageSide, kMaxImagePixels);
+  if (format == "jxl") return decode_jxl(data, size, kMaxImageSide, kMaxImagePixels);
 
   OIIO::Filesystem::IOMemReader proxy(data, size);
   OIIO::Filesystem::IOProxy* proxy_ptr = &proxy;

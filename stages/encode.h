@@ -1,6 +1,6 @@
 // Stage `encode`: compact, deterministic byte encodings of a cell's far field —
 // each cube face's colour image (JPEG / WebP / PNG through OpenImageIO, in
-// memory) and each face's textured depth mesh (quantised positions and
+// memory; AVIF / JPEG XL through libavif / libjxl) and each face's textured depth mesh (quantised positions and
 // texture coordinates, meshoptimizer vertex and index codecs; Kapoulkine,
 // meshoptimizer, https://github.com/zeux/meshoptimizer). Decoders take
 // untrusted bytes: they validate everything and throw std::runtime_error,
@@ -20,8 +20,8 @@ namespace cellbake {
 // ------------------------------------------------------------------ images
 
 struct ImageEncodeParams {
-  std::string format = "jpeg";  // "jpeg" | "webp" | "png"
-  int quality = 85;             // 1..100 for jpeg and webp (lossy); ignored by png (lossless)
+  std::string format = "jpeg";  // "jpeg" | "webp" | "png" | "avif" | "jxl"
+  int quality = 85;             // 1..100 for the lossy formats; ignored by png (lossless)
 };
 
 struct DecodedImage {
@@ -30,8 +30,8 @@ struct DecodedImage {
 };
 
 // Encodes a row-major RGBA8 image (row 0 at the top) as format `params.format`.
-// JPEG has no alpha: alpha is dropped (decode gives 255). PNG is lossless;
-// WebP at quality 100 is still lossy. Same input and params -> same bytes.
+// JPEG, AVIF and JPEG XL have no alpha here: alpha is dropped (decode gives
+// 255). PNG is lossless; WebP at quality 100 is still lossy. Same input and params -> same bytes.
 // Throws std::invalid_argument for an empty or mis-sized image, an unknown
 // format or a quality outside 1..100, and std::runtime_error("encode_image: ...")
 // when OpenImageIO fails.
@@ -39,7 +39,7 @@ std::vector<std::uint8_t> encode_image(const std::vector<Rgba8>& pixels, int wid
                                        const ImageEncodeParams& params);
 
 // Decodes bytes from encode_image (format sniffed from the magic bytes: PNG,
-// JPEG, WebP). Grey and grey+alpha images are expanded to RGBA; images without
+// JPEG, WebP, AVIF, JPEG XL), on the calling thread alone. Grey and grey+alpha images are expanded to RGBA; images without
 // alpha get 255. Throws std::runtime_error("image blob: ...") on anything it
 // cannot decode, including images above 16384 pixels on a side or 2^26 pixels
 // in all. Never crashes on garbage.
@@ -51,8 +51,16 @@ inline DecodedImage decode_image(const std::vector<std::uint8_t>& bytes) {
 // ------------------------------------------------------------- face meshes
 
 struct MeshEncodeParams {
-  // Bits per position axis (1..16), quantised over the mesh's own bounds; see
-  // face_mesh_position_error_bound for the resulting error.
+  // Grid coding (blob version 2, stages/encode_grid_mesh.h): when `face` is a
+  // cube face (0..5) and `face_size` > 0, a mesh whose vertices all lie on the
+  // eye rays through pixel corners of that face (as depth meshes do) is coded
+  // as pixel corners + log-quantised depth, relative depth error at most
+  // `depth_error_relative`. Other meshes, or face = -1, use version 1.
+  int face = -1;
+  int face_size = 0;
+  double depth_error_relative = 0.001;
+  // Version 1: bits per position axis (1..16), quantised over the mesh's own
+  // bounds; see face_mesh_position_error_bound for the resulting error.
   int position_bits = 16;
   // Reorder triangles for the vertex cache and vertices for fetch before
   // encoding (meshoptimizer), which shrinks the index stream ~2x. The decoded
@@ -61,16 +69,22 @@ struct MeshEncodeParams {
   bool optimize_order = true;
 };
 
-// Encodes a face mesh: a 64-byte little-endian header (magic "CBFM", version,
-// bits, counts, position and uv bounds, stream sizes), then the
-// meshoptimizer-encoded vertex stream (quantised x, y, z at position_bits and
-// u, v at 16 bits, as uint16) and index stream. Same input and params -> same
-// bytes. Throws std::invalid_argument("encode_face_mesh: ...") for a
-// non-finite position or uv, an index out of range, an index count not a
-// multiple of 3, uvs not matching positions, or bits outside 1..16.
+// Encodes a face mesh. Version 2 (grid coding, see MeshEncodeParams): a
+// 48-byte header (magic "CBFM", version, face, face size, counts, depth step)
+// and a zstd frame of the index stream and the predicted pixel-corner and
+// depth residuals; pixel corners are exact, depths within
+// depth_error_relative, always in vertex-cache order. Version 1: a 64-byte
+// little-endian header (magic "CBFM", version, bits, counts, position and uv
+// bounds, stream sizes), then the meshoptimizer-encoded vertex stream
+// (quantised x, y, z at position_bits and u, v at 16 bits, as uint16) and
+// index stream. Same input and params -> same bytes. Throws
+// std::invalid_argument("encode_face_mesh: ...") for a non-finite position or
+// uv, an index out of range, an index count not a multiple of 3, uvs not
+// matching positions, or bits outside 1..16.
 std::vector<std::uint8_t> encode_face_mesh(const FaceMesh& mesh, const MeshEncodeParams& params);
 
-// Decodes bytes from encode_face_mesh. Validates every length, count, bound,
+// Decodes bytes from encode_face_mesh, either version (databases baked before
+// the grid coding still open). Validates every length, count, bound,
 // quantised value and index; throws std::runtime_error("face mesh blob: ...")
 // on anything wrong. Memory use is bounded by a small multiple of `size`.
 FaceMesh decode_face_mesh(const std::uint8_t* data, std::size_t size);

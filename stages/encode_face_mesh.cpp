@@ -13,6 +13,7 @@
 #include <string>
 
 #include "stages/encode.h"
+#include "stages/encode_grid_mesh.h"
 
 namespace cellbake {
 namespace {
@@ -190,6 +191,9 @@ FaceMesh optimized_order(const FaceMesh& mesh) {
 
 std::vector<std::uint8_t> encode_face_mesh(const FaceMesh& input, const MeshEncodeParams& params) {
   check_mesh(input, params.position_bits);
+  if (params.face >= 0 && params.face_size > 0)
+    if (auto grid = encode_grid_face_mesh(input, params.face, params.face_size, params.depth_error_relative))
+      return std::move(*grid);
   const FaceMesh mesh = params.optimize_order ? optimized_order(input) : input;
 
   Header h;
@@ -254,6 +258,8 @@ std::vector<std::uint8_t> encode_face_mesh(const FaceMesh& input, const MeshEnco
 }
 
 FaceMesh decode_face_mesh(const std::uint8_t* data, std::size_t size) {
+  if (data != nullptr && size > 4 && data[4] == kGridMeshVersion && std::memcmp(data, kMagic.data(), 4) == 0)
+    return decode_grid_face_mesh(data, size);
   const Header h = read_header(data, size);
   FaceMesh mesh;
   if (h.vertex_count == 0) return mesh;

@@ -149,6 +149,35 @@ ambient = 0.25
   }
 }
 
+TEST(BakeConfig, EncodeCodecKeysSelectTheCodecsAndEnterTheInputHash) {
+  BakeConfig a;
+  EXPECT_EQ(a.image_format, "avif") << "the measured best (issue #16)";
+  EXPECT_EQ(a.mesh_codec, "grid");
+  a.regions = {Box3d{{0, 0, 0}, {2, 2, 2}}};
+  const CellSpec cell = enumerate_cells(a.regions, a.cell_size).front();
+  const CellHashes base = cell_hashes(cell, a, "store");
+  for (const char* change : {"encode.image_format=jxl", "encode.image_format=jpeg", "encode.quality=70",
+                             "encode.mesh_codec=quantized", "encode.mesh_depth_error=0.0005"}) {
+    BakeConfig b = a;
+    apply_override(b, change);
+    const CellHashes h = cell_hashes(cell, b, "store");
+    EXPECT_EQ(h.cull, base.cull) << change;
+    EXPECT_NE(h.input, base.input) << change;
+    const std::string key = std::string(change).substr(0, std::string(change).find('='));
+    EXPECT_NE(describe_bake_config(b).find(key + "="), std::string::npos) << change;
+  }
+  BakeConfig c;
+  apply_override(c, "encode.image_format=jxl");
+  apply_override(c, "encode.mesh_codec=quantized");
+  apply_override(c, "encode.mesh_depth_error=0.002");
+  EXPECT_EQ(c.image_format, "jxl");
+  EXPECT_EQ(c.mesh_codec, "quantized");
+  EXPECT_DOUBLE_EQ(c.mesh_depth_error, 0.002);
+  EXPECT_NE(error_of([&] { apply_override(c, "encode.image_format=heic"); }), "");
+  EXPECT_NE(error_of([&] { apply_override(c, "encode.mesh_codec=draco"); }), "");
+  EXPECT_NE(error_of([&] { apply_override(c, "encode.mesh_depth_error=0"); }).find("out of range"), std::string::npos);
+}
+
 TEST(BakeConfig, ValidationRequiresStoreAndRegions) {
   BakeConfig c;
   EXPECT_THROW(validate_bake_config(c), std::runtime_error);

@@ -1,0 +1,183 @@
+// Colour codecs on real sampled cube faces: for each selected cell of a bake
+// configuration, takes the cell-centre sample (as `cellbake bake` does with
+// one sample), fills background texels as run_encode does, then encodes every
+// face with each codec and quality and measures bytes, PSNR against the
+// uncompressed face over covered pixels only (finite depth: the pixels the
+// depth meshes texture), and single-thread encode / decode milliseconds.
+//
+//   bench_image_codecs configs/plant-demo.toml --store /tmp/h2/plant.store.db --cells 20-25
+//   bench_image_codecs textured.toml --cells 1-4 --codecs jpeg:85,avif:50
+//
+// Not a Google Benchmark program: it needs a geometry store and reports
+// error figures next to sizes and times.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "pipeline/bake_config.h"
+#include "pipeline/cell_grid.h"
+#include "pipeline/cell_job.h"
+#include "pipeline/sample_backend.h"
+#include "stages/background_fill.h"
+#include "stages/encode.h"
+#include "storage/geometry_store.h"
+
+namespace cellbake {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Codec {
+  std::string format;
+  int quality = 0;
+};
+
+struct Args {
+  std::string config, store, cells = "20-25";
+  std::vector<Codec> codecs;
+};
+
+std::vector<Codec> default_codecs() {
+  std::vector<Codec> c;
+  for (int q : {50, 70, 85, 95}) c.push_back({"jpeg", q});
+  for (int q : {50, 70, 85}) c.push_back({"webp", q});
+  for (int q : {30, 45, 55, 65, 75}) c.push_back({"avif", q});
+  for (int q : {50, 65, 75, 85}) c.push_back({"jxl", q});
+  return c;
+}
+
+std::vector<Codec> parse_codecs(const std::string& list) {
+  std::vector<Codec> out;
+  for (std::size_t p = 0; p < list.size();) {
+    const std::size_t q = std::min(list.find(',', p), list.size());
+    const std::string item = list.substr(p, q - p);
+    const std::size_t colon = item.find(':');
+    if (colon == std::string::npos) throw std::invalid_argument("codec '" + item + "' is not FORMAT:QUALITY");
+    out.push_back({item.substr(0, colon), std::stoi(item.substr(colon + 1))});
+    p = q + 1;
+  }
+  return out;
+}
+
+Args parse_args(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    const std::string s = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::invalid_argument("missing value after " + s);
+      return argv[++i];
+    };
+    if (s == "--store") a.store = value();
+    else if (s == "--cells") a.cells = value();
+    else if (s == "--codecs") a.codecs = parse_codecs(value());
+    else if (s == "-h" || s == "--help") {
+      std::printf("usage: bench_image_codecs CONFIG.toml [--store STORE.db] [--cells LIST] [--codecs F:Q,...]\n");
+      std::exit(0);
+    } else if (a.config.empty()) a.config = s;
+    else throw std::invalid_argument("unexpected argument " + s);
+  }
+  if (a.config.empty()) throw std::invalid_argument("a bake configuration is required (see --help)");
+  if (a.codecs.empty()) a.codecs = default_codecs();
+  return a;
+}
+
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+struct Face {
+  std::vector<Rgba8> color;  // background filled
+  std::vector<std::uint8_t> covered;
+  std::size_t covered_count = 0;
+};
+
+struct Point {
+  double bytes = 0, sq_error = 0, samples = 0, encode_ms = 0, decode_ms = 0, worst_face_psnr = 1e9;
+};
+
+double psnr(double sq_error, double samples) {
+  return sq_error <= 0 ? 99.0 : 10 * std::log10(255.0 * 255.0 * samples / sq_error);
+}
+
+int run(int argc, char** argv) {
+  const Args args = parse_args(argc, argv);
+  if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", "1", 1);
+  BakeConfig config = load_bake_config(args.config);
+  if (!args.store.empty()) config.store = args.store;
+  config.samples_initial = "centre";  // one sample per cell: whole faces, no delta scans
+  config.samples_max = 1;
+  GeometryStore store(config.store);
+  const std::unique_ptr<CubeSampler> sampler =
+      CubeSamplerFactory(parse_sample_backend(config.sample_backend), std::size_t(config.embree_cache_mb) << 20).make();
+
+  std::vector<Face> faces;
+  const int n = config.face_size;
+  for (const CellSpec& cell : select_cells(enumerate_cells(config.regions, config.cell_size), args.cells)) {
+    CellWork work;
+    work.cell = cell;
+    run_cull_box(work, config, store);
+    run_sample(work, config, store, *sampler);
+    if (work.samples.empty()) continue;
+    for (CubeFace& f : work.samples[0].cube.faces) {
+      Face face;
+      face.covered.resize(f.depth.size());
+      for (std::size_t i = 0; i < f.depth.size(); ++i) {
+        face.covered[i] = std::isfinite(f.depth[i]) ? 1 : 0;
+        face.covered_count += face.covered[i];
+      }
+      if (face.covered_count == 0) continue;
+      fill_background_colors(f);
+      face.color = f.color;
+      faces.push_back(std::move(face));
+    }
+  }
+  if (faces.empty()) throw std::runtime_error("no face with covered pixels in the selected cells");
+  std::size_t covered = 0;
+  for (const Face& f : faces) covered += f.covered_count;
+  std::printf("%zu faces of %d^2, %.1f %% of their pixels covered\n", faces.size(), n,
+              100.0 * double(covered) / (double(faces.size()) * n * n));
+  std::printf("%-10s %8s %10s %12s %14s %10s %10s\n", "codec", "quality", "KB/face", "PSNR dB", "worst face dB",
+              "enc ms", "dec ms");
+  for (const Codec& codec : args.codecs) {
+    Point p;
+    for (const Face& f : faces) {
+      auto t0 = Clock::now();
+      const std::vector<std::uint8_t> bytes = encode_image(f.color, n, n, {codec.format, codec.quality});
+      p.encode_ms += ms_since(t0);
+      t0 = Clock::now();
+      const DecodedImage img = decode_image(bytes);
+      p.decode_ms += ms_since(t0);
+      double se = 0;
+      for (std::size_t i = 0; i < f.color.size(); ++i) {
+        if (!f.covered[i]) continue;
+        const Rgba8 &a = f.color[i], &b = img.pixels[i];
+        const double dr = a.r - b.r, dg = a.g - b.g, db = a.b - b.b;
+        se += dr * dr + dg * dg + db * db;
+      }
+      p.bytes += double(bytes.size());
+      p.sq_error += se;
+      p.samples += 3.0 * double(f.covered_count);
+      p.worst_face_psnr = std::min(p.worst_face_psnr, psnr(se, 3.0 * double(f.covered_count)));
+    }
+    const double k = double(faces.size());
+    std::printf("%-10s %8d %10.1f %12.2f %14.2f %10.2f %10.2f\n", codec.format.c_str(), codec.quality,
+                p.bytes / k / 1024, psnr(p.sq_error, p.samples), p.worst_face_psnr, p.encode_ms / k, p.decode_ms / k);
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace cellbake
+
+int main(int argc, char** argv) {
+  try {
+    return cellbake::run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_image_codecs: %s\n", e.what());
+    return 1;
+  }
+}
