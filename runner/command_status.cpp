@@ -55,6 +55,7 @@ void add_status_command(CLI::App& app) {
   cmd->add_flag("--repair", opt->repair, "As --check, then mark the damaged cells pending (the next bake redoes them)");
   cmd->callback([opt] {
     std::uint64_t bytes = 0, far = 0, samples = 0, delta_covered = 0, delta_removed = 0;
+    CellDbBytes by_kind;
     std::map<std::string, double> stage_seconds;
     std::map<std::string, ConfigCells> configs;
     std::vector<Damaged> damaged;
@@ -70,6 +71,8 @@ void add_status_command(CLI::App& app) {
       cells.total = std::max(cells.total, meta_u64(db, "cells_total", 0));
       bytes += t.bytes;
       far += t.far_triangles;
+      const CellDbBytes b = db.bytes_by_kind();
+      by_kind.cells += b.cells, by_kind.colour += b.colour, by_kind.mesh += b.mesh, by_kind.near_list += b.near_list;
       samples += t.samples;
       delta_covered += t.delta_covered_pixels;
       delta_removed += t.delta_removed_pixels;
@@ -124,6 +127,7 @@ void add_status_command(CLI::App& app) {
       j["stage_seconds"] = stage_seconds;
       j["content_hash"] = h.hex();
       j["bytes"] = bytes;
+      j["bytes_by_kind"] = {{"colour", by_kind.colour}, {"mesh", by_kind.mesh}, {"near_list", by_kind.near_list}};
       j["far_triangles"] = far;
       j["samples"] = samples;
       j["delta_covered_pixels"] = delta_covered;
@@ -139,6 +143,11 @@ void add_status_command(CLI::App& app) {
       if (bad) std::printf(", %llu damaged", (unsigned long long)bad);
       std::printf("\n");
       std::printf("stored: %.1f MB, %llu far-field triangles\n", bytes / 1e6, (unsigned long long)far);
+      if (by_kind.cells > 0) {
+        const double k = 1e3 * double(by_kind.cells);
+        std::printf("per done cell: %.1f KB colour, %.1f KB mesh, %.1f KB near list\n", by_kind.colour / k,
+                    by_kind.mesh / k, by_kind.near_list / k);
+      }
       if (done > 0 && samples > 0)
         std::printf("samples: %.2f per done cell; delta scans: %.1f %% of their pixels removed (an ancestor holds them)\n",
                     double(samples) / double(done),

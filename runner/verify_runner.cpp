@@ -183,6 +183,10 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
       result.bounds = row->bounds;
       result.bake_seconds = row->stage_seconds;
       result.bytes = row->bytes;
+      for (const SampleRow& sample : row->samples)
+        for (const FaceRow& face : sample.faces)
+          result.colour_bytes += face.image.size(), result.mesh_bytes += face.mesh.size();
+      result.near_list_bytes = pack_near_chunks(row->near_chunks).size();
       result.near_triangles = row->near_triangles;
       result.far_triangles = row->far_triangles;
       const DecodedCell cell = decode_cell(*row);

@@ -321,6 +321,17 @@ std::optional<CellRow> CellDb::get_cell(std::int64_t id, bool with_blobs) const 
   return c;
 }
 
+CellDbBytes CellDb::bytes_by_kind() const {
+  CellDbBytes b;
+  SqliteStatement cells(*db_, "SELECT count(*), total(length(near_chunks)) FROM cells WHERE status = 'done'");
+  if (cells.step()) b.cells = std::uint64_t(cells.column_int(0)), b.near_list = std::uint64_t(cells.column_double(1));
+  SqliteStatement faces(*db_,
+                        "SELECT total(length(image)), total(length(mesh)) FROM faces "
+                        "WHERE cell_id IN (SELECT id FROM cells WHERE status = 'done')");
+  if (faces.step()) b.colour = std::uint64_t(faces.column_double(0)), b.mesh = std::uint64_t(faces.column_double(1));
+  return b;
+}
+
 CellDbTotals CellDb::totals() const {
   CellDbTotals t;
   Hasher h;

@@ -86,6 +86,12 @@ struct CellDbTotals {
   std::uint64_t delta_removed_pixels = 0;    // of those, removed because an ancestor holds them
 };
 
+// Stored bytes by kind over the done cells (issue #16): encoded colour images,
+// encoded face meshes, near-field lists.
+struct CellDbBytes {
+  std::uint64_t cells = 0, colour = 0, mesh = 0, near_list = 0;
+};
+
 class CellDb {
  public:
   enum class Mode { read_only, read_write };
@@ -107,6 +113,9 @@ class CellDb {
   std::optional<CellRow> get_cell(std::int64_t id, bool with_blobs = true) const;
   std::vector<std::int64_t> cell_ids() const;
   CellDbTotals totals() const;
+  // Sums of length(image), length(mesh) over the done cells' faces and of
+  // length(near_chunks) over the done cells; one read-only query each.
+  CellDbBytes bytes_by_kind() const;
   // PRAGMA integrity_check == "ok".
   bool integrity_ok() const;
   const std::filesystem::path& path() const;

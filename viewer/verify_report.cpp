@@ -194,6 +194,9 @@ nlohmann::json to_json(const VerifyCellResult& c) {
                    {"bake_seconds", c.bake_seconds},
                    {"bake_seconds_total", c.bake_seconds_total()},
                    {"bytes", c.bytes},
+                   {"colour_bytes", c.colour_bytes},
+                   {"mesh_bytes", c.mesh_bytes},
+                   {"near_list_bytes", c.near_list_bytes},
                    {"near_triangles", c.near_triangles},
                    {"far_triangles", c.far_triangles},
                    {"void_curve", c.void_curve},
@@ -212,6 +215,9 @@ VerifyCellResult cell_from_json(const nlohmann::json& j) {
   c.key = j.at("key").get<std::string>();
   c.bake_seconds = j.at("bake_seconds").get<std::map<std::string, double>>();
   c.bytes = j.at("bytes").get<std::uint64_t>();
+  c.colour_bytes = j.value("colour_bytes", std::uint64_t{0});
+  c.mesh_bytes = j.value("mesh_bytes", std::uint64_t{0});
+  c.near_list_bytes = j.value("near_list_bytes", std::uint64_t{0});
   c.near_triangles = j.at("near_triangles").get<std::uint64_t>();
   c.far_triangles = j.at("far_triangles").get<std::uint64_t>();
   c.void_curve = j.value("void_curve", std::vector<double>{});
@@ -442,7 +448,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
 
   h << "<h2>Cells</h2>\n<table><tr><th>cell</th><th>views</th><th>median PSNR</th><th>min PSNR</th><th>median SSIM</th>"
        "<th>max holes</th><th>max skins</th><th>median depth err</th><th>tris impostor</th><th>tris truth</th>"
-       "<th>ms impostor</th><th>ms truth</th><th>bake s</th><th>bytes</th><th>samples</th>"
+       "<th>ms impostor</th><th>ms truth</th><th>bake s</th><th>bytes</th><th>KB colour / mesh / near list</th><th>samples</th>"
        "<th>median PSNR, root sample alone</th><th>max holes, root sample alone</th>"
        "<th class=\"l\">void curve (after each sample)</th><th class=\"l\">note</th></tr>\n";
   const MetricStats psnr_stats = metric_stats(cells, verify_metrics()[0]);
@@ -462,7 +468,9 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
       << fmt(median_of([&] { std::vector<double> v; for (auto& x : c.views) v.push_back(double(x.triangles_truth)); return v; }()), "%.0f")
       << "</td><td>" << fmt(cell_median(c, &VerifyViewResult::ms_impostor), "%.1f") << "</td><td>"
       << fmt(cell_median(c, &VerifyViewResult::ms_truth), "%.1f") << "</td><td>" << fmt(c.bake_seconds_total(), "%.2f")
-      << "</td><td>" << c.bytes << "</td><td>" << c.void_curve.size() << "</td><td>"
+      << "</td><td>" << c.bytes << "</td><td>" << fmt(c.colour_bytes / 1024.0, "%.1f") << " / "
+      << fmt(c.mesh_bytes / 1024.0, "%.1f") << " / " << fmt(c.near_list_bytes / 1024.0, "%.1f") << "</td><td>"
+      << c.void_curve.size() << "</td><td>"
       << fmt(cell_median(c, &VerifyViewResult::psnr_db_root), "%.2f") << "</td><td>"
       << fmt(max_of(c, &VerifyViewResult::hole_fraction_root), "%.4f") << "</td><td class=\"l\">" << void_curve_text(c)
       << "</td><td class=\"l\">" << escape_xml(c.error) << "</td></tr>\n";

@@ -42,6 +42,7 @@ struct VerifyCellResult {
   std::string key;  // content hash + verify parameters: equal keys need no re-render
   std::map<std::string, double> bake_seconds;  // per stage, from the cell database
   std::uint64_t bytes = 0, near_triangles = 0, far_triangles = 0;
+  std::uint64_t colour_bytes = 0, mesh_bytes = 0, near_list_bytes = 0;  // stored bytes by kind (issue #16)
   std::vector<double> void_curve;  // per sample in the order taken: worst candidate's void fraction after it (-1: not measured)
   std::vector<double> sample_seconds;  // bake seconds per sample, same order
   std::string error;     // non-empty when the cell could not be verified (views then empty)
