@@ -1,5 +1,6 @@
 #include "pipeline/bake_config.h"
 
+#include <cmath>
 #include <toml++/toml.h>
 
 #include <functional>
@@ -96,6 +97,15 @@ const std::map<std::string, Setter>& setters() {
        }},
       {"near.budget", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.near_budget = static_cast<std::uint64_t>(integer(n, w, "near.budget", 0, std::int64_t(1) << 40));
+       }},
+      {"near.budget_fraction", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.near_budget_fraction = number(n, w, "near.budget_fraction", 0, 1);
+       }},
+      {"far.choice", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.far_choice = text(n, w, "far.choice", {"cheapest", "tdm", "geometry"});
+       }},
+      {"far.geometry_below", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.far_geometry_below = static_cast<std::uint64_t>(integer(n, w, "far.geometry_below", 0, std::int64_t(1) << 40));
        }},
       {"sample.face_size", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.face_size = int(integer(n, w, "sample.face_size", 8, 4096));
@@ -298,6 +308,13 @@ void apply_override(BakeConfig& c, const std::string& assignment) {
   it->second(c, *t.get("v"), "--set " + key);
 }
 
+std::uint64_t effective_near_budget(const BakeConfig& c, std::uint64_t model_triangles) {
+  if (c.near_budget_fraction <= 0) return c.near_budget;
+  constexpr double kFloor = 4096;  // one chunk (stages/chunking.h)
+  const double scaled = std::max(kFloor, std::ceil(c.near_budget_fraction * double(model_triangles)));
+  return std::min(c.near_budget, static_cast<std::uint64_t>(scaled));
+}
+
 void validate_bake_config(const BakeConfig& c) {
   const std::string where = c.source.empty() ? "<command line>" : c.source.string();
   if (c.store.empty()) throw std::runtime_error(where + ": no geometry store given ([model] store or --store)");
@@ -309,6 +326,8 @@ std::string describe_bake_config(const BakeConfig& c) {
   std::ostringstream o;
   o.precision(17);
   o << "up=" << c.up << "\ncells.size=" << c.cell_size << "\nnear.budget=" << c.near_budget
+    << "\nnear.budget_fraction=" << c.near_budget_fraction << "\nfar.choice=" << c.far_choice
+    << "\nfar.geometry_below=" << c.far_geometry_below
     << "\nsample.face_size=" << c.face_size << "\nsample.supersample=" << c.supersample
     << "\nsample.near_plane=" << c.near_plane << "\nsample.seam_shell_px=" << c.seam_shell_px
     << "\nsample.backend=" << c.sample_backend << "\nsample.embree_cache_mb=" << c.embree_cache_mb

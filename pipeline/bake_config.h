@@ -30,6 +30,17 @@ struct BakeConfig {
 
   // [near]
   std::uint64_t near_budget = 100000;  // near-field triangle budget per cell (thesis: 100,000)
+  // A small model's budget is this fraction of its triangles instead (never
+  // under 4096, one chunk): effective_near_budget(); 0 keeps near_budget as is.
+  double near_budget_fraction = 0.1;
+
+  // [far]: how each face tile's far field is drawn (stages/far_choice.h):
+  // "cheapest" (exact far geometry where it costs no more triangles than the
+  // depth meshes it replaces), "tdm" (depth meshes only) or "geometry".
+  std::string far_choice = "cheapest";
+  // A far field of at most this many triangles is drawn as geometry without
+  // taking samples (a depth mesh rarely costs fewer, and sampling costs time).
+  std::uint64_t far_geometry_below = 256;
 
   // [sample]
   int face_size = 512;           // stored cube-face resolution, pixels
@@ -113,6 +124,12 @@ void apply_override(BakeConfig& config, const std::string& assignment);
 // Checks cross-field rules (at least one region, non-empty regions, store set).
 // Throws std::runtime_error naming the config source.
 void validate_bake_config(const BakeConfig& config);
+
+// The near-field budget a bake of a model of `model_triangles` uses:
+// min(near_budget, max(4096, near_budget_fraction * model_triangles)), or
+// near_budget when the fraction is 0. A small model then keeps a far field
+// (the thesis' 100,000 would swallow a 36 k-triangle model whole).
+std::uint64_t effective_near_budget(const BakeConfig& config, std::uint64_t model_triangles);
 
 // A canonical text form of every parameter (for hashing and the database meta).
 std::string describe_bake_config(const BakeConfig& config);

@@ -15,6 +15,9 @@
 #include "stages/sample_redundancy.h"
 #include "stages/sample_void.h"
 #include "stages/simplify.h"
+#include "stages/chunk_subset.h"
+#include "storage/cell_content_hash.h"
+#include "storage/chunk_codec.h"
 
 namespace cellbake {
 namespace {
@@ -71,6 +74,7 @@ CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::str
   in.text("simplify").u64(StageVersions::simplify).f64(c.depth_error_relative).f64(c.boundary_error_px).u64(c.max_face_triangles);
   in.text("encode").u64(StageVersions::encode).text(c.image_format).u64(c.image_quality).u64(c.position_bits)
       .text(c.mesh_codec).f64(c.mesh_depth_error);
+  in.text("far_choice").u64(StageVersions::far_choice).text(c.far_choice).u64(c.far_geometry_below);
   h.input = in.hex();
   return h;
 }
@@ -137,9 +141,25 @@ void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& sou
   if (work.cell.region >= 0 && std::size_t(work.cell.region) < config.regions.size())
     nav = navigable_part(work.cell.bounds, config.regions[std::size_t(work.cell.region)]);
   if (nav.empty()) nav = Box3d::cube(work.cell.center(), 0);
+  // The far field's chunks: a far field drawn as geometry whole needs no samples.
+  work.far_chunks.clear();
+  std::uint64_t far_triangles = 0;
+  {
+    std::vector<std::int64_t> near;
+    for (const auto& n : work.cull->near_field) near.push_back(n.chunk_id);
+    std::sort(near.begin(), near.end());
+    for (const ChunkRef& c : source.query(source.model_bounds()))
+      if (!std::binary_search(near.begin(), near.end(), c.id)) {
+        work.far_chunks.push_back(c);
+        far_triangles += c.triangle_count;
+      }
+  }
+  work.samples.clear();
+  const FarChoiceMode mode = parse_far_choice_mode(config.far_choice);
+  if (mode == FarChoiceMode::geometry || (mode == FarChoiceMode::cheapest && far_triangles <= config.far_geometry_below))
+    return;
   std::vector<Vec3d> points = initial_sample_points(nav, parse_initial_samples(config.samples_initial));
   if (points.size() > std::size_t(config.samples_max)) points.resize(std::size_t(config.samples_max));
-  work.samples.clear();
   const auto take = [&](const Vec3d& eye) {
     const auto t0 = Clock::now();
     SampleWork s;
@@ -237,6 +257,52 @@ void run_simplify(CellWork& work, const BakeConfig& config) {
   }
 }
 
+void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource& source) {
+  StageTimer timer(work, "far_choice");
+  // Every eye the viewer may draw the cell from: the cell, and the samples in it.
+  Box3d eyes = work.cell.bounds;
+  std::vector<FarChoiceSample> samples;
+  for (const SampleWork& s : work.samples) {
+    eyes.expand(s.cube.eye);
+    FarChoiceSample c;
+    for (int f = 0; f < kCubeFaces; ++f) {
+      c.meshes[std::size_t(f)] = &s.simplified[std::size_t(f)];
+      c.seen[std::size_t(f)] = &s.cube.faces[std::size_t(f)].seen;
+    }
+    samples.push_back(c);
+  }
+  work.far = choose_far_field(eyes, work.far_chunks, samples, parse_far_choice_mode(config.far_choice));
+  for (SampleWork& s : work.samples)
+    for (int f = 0; f < kCubeFaces; ++f)
+      drop_geometry_tiles(s.simplified[std::size_t(f)], work.far->faces[std::size_t(f)].geometry_tiles);
+  work.far_chunks.clear();
+  // The row's far geometry: whole chunks by reference, seen triangles as chunks of their own.
+  CellRow& row = work.row;
+  row.far_geometry.clear();
+  row.far_choice.clear();
+  row.far_geometry_triangles = work.far->geometry_triangles;
+  for (const FarPiece& piece : work.far->pieces) {
+    FarGeometryRow g;
+    g.chunk_id = piece.chunk.id;
+    g.triangles = std::uint32_t(piece.triangle_count());
+    g.whole = piece.triangles.empty();
+    g.bounds = piece.chunk.bounds;
+    if (!g.whole) {
+      const Chunk part = chunk_subset(*source.load(piece.chunk.id), piece.triangles);
+      g.origin = part.origin;
+      g.bounds = part.bounds;
+      g.geometry = encode_chunk_blob(part);
+      row.bytes += g.geometry.size();
+    }
+    row.far_geometry.push_back(std::move(g));
+  }
+  for (int f = 0; f < kCubeFaces; ++f) {
+    const FaceFarChoice& c = work.far->faces[std::size_t(f)];
+    if (c.geometry_tiles == 0 && c.replaced_triangles == 0 && c.tdm_triangles == 0) continue;
+    row.far_choice.push_back({f, c.geometry_tiles, c.tdm_triangles, c.replaced_triangles, c.geometry_triangles});
+  }
+}
+
 void run_encode(CellWork& work, const BakeConfig& config) {
   StageTimer timer(work, "encode");
   ImageEncodeParams ip;
@@ -247,6 +313,7 @@ void run_encode(CellWork& work, const BakeConfig& config) {
   mp.depth_error_relative = config.mesh_depth_error;
   CellRow& row = work.row;
   row.samples.clear();
+
   for (std::size_t i = 0; i < work.samples.size(); ++i) {
     SampleWork& s = work.samples[i];
     const auto t0 = Clock::now();
@@ -259,11 +326,17 @@ void run_encode(CellWork& work, const BakeConfig& config) {
     sample.removed_pixels = s.removed;
     for (int f = 0; f < kCubeFaces; ++f) {
       CubeFace& face = s.cube.faces[f];
-      fill_background_colors(face);
       FaceRow fr;
       fr.face = f;
       fr.image_format = config.image_format;
-      fr.image = encode_image(face.color, face.size, face.size, ip);
+      if (s.simplified[f].triangle_count() > 0) {
+        fill_background_colors(face);
+        fr.image = encode_image(face.color, face.size, face.size, ip);
+      } else {
+        // Nothing of this face is drawn (sky, or geometry stands in for all
+        // of it): a 1x1 image keeps every face decodable at no cost.
+        fr.image = encode_image(std::vector<Rgba8>(1, Rgba8{0, 0, 0, 0}), 1, 1, ip);
+      }
       if (config.mesh_codec == "grid") mp.face = f, mp.face_size = face.size;
       fr.mesh = encode_face_mesh(s.simplified[f], mp);
       fr.triangles = static_cast<std::uint32_t>(s.simplified[f].triangle_count());
@@ -309,19 +382,7 @@ CellRow finish_cell_row(CellWork& work) {
     return row;
   }
   row.status = "done";
-  // Content hash: everything a viewer reads, nothing about timing.
-  Hasher h;
-  h.u64(row.id).f64(row.cull_half_size).u64(row.near_triangles);
-  for (const auto& n : row.near_chunks) h.u64(std::uint64_t(n.chunk_id)).u64(n.triangles).u64(n.whole);
-  for (const auto& s : row.samples) {
-    h.u64(s.index).f64(s.eye.x).f64(s.eye.y).f64(s.eye.z).u64(std::uint64_t(std::int64_t(s.parent)));
-    h.f64(s.void_after).u64(s.covered_pixels).u64(s.removed_pixels);
-    for (const auto& f : s.faces) {
-      h.u64(f.face).text(f.image_format).bytes(f.image.data(), f.image.size()).u64(f.image.size());
-      h.bytes(f.mesh.data(), f.mesh.size()).u64(f.mesh.size());
-    }
-  }
-  row.content_hash = h.hex();
+  row.content_hash = cell_content_hash(row);  // everything a viewer reads, nothing about timing
   return row;
 }
 

@@ -1,7 +1,7 @@
 // The per-cell job: which stage feeds which, stage names and versions, the
 // parameter/input hashes that make reruns resumable, and the assembly of a
 // cell database row. Stages run in the order
-//   cull_box -> sample -> depth_mesh -> simplify -> encode
+//   cull_box -> sample -> depth_mesh -> simplify -> far_choice -> encode
 // and the runner schedules them (sample needs a CubeSampler, one per thread;
 // the others are plain CPU work). A stage that throws turns the cell into a failed row whose
 // message names the cell and the stage.
@@ -18,6 +18,7 @@
 #include "stages/chunk_source.h"
 #include "stages/cube_map.h"
 #include "stages/cull_box.h"
+#include "stages/far_choice.h"
 #include "storage/cell_db.h"
 
 namespace cellbake {
@@ -32,10 +33,11 @@ struct StageVersions {
   static constexpr int depth_mesh = 2;  // 2: delta scans lose the pixels their ancestors hold
   static constexpr int simplify = 3;
   static constexpr int encode = 3;      // 2: background texels filled from their covered neighbours; 3: grid mesh codec, avif
+  static constexpr int far_choice = 1;  // 1: exact far geometry per face tile where it is cheaper (issue #13)
 };
 
 // The stage names, in order, as used in stage_seconds and error messages.
-inline constexpr std::array<const char*, 5> kStageNames = {"cull_box", "sample", "depth_mesh", "simplify", "encode"};
+inline constexpr std::array<const char*, 6> kStageNames = {"cull_box", "sample", "depth_mesh", "simplify", "far_choice", "encode"};
 
 struct CellHashes {
   std::string cull;   // store content + cull_box version and parameters + the cell
@@ -64,7 +66,10 @@ struct CellWork {
   CellSpec cell;
   CellHashes hashes;
   std::optional<CullBoxResult> cull;  // set by run_cull_box (or reused)
-  std::vector<SampleWork> samples;    // set by run_sample, in the order taken
+  std::vector<ChunkRef> far_chunks;   // set by run_sample: every chunk outside the near field, by id
+  std::vector<SampleWork> samples;    // set by run_sample, in the order taken (none when the far field is
+                                      // drawn as geometry whole: empty or under far.geometry_below triangles)
+  std::optional<FarChoice> far;       // set by run_far_choice
   std::map<std::string, double> seconds;
   std::string failed_stage, error;  // set when a stage threw
   CellRow row;                      // filled by run_encode / make_failed_row
@@ -77,6 +82,11 @@ void run_cull_box(CellWork& work, const BakeConfig& config, const ChunkSource& s
 void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& source, CubeSampler& sampler);
 void run_depth_mesh(CellWork& work, const BakeConfig& config);
 void run_simplify(CellWork& work, const BakeConfig& config);
+// Chooses exact far geometry or depth meshes per face tile and drops the
+// depth-mesh triangles that geometry replaces (stages/far_choice.h).
+// Fills the row's far geometry and per-face choice (loads the chunks it keeps
+// triangles of from `source`).
+void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource& source);
 void run_encode(CellWork& work, const BakeConfig& config);
 
 // Runs `step` for `stage` unless the cell already failed; a throw is recorded

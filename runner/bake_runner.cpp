@@ -21,7 +21,8 @@
 
 namespace cellbake {
 
-BakeSummary run_bake(const BakeConfig& config, const BakeOptions& options) {
+BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
+  BakeConfig config = given;
   const auto t0 = std::chrono::steady_clock::now();
   validate_bake_config(config);
   const int threads = options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
@@ -30,6 +31,13 @@ BakeSummary run_bake(const BakeConfig& config, const BakeOptions& options) {
   if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", threads > 1 ? "1" : "2", 1);
 
   GeometryStore store(config.store);
+  const std::uint64_t model_triangles = store.summary().triangles;
+  config.near_budget = effective_near_budget(config, model_triangles);
+  if (model_triangles <= config.near_budget && !options.quiet)
+    std::fprintf(stderr,
+                 "note: the whole model (%llu triangles) fits the near-field budget (%llu): cells draw it as "
+                 "geometry and have no far field\n",
+                 (unsigned long long)model_triangles, (unsigned long long)config.near_budget);
   std::filesystem::create_directories(std::filesystem::absolute(config.database).parent_path());
   CellDb db(config.database, CellDb::Mode::read_write);
   const CellDbLock lock(config.database, "baked");  // one bake per database; a second one stops here
@@ -121,6 +129,7 @@ BakeSummary run_bake(const BakeConfig& config, const BakeOptions& options) {
     tbb::flow::function_node<WorkPtr, WorkPtr> mesh(g, tbb::flow::unlimited, [&](WorkPtr w) {
       run_stage(*w, "depth_mesh", [&] { run_depth_mesh(*w, config); });
       run_stage(*w, "simplify", [&] { run_simplify(*w, config); });
+      run_stage(*w, "far_choice", [&] { run_far_choice(*w, config, store); });
       run_stage(*w, "encode", [&] { run_encode(*w, config); });
       return w;
     });

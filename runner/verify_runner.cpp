@@ -238,7 +238,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
           drawer->draw_truth(camera, options.width, options.height, draw_options, truth);  // uploads
           const SceneFrameStats ts = drawer->draw_truth(camera, options.width, options.height, draw_options, truth);
           drawer->release_context();
-          v.triangles_impostor = cell.near_triangles + is.far_triangles;
+          v.triangles_impostor = is.chunk_triangles + is.far_triangles;  // near + far geometry + depth meshes drawn
           v.triangles_truth = ts.chunk_triangles;
           v.ms_impostor = is.milliseconds;
           v.ms_truth = ts.milliseconds;

@@ -41,11 +41,41 @@ inline Vec3d cube_face_direction(const FaceBasis& b, double s, double t) {
   return b.forward + b.right * s + b.up * t;
 }
 
+// Each face is split into kFarTiles x kFarTiles tiles (row-major, row 0 at
+// the top): the grid the far field's representation is chosen on
+// (stages/far_choice.h) and viewers cull depth meshes with.
+constexpr int kFarTiles = 4;
+constexpr int kFarTilesPerFace = kFarTiles * kFarTiles;
+
+// The tile (row * kFarTiles + column) holding the centre of pixel (col, row)
+// of a size x size face.
+inline int pixel_tile(int col, int row, int size) {
+  const auto band = [size](int i) { return int((2 * std::int64_t(i) + 1) * kFarTiles / (2 * std::int64_t(size))); };
+  return band(row) * kFarTiles + band(col);
+}
+
+// A chunk a cube face shows, with the tiles (bits pixel_tile) it may reach:
+// either the whole chunk (`triangles` empty: a rasteriser knows which chunks
+// it drew, not which of their triangles) or the triangles that drew pixels,
+// ascending, each with the tiles it drew in (a ray caster knows).
+struct SeenChunk {
+  std::int64_t id = 0;
+  std::uint32_t tiles = 0;
+  std::vector<std::uint32_t> triangles;
+  std::vector<std::uint16_t> triangle_tiles;  // parallel to `triangles`
+  bool whole() const { return triangles.empty(); }
+  bool operator==(const SeenChunk&) const = default;
+};
+
 // One rendered cube face: row-major, row 0 at the top.
 struct CubeFace {
   int size = 0;
   std::vector<Rgba8> color;
   std::vector<float> depth;  // planar view depth; kBackgroundDepth where nothing was drawn
+  // Every chunk that drew a pixel here (a backend may list more: hidden ones
+  // it could not rule out), sorted by id: what exact far geometry standing
+  // in for this face's depth mesh must draw.
+  std::vector<SeenChunk> seen;
 };
 
 // A panoramic colour + depth sample taken at `eye` (world coordinates).

@@ -5,6 +5,8 @@
 // per-face frustum culling of chunks so that only visible chunks are loaded.
 #include "stages/sample.h"
 
+#include "stages/far_choice.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -161,9 +163,18 @@ CubeSample sample_cube(const Vec3d& eye, const Box3d& cull_box, const SamplePara
     camera.up = b.up;
     camera.near_plane = params.near_plane;
     renderer.begin_frame(render_size, render_size);
-    renderer.draw_unoccluded(camera, cull_box, nearest_first, load);
+    std::vector<std::int64_t> drawn;
+    renderer.draw_unoccluded(camera, cull_box, nearest_first, load, &drawn);
     renderer.read_frame(color, depth);
-    sample.faces[static_cast<std::size_t>(face)] = finish_face(color, depth, params);
+    CubeFace& out = sample.faces[static_cast<std::size_t>(face)];
+    out = finish_face(color, depth, params);
+    // Seen: every chunk drawn, on the tiles its bounds may reach (a superset
+    // of the chunks with pixels: hidden chunks the box test kept count too).
+    std::sort(drawn.begin(), drawn.end());
+    for (const ChunkRef& c : refs)
+      if (std::binary_search(drawn.begin(), drawn.end(), c.id))
+        if (const std::uint32_t tiles = tiles_seeing_box(face, Box3d::cube(eye, 0), c.bounds))
+          out.seen.push_back({c.id, tiles});
   }
   return sample;
 }

@@ -5,6 +5,7 @@
 
 #include "stages/encode.h"
 #include "storage/cell_content_hash.h"
+#include "storage/chunk_codec.h"
 #include "storage/sqlite_db.h"
 
 namespace cellbake {
@@ -37,6 +38,18 @@ std::string check_cell(const CellDb& db, std::int64_t id) {
       } catch (const std::exception& e) {
         return face + " mesh: " + e.what();
       }
+    }
+  }
+  for (const auto& g : row->far_geometry) {
+    if (g.whole) continue;
+    try {
+      Chunk chunk;
+      decode_chunk_blob(g.geometry.data(), g.geometry.size(), chunk);
+      if (chunk.triangle_count() != g.triangles)
+        return "far geometry of chunk " + std::to_string(g.chunk_id) + ": " + std::to_string(chunk.triangle_count()) +
+               " triangles, " + std::to_string(g.triangles) + " recorded";
+    } catch (const std::exception& e) {
+      return "far geometry of chunk " + std::to_string(g.chunk_id) + ": " + e.what();
     }
   }
   const std::string hash = cell_content_hash(*row);

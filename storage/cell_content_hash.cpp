@@ -16,6 +16,17 @@ std::string cell_content_hash(const CellRow& row) {
       h.bytes(f.mesh.data(), f.mesh.size()).u64(f.mesh.size());
     }
   }
+  // Exact far geometry (issue #13); cells without any hash as before it existed.
+  if (!row.far_geometry.empty() || !row.far_choice.empty()) {
+    h.text("far").u64(row.far_geometry_triangles);
+    for (const auto& g : row.far_geometry) {
+      h.u64(std::uint64_t(g.chunk_id)).u64(g.triangles).u64(g.whole).f64(g.origin.x).f64(g.origin.y).f64(g.origin.z);
+      h.f64(g.bounds.lo.x).f64(g.bounds.lo.y).f64(g.bounds.lo.z).f64(g.bounds.hi.x).f64(g.bounds.hi.y).f64(g.bounds.hi.z);
+      h.bytes(g.geometry.data(), g.geometry.size()).u64(g.geometry.size());
+    }
+    for (const auto& f : row.far_choice)
+      h.u64(std::uint64_t(f.face)).u64(f.geometry_tiles).u64(f.tdm_triangles).u64(f.replaced_triangles).u64(f.geometry_triangles);
+  }
   return h.hex();
 }
 

@@ -11,7 +11,7 @@
 namespace cellbake {
 namespace {
 
-constexpr int kCellDbSchemaVersion = 3;
+constexpr int kCellDbSchemaVersion = 4;
 constexpr int kOldestReadableSchemaVersion = 2;  // read-only opens of v2 databases (one sample per cell) still work
 
 // Migrations: entry i upgrades schema version i to i + 1.
@@ -49,6 +49,22 @@ ALTER TABLE samples ADD COLUMN void_after REAL NOT NULL DEFAULT -1;
 ALTER TABLE samples ADD COLUMN covered_pixels INTEGER NOT NULL DEFAULT 0;
 ALTER TABLE samples ADD COLUMN removed_pixels INTEGER NOT NULL DEFAULT 0;
 ALTER TABLE samples ADD COLUMN seconds REAL NOT NULL DEFAULT 0;
+)sql",
+    // v4: the far field's representation chosen per face tile (exact far
+    // geometry or textured depth meshes; issue #13).
+    R"sql(
+ALTER TABLE cells ADD COLUMN far_geometry_triangles INTEGER NOT NULL DEFAULT 0;
+CREATE TABLE far_geometry(
+  cell_id INTEGER NOT NULL REFERENCES cells(id) ON DELETE CASCADE, chunk_id INTEGER NOT NULL,
+  triangles INTEGER NOT NULL, whole INTEGER NOT NULL,
+  origin_x REAL, origin_y REAL, origin_z REAL, min_x REAL, min_y REAL, min_z REAL, max_x REAL, max_y REAL, max_z REAL,
+  geometry BLOB,
+  PRIMARY KEY(cell_id, chunk_id));
+CREATE TABLE far_choice(
+  cell_id INTEGER NOT NULL REFERENCES cells(id) ON DELETE CASCADE, face INTEGER NOT NULL,
+  geometry_tiles INTEGER NOT NULL, tdm_triangles INTEGER NOT NULL, replaced_triangles INTEGER NOT NULL,
+  geometry_triangles INTEGER NOT NULL,
+  PRIMARY KEY(cell_id, face));
 )sql",
 };
 
@@ -184,8 +200,8 @@ void CellDb::put_cell(const CellRow& c) {
     SqliteStatement s(*db_,
                       "INSERT INTO cells(id, region, gx, gy, gz, min_x, min_y, min_z, max_x, max_y, max_z, status, "
                       "error, input_hash, cull_hash, content_hash, cull_half_size, near_triangles, near_chunks, "
-                      "far_triangles, bytes, max_boundary_error_px, max_depth_error, stage_seconds) "
-                      "VALUES(?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
+                      "far_triangles, bytes, max_boundary_error_px, max_depth_error, stage_seconds, "
+                      "far_geometry_triangles) VALUES(?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
     const auto near = pack_near_chunks(c.near_chunks);
     nlohmann::json secs(c.stage_seconds);
     s.bind(1, c.id).bind(2, std::int64_t(c.region)).bind(3, std::int64_t(c.gx)).bind(4, std::int64_t(c.gy));
@@ -194,8 +210,21 @@ void CellDb::put_cell(const CellRow& c) {
     s.bind(14, c.input_hash).bind(15, c.cull_hash).bind(16, c.content_hash).bind(17, c.cull_half_size);
     s.bind(18, std::int64_t(c.near_triangles)).bind_blob(19, near.data(), near.size());
     s.bind(20, std::int64_t(c.far_triangles)).bind(21, std::int64_t(c.bytes)).bind(22, c.max_boundary_error_px);
-    s.bind(23, c.max_depth_error).bind(24, secs.dump());
+    s.bind(23, c.max_depth_error).bind(24, secs.dump()).bind(25, std::int64_t(c.far_geometry_triangles));
     s.run();
+  }
+  SqliteStatement ins_geometry(*db_, "INSERT INTO far_geometry VALUES(?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
+  for (const FarGeometryRow& g : c.far_geometry) {
+    ins_geometry.bind(1, c.id).bind(2, g.chunk_id).bind(3, std::int64_t(g.triangles)).bind(4, std::int64_t(g.whole));
+    ins_geometry.bind(5, g.origin.x).bind(6, g.origin.y).bind(7, g.origin.z).bind(8, g.bounds.lo.x);
+    ins_geometry.bind(9, g.bounds.lo.y).bind(10, g.bounds.lo.z).bind(11, g.bounds.hi.x).bind(12, g.bounds.hi.y);
+    ins_geometry.bind(13, g.bounds.hi.z).bind_blob(14, g.geometry.data(), g.geometry.size()).run();
+  }
+  SqliteStatement ins_choice(*db_, "INSERT INTO far_choice VALUES(?,?,?,?,?,?)");
+  for (const FarChoiceRow& f : c.far_choice) {
+    ins_choice.bind(1, c.id).bind(2, std::int64_t(f.face)).bind(3, std::int64_t(f.geometry_tiles));
+    ins_choice.bind(4, std::int64_t(f.tdm_triangles)).bind(5, std::int64_t(f.replaced_triangles));
+    ins_choice.bind(6, std::int64_t(f.geometry_triangles)).run();
   }
   SqliteStatement ins_sample(*db_, "INSERT INTO samples VALUES(?,?,?,?,?,?,?,?,?,?)");
   SqliteStatement ins_face(*db_, "INSERT INTO faces VALUES(?,?,?,?,?,?,?,?,?)");
@@ -247,9 +276,11 @@ std::vector<std::int64_t> CellDb::cell_ids() const {
 
 std::optional<CellRow> CellDb::get_cell(std::int64_t id, bool with_blobs) const {
   SqliteStatement s(*db_,
-                    "SELECT region, gx, gy, gz, min_x, min_y, min_z, max_x, max_y, max_z, status, error, input_hash, "
+                    std::string("SELECT region, gx, gy, gz, min_x, min_y, min_z, max_x, max_y, max_z, status, error, input_hash, "
                     "cull_hash, content_hash, cull_half_size, near_triangles, near_chunks, far_triangles, bytes, "
-                    "max_boundary_error_px, max_depth_error, stage_seconds FROM cells WHERE id=?");
+                    "max_boundary_error_px, max_depth_error, stage_seconds, ") +
+                        std::string(schema_version_ >= 4 ? "far_geometry_triangles" : "0") +
+                        " FROM cells WHERE id=?");
   s.bind(1, id);
   if (!s.step()) return std::nullopt;
   CellRow c;
@@ -282,6 +313,32 @@ std::optional<CellRow> CellDb::get_cell(std::int64_t id, bool with_blobs) const 
   if (secs.is_object())
     for (auto& [k, v] : secs.items())
       if (v.is_number()) c.stage_seconds[k] = v.get<double>();
+  c.far_geometry_triangles = std::uint64_t(s.column_int(23));
+  if (schema_version_ >= 4) {
+    SqliteStatement fg(*db_, std::string("SELECT chunk_id, triangles, whole, origin_x, origin_y, origin_z, min_x, "
+                                         "min_y, min_z, max_x, max_y, max_z, ") +
+                                 (with_blobs ? "geometry" : "x''") + " FROM far_geometry WHERE cell_id=? ORDER BY chunk_id");
+    fg.bind(1, id);
+    while (fg.step()) {
+      FarGeometryRow g;
+      g.chunk_id = fg.column_int(0);
+      g.triangles = std::uint32_t(fg.column_int(1));
+      g.whole = fg.column_int(2) != 0;
+      g.origin = {fg.column_double(3), fg.column_double(4), fg.column_double(5)};
+      g.bounds = {{fg.column_double(6), fg.column_double(7), fg.column_double(8)},
+                  {fg.column_double(9), fg.column_double(10), fg.column_double(11)}};
+      g.geometry = fg.column_blob(12);
+      c.far_geometry.push_back(std::move(g));
+    }
+    SqliteStatement fc(*db_,
+                       "SELECT face, geometry_tiles, tdm_triangles, replaced_triangles, geometry_triangles FROM "
+                       "far_choice WHERE cell_id=? ORDER BY face");
+    fc.bind(1, id);
+    while (fc.step())
+      c.far_choice.push_back({int(fc.column_int(0)), std::uint32_t(fc.column_int(1)),
+                              std::uint64_t(fc.column_int(2)), std::uint64_t(fc.column_int(3)),
+                              std::uint64_t(fc.column_int(4))});
+  }
 
   SqliteStatement ss(*db_, schema_version_ >= 3
                                ? "SELECT sample_index, eye_x, eye_y, eye_z, parent, void_after, covered_pixels, "

@@ -45,6 +45,29 @@ struct SampleRow {
   std::vector<FaceRow> faces;
 };
 
+// How one cube face's far field is drawn (issue #13): which of its
+// kFarTiles x kFarTiles tiles draw exact far geometry (the cell's far_chunks)
+// instead of textured depth meshes, with the figures the choice compared.
+struct FarChoiceRow {
+  int face = 0;                         // 0..5, cube_map.h order
+  std::uint32_t geometry_tiles = 0;     // bit (row * 4 + column) set: the tile draws geometry
+  std::uint64_t tdm_triangles = 0;      // depth-mesh triangles of this face kept, over all samples
+  std::uint64_t replaced_triangles = 0; // depth-mesh triangles dropped because geometry covers their tile
+  std::uint64_t geometry_triangles = 0; // triangles of the far chunks this face's geometry tiles need
+};
+
+// Exact far geometry of a cell (issue #13): one source chunk, whole (drawn
+// from the geometry store) or the triangles of it the samples saw, stored
+// as a chunk blob (storage/chunk_codec.h) with its origin and bounds.
+struct FarGeometryRow {
+  std::int64_t chunk_id = 0;
+  std::uint32_t triangles = 0;
+  bool whole = false;
+  Vec3d origin;
+  Box3d bounds;
+  std::vector<std::uint8_t> geometry;  // empty when whole
+};
+
 struct CellRow {
   std::int64_t id = 0;
   int region = 0;
@@ -58,7 +81,10 @@ struct CellRow {
   double cull_half_size = 0;
   std::uint64_t near_triangles = 0;
   std::vector<NearChunkRow> near_chunks;
-  std::uint64_t far_triangles = 0;
+  std::uint64_t far_triangles = 0;          // depth-mesh triangles over all samples and faces
+  std::vector<FarGeometryRow> far_geometry; // exact far geometry drawn instead of depth meshes, by chunk id
+  std::uint64_t far_geometry_triangles = 0; // its triangles
+  std::vector<FarChoiceRow> far_choice;     // per face (empty: every tile draws depth meshes)
   std::uint64_t bytes = 0;
   double max_boundary_error_px = 0;
   double max_depth_error = 0;

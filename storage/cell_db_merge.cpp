@@ -79,7 +79,14 @@ void copy_rows(CellDb& target, const CellDb& source, const std::vector<std::int6
     attach.bind(1, source.path().string()).run();
   }
   {
+    const bool far_choice = target.schema_version() >= 4;
     SqliteStatement del_faces(db, "DELETE FROM main.faces WHERE cell_id=?");
+    SqliteStatement del_choice(db, far_choice ? "DELETE FROM main.far_choice WHERE cell_id=?" : "SELECT ?");
+    SqliteStatement ins_choice(
+        db, far_choice ? "INSERT INTO main.far_choice SELECT * FROM source.far_choice WHERE cell_id=?" : "SELECT ?");
+    SqliteStatement del_geometry(db, far_choice ? "DELETE FROM main.far_geometry WHERE cell_id=?" : "SELECT ?");
+    SqliteStatement ins_geometry(
+        db, far_choice ? "INSERT INTO main.far_geometry SELECT * FROM source.far_geometry WHERE cell_id=?" : "SELECT ?");
     SqliteStatement del_samples(db, "DELETE FROM main.samples WHERE cell_id=?");
     SqliteStatement del_cell(db, "DELETE FROM main.cells WHERE id=?");
     SqliteStatement ins_cell(db, "INSERT INTO main.cells SELECT * FROM source.cells WHERE id=?");
@@ -87,7 +94,9 @@ void copy_rows(CellDb& target, const CellDb& source, const std::vector<std::int6
     SqliteStatement ins_faces(db, "INSERT INTO main.faces SELECT * FROM source.faces WHERE cell_id=?");
     for (std::int64_t id : to_copy) {
       SqliteTransaction tx(db);
-      for (SqliteStatement* s : {&del_faces, &del_samples, &del_cell, &ins_cell, &ins_samples, &ins_faces})
+      for (SqliteStatement* s :
+           {&del_faces, &del_choice, &del_geometry, &del_samples, &del_cell, &ins_cell, &ins_samples, &ins_faces,
+            &ins_choice, &ins_geometry})
         s->bind(1, id).run();
       tx.commit();
       ++counts.copied;

@@ -295,6 +295,7 @@ TEST(Appearance, CheckerQuadShowsInTheImpostorAfterABake) {
   c.samples_initial = "centre";
   c.samples_max = 1;
   c.shading.mode = ShadingMode::unlit;
+  c.far_choice = "tdm";  // the texture must reach the depth mesh's image (2 triangles would be drawn as geometry)
   ASSERT_EQ(test::bake_quietly(c, 1).cells_baked, 1u);
 
   Vec3d eye;

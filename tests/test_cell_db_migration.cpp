@@ -1,4 +1,5 @@
-// Cell database schema v3 (several samples per cell): a version 2 database,
+// Cell database schema v4 (v3: several samples per cell; v4: exact far
+// geometry per face tile): a version 2 database,
 // as cellbake wrote it before, opens read-only as it is and migrates in place
 // when opened read-write, keeping its cells; merge refuses to mix versions.
 #include <gtest/gtest.h>
@@ -59,12 +60,12 @@ TEST(CellDbMigration, AVersionTwoDatabaseOpensReadOnlyAsItIs) {
   EXPECT_EQ(cell->samples[0].faces[0].mesh, (std::vector<std::uint8_t>{3, 4}));
 }
 
-TEST(CellDbMigration, OpeningReadWriteMigratesToVersionThreeKeepingTheCells) {
+TEST(CellDbMigration, OpeningReadWriteMigratesToVersionFourKeepingTheCells) {
   test::TempDir dir;
   write_v2_database(dir / "old.db");
   {
     CellDb db(dir / "old.db", CellDb::Mode::read_write);
-    EXPECT_EQ(db.schema_version(), 3);
+    EXPECT_EQ(db.schema_version(), 4);
     EXPECT_TRUE(db.integrity_ok());
     // New rows carry the new columns.
     CellRow row = *db.get_cell(7);
@@ -73,16 +74,34 @@ TEST(CellDbMigration, OpeningReadWriteMigratesToVersionThreeKeepingTheCells) {
     row.samples[0].covered_pixels = 100;
     row.samples[0].removed_pixels = 90;
     row.samples[0].seconds = 1.5;
+    FarGeometryRow far;
+    far.chunk_id = 11;
+    far.triangles = 2;
+    far.origin = {1, 2, 3};
+    far.bounds = {{0, 0, 0}, {1, 1, 1}};
+    far.geometry = {5, 6, 7};
+    row.far_geometry.push_back(far);
+    row.far_geometry_triangles = 2;
+    row.far_choice.push_back({2, 0x8001u, 10, 4, 2});
     db.put_cell(row);
   }
   CellDb db(dir / "old.db", CellDb::Mode::read_only);
-  EXPECT_EQ(db.schema_version(), 3);
+  EXPECT_EQ(db.schema_version(), 4);
   const auto old_cell = db.get_cell(7), new_cell = db.get_cell(8);
   ASSERT_TRUE(old_cell && new_cell);
   EXPECT_EQ(old_cell->content_hash, "content");
   EXPECT_EQ(old_cell->samples[0].void_after, -1);
   EXPECT_EQ(new_cell->samples[0].void_after, 0.004);
   EXPECT_EQ(new_cell->samples[0].covered_pixels, 100u);
+  EXPECT_TRUE(old_cell->far_geometry.empty());
+  ASSERT_EQ(new_cell->far_geometry.size(), 1u);
+  EXPECT_EQ(new_cell->far_geometry[0].chunk_id, 11);
+  EXPECT_EQ(new_cell->far_geometry[0].origin, (Vec3d{1, 2, 3}));
+  EXPECT_EQ(new_cell->far_geometry[0].geometry, (std::vector<std::uint8_t>{5, 6, 7}));
+  EXPECT_EQ(new_cell->far_geometry_triangles, 2u);
+  ASSERT_EQ(new_cell->far_choice.size(), 1u);
+  EXPECT_EQ(new_cell->far_choice[0].geometry_tiles, 0x8001u);
+  EXPECT_EQ(new_cell->far_choice[0].replaced_triangles, 4u);
   EXPECT_EQ(new_cell->samples[0].removed_pixels, 90u);
   EXPECT_EQ(new_cell->samples[0].seconds, 1.5);
 }

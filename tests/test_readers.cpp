@@ -675,9 +675,9 @@ TEST(ReadModel, UnknownExtensionAndMissingFile) {
   expect_input_error(dir / "model.xyz", "", "unknown model format '.xyz'");
   write_text(dir / "noext", "1 2 3\n");
   expect_input_error(dir / "noext", "", "unknown model format");
-  expect_input_error(dir / "absent.obj", "", "cannot open");
-  expect_input_error(dir / "absent.ply.gz", "", "cannot open");
-  expect_input_error(dir / "absent.glb", "", "cannot open");
+  expect_input_error(dir / "absent.obj", "", "no such file");
+  expect_input_error(dir / "absent.ply.gz", "", "no such file");
+  expect_input_error(dir / "absent.glb", "", "no such file");
 }
 
 TEST(ReadModel, ExtensionIsCaseInsensitive) {

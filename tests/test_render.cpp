@@ -28,13 +28,15 @@ namespace cellbake {
 namespace {
 
 // A 12 x 12 x 4 m room with one pillar (x 7..8, y 5..7) and two 2 m view
-// cells centred at (2, 6, 1.6) and (4, 6, 1.6), baked with 64-pixel PNG faces.
+// cells centred at (2, 6, 1.6) and (4, 6, 1.6), baked with 64-pixel PNG faces
+// and depth meshes only.
 struct BakedRoom {
   test::TempDir dir;
   std::filesystem::path db;
   BakedRoom() {
-    const BakeConfig c = test::obj_room_bake_config(dir.path(), test::pillar_room_obj(), Box3d{{1, 5, 1.6}, {5, 7, 1.6}},
-                                                    300, 64);
+    BakeConfig c = test::obj_room_bake_config(dir.path(), test::pillar_room_obj(), Box3d{{1, 5, 1.6}, {5, 7, 1.6}},
+                                              300, 64);
+    c.far_choice = "tdm";  // these tests are about textured depth meshes (tests/test_far_choice.cpp: the choice)
     EXPECT_EQ(test::bake_quietly(c).cells_baked, 2u);
     db = c.database;
   }

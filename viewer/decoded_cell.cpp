@@ -5,10 +5,15 @@
 #include <stdexcept>
 #include <string>
 
+#include "storage/chunk_codec.h"
+
 namespace cellbake {
 
 std::size_t DecodedCell::bytes() const {
-  std::size_t b = near_ids.size() * sizeof(std::int64_t);
+  std::size_t b = (near_ids.size() + far_whole_ids.size()) * sizeof(std::int64_t);
+  for (const auto& c : far_pieces)
+    b += c->positions.size() * (sizeof(Vec3f) + sizeof(Rgba8)) + c->uvs.size() * sizeof(Uv) +
+         c->normals.size() * sizeof(Vec3f) + (c->indices.size() + c->materials.size()) * sizeof(std::uint32_t);
   for (const DecodedFace& f : faces)
     b += f.mesh.positions.size() * sizeof(Vec3f) + f.mesh.uvs.size() * sizeof(Uv) +
          f.mesh.indices.size() * sizeof(std::uint32_t) + f.image.pixels.size() * sizeof(Rgba8);
@@ -66,6 +71,25 @@ DecodedCell decode_cell(const CellRow& row) {
   cell.cull_box = Box3d::cube(row.bounds.center(), row.cull_half_size);
   cell.near_triangles = row.near_triangles;
   for (const NearChunkRow& n : row.near_chunks) cell.near_ids.push_back(n.chunk_id);
+  for (std::size_t k = 0; k < row.far_geometry.size(); ++k) {
+    const FarGeometryRow& g = row.far_geometry[k];
+    cell.far_geometry_triangles += g.triangles;
+    if (g.whole) {
+      cell.far_whole_ids.push_back(g.chunk_id);
+      continue;
+    }
+    auto chunk = std::make_shared<Chunk>();
+    try {
+      decode_chunk_blob(g.geometry.data(), g.geometry.size(), *chunk);
+    } catch (const std::exception& e) {
+      throw std::runtime_error(where + " far geometry of chunk " + std::to_string(g.chunk_id) + ": " + e.what());
+    }
+    chunk->id = -(row.id * (std::int64_t{1} << 20)) - std::int64_t(k) - 1;
+    chunk->origin = g.origin;
+    chunk->bounds = g.bounds;
+    cell.far_pieces.push_back(std::move(chunk));
+  }
+  std::sort(cell.far_whole_ids.begin(), cell.far_whole_ids.end());
   for (const SampleRow& s : row.samples) {
     SampleNode node;
     node.index = s.index;

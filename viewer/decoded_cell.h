@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "stages/cube_map.h"
@@ -30,7 +31,7 @@ struct DecodedFace {
   std::vector<FaceTile> tiles;  // non-empty tiles of a kFaceTiles x kFaceTiles grid over the face (by triangle centroid)
 };
 
-constexpr int kFaceTiles = 4;
+constexpr int kFaceTiles = kFarTiles;  // the far-choice grid (stages/cube_map.h)
 
 struct DecodedCell {
   std::int64_t id = 0;
@@ -40,6 +41,12 @@ struct DecodedCell {
   std::uint64_t near_triangles = 0;    // triangles of those chunks inside the cull box
   std::uint64_t far_triangles = 0;     // sum over the decoded faces
   std::vector<DecodedFace> faces;
+  // Exact far geometry (issue #13): the seen triangles of far chunks as
+  // chunks of their own (ids negative and unique per cell and piece, so GPU
+  // caches keep them apart from the store's), and whole chunks of the store.
+  std::vector<std::shared_ptr<const Chunk>> far_pieces;
+  std::vector<std::int64_t> far_whole_ids;  // ascending
+  std::uint64_t far_geometry_triangles = 0;
   std::vector<SampleNode> samples;  // eye, dependency-tree parent and triangles of every sample
   std::size_t bytes() const;  // decoded size in host memory
 };

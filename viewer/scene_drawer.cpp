@@ -104,8 +104,30 @@ SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width
     // band wherever the eye is not at a sample point; the overlap with the
     // far field (which also reaches a shell inside the box) is resolved by
     // the depth test.
-    if (options.near_field)
-      chunks_.draw(camera, Box3d{}, cell.near_ids, [this](std::int64_t id) { return source_.load(id); });
+    // Chunks of the store in the view frustum (near field, whole far chunks).
+    std::vector<std::int64_t> in_view;
+    if (options.near_field || (options.far_field && !cell.far_whole_ids.empty())) {
+      in_view = chunks_in_view(camera, source_);
+      std::sort(in_view.begin(), in_view.end());
+    }
+    const auto visible = [&in_view](const std::vector<std::int64_t>& ids) {
+      std::vector<std::int64_t> out;
+      for (std::int64_t id : ids)
+        if (std::binary_search(in_view.begin(), in_view.end(), id)) out.push_back(id);
+      return out;
+    };
+    const ChunkLoader load = [this](std::int64_t id) { return source_.load(id); };
+    if (options.near_field) chunks_.draw(camera, Box3d{}, visible(cell.near_ids), load);
+    if (options.far_field && (!cell.far_pieces.empty() || !cell.far_whole_ids.empty())) {
+      // Exact far geometry, frustum-culled like the truth.
+      const std::uint64_t drawn_before = chunks_.stats().triangles_drawn;
+      std::vector<std::shared_ptr<const Chunk>> pieces;
+      for (const auto& c : cell.far_pieces)
+        if (box_in_view(camera, c->bounds)) pieces.push_back(c);
+      chunks_.draw(camera, Box3d{}, pieces);
+      if (!cell.far_whole_ids.empty()) chunks_.draw(camera, Box3d{}, visible(cell.far_whole_ids), load);
+      stats.far_geometry_triangles = chunks_.stats().triangles_drawn - drawn_before;
+    }
     if (options.far_field) {
       TdmDrawOptions tdm_options;
       tdm_options.wireframe = options.wireframe;

@@ -43,6 +43,7 @@ struct SceneDrawOptions {
 struct SceneFrameStats {
   std::uint64_t chunk_triangles = 0;  // chunk triangles submitted (whole chunks, before discard)
   std::uint64_t far_triangles = 0;    // textured depth mesh triangles submitted
+  std::uint64_t far_geometry_triangles = 0;  // exact far geometry triangles submitted (also in chunk_triangles)
   std::uint64_t samples_drawn = 0;    // samples whose faces were considered (before per-face culling)
   std::uint64_t chunks_drawn = 0;
   double milliseconds = 0;  // begin_frame to read-back, wall clock

@@ -86,7 +86,7 @@ ViewResult ViewSession::render(const ViewRequest& r, ViewMode mode, std::FILE* w
         drawer_->draw_impostor(camera, r.width, r.height, *cell, options, frame);  // warm-up: uploads
         result.impostor_stats = drawer_->draw_impostor(camera, r.width, r.height, *cell, options, frame);
         result.impostor = std::move(frame);
-        result.triangles_impostor = cell->near_triangles + result.impostor_stats.far_triangles;
+        result.triangles_impostor = result.impostor_stats.chunk_triangles + result.impostor_stats.far_triangles;
       } catch (const std::exception& e) {
         const std::int64_t id = cell->id;
         result.fallback_reason = "cell " + std::to_string(id) + ": " + e.what();

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <unordered_map>
 
 #include "stages/raycast/instance_scene.h"
 #include "stages/raycast/ray_segments.h"
@@ -106,8 +107,27 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
   std::vector<float> depth;
   CubeSample sample;
   sample.eye = eye;
+  std::vector<std::uint32_t> tile_of(pixels);
+  for (std::size_t p = 0; p < pixels; ++p) tile_of[p] = std::uint32_t(pixel_tile(int(p % std::size_t(size)), int(p / std::size_t(size)), size));
+  // What each face saw: chunk -> per-triangle tile masks (dense while tracing,
+  // compacted when the face is done); runs of one chunk and tile are common.
+  std::unordered_map<const Chunk*, std::size_t> slot_of;
+  std::vector<std::pair<const Chunk*, std::vector<std::uint16_t>>> slots;
   for (int face = 0; face < kCubeFaces; ++face) {
     const FaceBasis b = cube_face_basis(face);
+    slot_of.clear();
+    slots.clear();
+    const Chunk* last_chunk = nullptr;
+    std::vector<std::uint16_t>* last_tiles = nullptr;
+    const auto saw = [&](const SurfaceHit& hit, std::uint32_t p) {
+      if (hit.chunk != last_chunk) {
+        auto [it, added] = slot_of.try_emplace(hit.chunk, slots.size());
+        if (added) slots.emplace_back(hit.chunk, std::vector<std::uint16_t>(hit.chunk->triangle_count(), 0));
+        last_chunk = hit.chunk;
+        last_tiles = &slots[it->second].second;
+      }
+      (*last_tiles)[hit.triangle] |= std::uint16_t(1u << tile_of[p]);
+    };
     const auto to_float = [](const Vec3d& v) { return Vec3f{float(v.x), float(v.y), float(v.z)}; };
     const Vec3f step_x = to_float(b.right * (2.0 / size)), step_y = to_float(b.up * (2.0 / size));
     color.assign(pixels, Rgba8{0, 0, 0, 0});
@@ -148,6 +168,7 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
         if (texturer.untextured()) {
           color[p] = shader_.shade(hit);
           depth[p] = r.ray.tfar;
+          saw(hit, p);
           ++stats_.hits;
           continue;
         }
@@ -185,10 +206,25 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
         }
         color[p] = shader_.shade(hit, texel.textured ? &texel.texel : nullptr);
         depth[p] = t;
+        saw(hit, p);
         ++stats_.hits;
       }
     }
-    sample.faces[std::size_t(face)] = finish_face(color, depth, params);
+    CubeFace& out = sample.faces[std::size_t(face)];
+    out = finish_face(color, depth, params);
+    out.seen.reserve(slots.size());
+    for (const auto& [chunk, tiles] : slots) {
+      SeenChunk seen;
+      seen.id = chunk->id;
+      for (std::size_t t = 0; t < tiles.size(); ++t)
+        if (tiles[t]) {
+          seen.triangles.push_back(std::uint32_t(t));
+          seen.triangle_tiles.push_back(tiles[t]);
+          seen.tiles |= tiles[t];
+        }
+      out.seen.push_back(std::move(seen));
+    }
+    std::sort(out.seen.begin(), out.seen.end(), [](const SeenChunk& a, const SeenChunk& b) { return a.id < b.id; });
   }
   cache_->check_device("tracing a cube map");
   stats_.trace_seconds += seconds_since(t0);

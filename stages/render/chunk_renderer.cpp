@@ -679,7 +679,8 @@ void ChunkRenderer::test_boxes(const RenderCamera& camera, const std::vector<flo
 }
 
 void ChunkRenderer::draw_unoccluded(const RenderCamera& camera, const Box3d& discard_box,
-                                    std::span<const ChunkRef> chunks, const ChunkLoader& load) {
+                                    std::span<const ChunkRef> chunks, const ChunkLoader& load,
+                                    std::vector<std::int64_t>* drawn) {
   require_frame("draw_unoccluded");
   make_current();
   set_camera_uniforms(camera, discard_box, BoxClip::discard_inside);
@@ -688,6 +689,7 @@ void ChunkRenderer::draw_unoccluded(const RenderCamera& camera, const Box3d& dis
   if (!occlusion_culling()) {
     for (const ChunkRef& c : chunks) ids.push_back(c.id);
     draw_ids(camera, ids, load);
+    if (drawn) drawn->insert(drawn->end(), ids.begin(), ids.end());
     check_gl_error(gl_, "chunk_renderer: draw_unoccluded");
     return;
   }
@@ -701,6 +703,7 @@ void ChunkRenderer::draw_unoccluded(const RenderCamera& camera, const Box3d& dis
     ids.clear();
     for (std::size_t i = 0; i < count; ++i) ids.push_back(pending[i].id);
     draw_ids(camera, ids, load);
+    if (drawn) drawn->insert(drawn->end(), ids.begin(), ids.end());
     pending.erase(pending.begin(), pending.begin() + static_cast<std::ptrdiff_t>(count));
     batch *= 2;
     if (pending.empty()) break;

@@ -161,8 +161,10 @@ class ChunkRenderer {
   // nearer. Boxes that reach the near plane are never tested. Falls back to
   // drawing everything where the context lacks GL 4.3. Loads only chunks it
   // draws. Deterministic for the same inputs, renderer settings and Mesa.
+  // When `drawn` is given, the ids of the chunks drawn (not skipped) are
+  // appended to it in drawing order.
   void draw_unoccluded(const RenderCamera& camera, const Box3d& discard_box, std::span<const ChunkRef> chunks,
-                       const ChunkLoader& load);
+                       const ChunkLoader& load, std::vector<std::int64_t>* drawn = nullptr);
   // True when draw_unoccluded() can skip hidden chunks (GL 4.3 available).
   bool occlusion_culling() const { return occlusion_program_ != 0; }
   // Same as draw(), for chunks the caller already holds (uploaded unless cached).

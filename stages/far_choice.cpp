@@ -1,0 +1,266 @@
+#include "stages/far_choice.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace cellbake {
+namespace {
+
+constexpr int kAllTiles = kCubeFaces * kFarTilesPerFace;
+
+// max over the box of w . p
+double max_dot(const Vec3d& w, const Box3d& b) {
+  double s = 0;
+  for (int a = 0; a < 3; ++a) s += std::max(w[a] * b.lo[a], w[a] * b.hi[a]);
+  return s;
+}
+
+double min_dot(const Vec3d& w, const Box3d& b) { return -max_dot(w * -1.0, b); }
+
+// Some p in `box` and e in `eyes` with w . (p - e) >= 0 (a little slack for rounding).
+bool plane_reaches(const Vec3d& w, const Box3d& eyes, const Box3d& box) {
+  const double hi = max_dot(w, box), lo = min_dot(w, eyes);
+  const double scale = std::max({1.0, std::abs(hi), std::abs(lo)});
+  return hi - lo >= -1e-9 * scale;
+}
+
+}  // namespace
+
+FarChoiceMode parse_far_choice_mode(const std::string& name) {
+  if (name == "cheapest") return FarChoiceMode::cheapest;
+  if (name == "tdm") return FarChoiceMode::tdm;
+  if (name == "geometry") return FarChoiceMode::geometry;
+  throw std::invalid_argument("far.choice must be \"cheapest\", \"tdm\" or \"geometry\", not \"" + name + "\"");
+}
+
+std::uint32_t tiles_seeing_box(int face, const Box3d& eyes, const Box3d& box) {
+  if (eyes.empty() || box.empty()) return 0;
+  const FaceBasis b = cube_face_basis(face);
+  if (!plane_reaches(b.forward, eyes, box)) return 0;
+  // Column c covers s in [s_c, s_c+1], row r covers t in [t_r+1, t_r] (row 0 at the top).
+  std::uint32_t columns = 0, rows = 0;
+  for (int k = 0; k < kFarTiles; ++k) {
+    const double s0 = 2.0 * k / kFarTiles - 1, s1 = 2.0 * (k + 1) / kFarTiles - 1;
+    if (plane_reaches(b.right - b.forward * s0, eyes, box) && plane_reaches(b.forward * s1 - b.right, eyes, box))
+      columns |= 1u << k;
+    const double t1 = 1 - 2.0 * k / kFarTiles, t0 = 1 - 2.0 * (k + 1) / kFarTiles;
+    if (plane_reaches(b.up - b.forward * t0, eyes, box) && plane_reaches(b.forward * t1 - b.up, eyes, box))
+      rows |= 1u << k;
+  }
+  std::uint32_t tiles = 0;
+  for (int r = 0; r < kFarTiles; ++r)
+    for (int c = 0; c < kFarTiles; ++c)
+      if ((rows >> r & 1u) && (columns >> c & 1u)) tiles |= 1u << (r * kFarTiles + c);
+  return tiles;
+}
+
+int triangle_tile(const FaceMesh& mesh, std::size_t triangle) {
+  float u0 = 1, u1 = 0, v0 = 1, v1 = 0;
+  for (int c = 0; c < 3; ++c) {
+    const Uv& uv = mesh.uvs[mesh.indices[3 * triangle + std::size_t(c)]];
+    u0 = std::min(u0, uv.u), u1 = std::max(u1, uv.u);
+    v0 = std::min(v0, uv.v), v1 = std::max(v1, uv.v);
+  }
+  const int column = std::clamp(int(0.5f * (u0 + u1) * kFarTiles), 0, kFarTiles - 1);
+  const int row = std::clamp(int(0.5f * (v0 + v1) * kFarTiles), 0, kFarTiles - 1);
+  constexpr float kEdge = 1e-6f;  // texture coordinates on a tile border belong to both tiles
+  if (u0 < float(column) / kFarTiles - kEdge || u1 > float(column + 1) / kFarTiles + kEdge) return -1;
+  if (v0 < float(row) / kFarTiles - kEdge || v1 > float(row + 1) / kFarTiles + kEdge) return -1;
+  return row * kFarTiles + column;
+}
+
+FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
+                           std::span<const FarChoiceSample> samples, FarChoiceMode mode) {
+  FarChoice out;
+  // What each tile would drop: its depth-mesh triangles.
+  std::vector<std::uint64_t> removable(kAllTiles, 0), kept_elsewhere(kCubeFaces, 0);
+  for (const FarChoiceSample& sample : samples)
+    for (int f = 0; f < kCubeFaces; ++f) {
+      if (!sample.meshes[std::size_t(f)]) continue;
+      const FaceMesh& m = *sample.meshes[std::size_t(f)];
+      for (std::size_t t = 0; t < m.triangle_count(); ++t) {
+        const int tile = triangle_tile(m, t);
+        if (tile < 0)
+          ++kept_elsewhere[std::size_t(f)];
+        else
+          ++removable[std::size_t(f * kFarTilesPerFace + tile)];
+      }
+    }
+
+  // What each tile would need: elements (a whole chunk, or one triangle of a
+  // chunk) with their triangle counts.
+  struct Element {
+    std::uint32_t chunk;
+    std::uint32_t triangle;  // kWhole: the whole chunk
+    std::uint64_t weight;
+  };
+  constexpr std::uint32_t kWhole = ~std::uint32_t{0};
+  std::vector<Element> elements;
+  std::vector<std::vector<std::uint32_t>> tile_elements(kAllTiles);
+  const auto add = [&](int face, std::uint32_t tiles, std::uint32_t element) {
+    for (int k = 0; k < kFarTilesPerFace; ++k)
+      if (tiles >> k & 1u) tile_elements[std::size_t(face * kFarTilesPerFace + k)].push_back(element);
+  };
+  if (samples.empty()) {
+    mode = FarChoiceMode::geometry;
+    for (std::size_t i = 0; i < far_chunks.size(); ++i) {
+      elements.push_back({std::uint32_t(i), kWhole, far_chunks[i].triangle_count});
+      for (int f = 0; f < kCubeFaces; ++f)
+        add(f, tiles_seeing_box(f, eyes, far_chunks[i].bounds), std::uint32_t(elements.size() - 1));
+    }
+  } else {
+    // Per far chunk seen: whole (any sample saw it whole) or its triangles;
+    // element ids through a dense per-triangle table of the chunks seen.
+    const auto index_of = [&](std::int64_t id) -> std::int64_t {
+      const auto it = std::lower_bound(far_chunks.begin(), far_chunks.end(), id,
+                                       [](const ChunkRef& c, std::int64_t v) { return c.id < v; });
+      return it != far_chunks.end() && it->id == id ? it - far_chunks.begin() : -1;
+    };
+    std::vector<char> whole(far_chunks.size(), 0), seen(far_chunks.size(), 0);
+    for (const FarChoiceSample& sample : samples)
+      for (const auto* list : sample.seen)
+        if (list)
+          for (const SeenChunk& c : *list)
+            if (const std::int64_t i = index_of(c.id); i >= 0) {
+              seen[std::size_t(i)] = 1;
+              if (c.whole()) whole[std::size_t(i)] = 1;
+            }
+    std::vector<std::size_t> offset(far_chunks.size() + 1, 0);
+    for (std::size_t i = 0; i < far_chunks.size(); ++i)
+      offset[i + 1] = offset[i] + (seen[i] && !whole[i] ? far_chunks[i].triangle_count : 0);
+    std::vector<std::uint32_t> element_of(offset.back(), kWhole);
+    std::vector<std::uint32_t> whole_element(far_chunks.size(), kWhole);
+    for (const FarChoiceSample& sample : samples)
+      for (int f = 0; f < kCubeFaces; ++f) {
+        if (!sample.seen[std::size_t(f)]) continue;
+        for (const SeenChunk& c : *sample.seen[std::size_t(f)]) {
+          const std::int64_t i = index_of(c.id);
+          if (i < 0) continue;
+          const std::size_t ci = std::size_t(i);
+          if (whole[ci]) {
+            if (whole_element[ci] == kWhole) {
+              whole_element[ci] = std::uint32_t(elements.size());
+              elements.push_back({std::uint32_t(ci), kWhole, far_chunks[ci].triangle_count});
+            }
+            add(f, c.tiles, whole_element[ci]);
+            continue;
+          }
+          for (std::size_t k = 0; k < c.triangles.size(); ++k) {
+            const std::uint32_t t = c.triangles[k];
+            if (t >= far_chunks[ci].triangle_count) continue;  // not this chunk's: ignore
+            std::uint32_t& e = element_of[offset[ci] + t];
+            if (e == kWhole) {
+              e = std::uint32_t(elements.size());
+              elements.push_back({std::uint32_t(ci), t, 1});
+            }
+            add(f, c.triangle_tiles[k], e);
+          }
+        }
+      }
+    for (auto& list : tile_elements) {
+      std::sort(list.begin(), list.end());
+      list.erase(std::unique(list.begin(), list.end()), list.end());
+    }
+  }
+
+  std::vector<char> geometry(kAllTiles, 0), chosen(elements.size(), 0);
+  std::vector<std::uint32_t> stamp_of(elements.size(), 0);
+  std::uint32_t stamp = 0;
+  // Takes geometry for the group's tiles not taken yet when it pays.
+  const auto try_group = [&](int first, int count, bool force) {
+    ++stamp;
+    std::uint64_t extra = 0, gain = 0;
+    bool any = false;
+    for (int k = first; k < first + count; ++k) {
+      if (geometry[std::size_t(k)]) continue;
+      any = true;
+      gain += removable[std::size_t(k)];
+      for (std::uint32_t e : tile_elements[std::size_t(k)])
+        if (!chosen[e] && stamp_of[e] != stamp) stamp_of[e] = stamp, extra += elements[e].weight;
+    }
+    if (!any || extra + gain == 0) return false;
+    if (!force && extra > gain) return false;
+    for (int k = first; k < first + count; ++k) {
+      if (geometry[std::size_t(k)]) continue;
+      if (tile_elements[std::size_t(k)].empty() && removable[std::size_t(k)] == 0) continue;
+      geometry[std::size_t(k)] = 1;
+      for (std::uint32_t e : tile_elements[std::size_t(k)]) chosen[e] = 1;
+    }
+    return true;
+  };
+  if (mode == FarChoiceMode::geometry) {
+    try_group(0, kAllTiles, true);
+  } else if (mode == FarChoiceMode::cheapest) {
+    for (bool changed = true; changed;) {
+      changed = try_group(0, kAllTiles, false);
+      for (int f = 0; f < kCubeFaces; ++f) changed = try_group(f * kFarTilesPerFace, kFarTilesPerFace, false) || changed;
+      for (int k = 0; k < kAllTiles; ++k) changed = try_group(k, 1, false) || changed;
+    }
+  }
+
+  for (int f = 0; f < kCubeFaces; ++f) {
+    FaceFarChoice& face = out.faces[std::size_t(f)];
+    face.tdm_triangles = kept_elsewhere[std::size_t(f)];
+    ++stamp;
+    for (int k = 0; k < kFarTilesPerFace; ++k) {
+      const std::size_t tile = std::size_t(f * kFarTilesPerFace + k);
+      if (!geometry[tile]) {
+        face.tdm_triangles += removable[tile];
+        continue;
+      }
+      face.geometry_tiles |= 1u << k;
+      face.replaced_triangles += removable[tile];
+      for (std::uint32_t e : tile_elements[tile])
+        if (stamp_of[e] != stamp) stamp_of[e] = stamp, face.geometry_triangles += elements[e].weight;
+    }
+  }
+  // Chosen elements grouped into pieces by chunk (chunks ascend by id).
+  std::vector<std::uint32_t> order;
+  for (std::uint32_t e = 0; e < elements.size(); ++e)
+    if (chosen[e]) order.push_back(e);
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return elements[a].chunk != elements[b].chunk ? elements[a].chunk < elements[b].chunk
+                                                  : elements[a].triangle < elements[b].triangle;
+  });
+  for (std::uint32_t e : order) {
+    const Element& el = elements[e];
+    if (out.pieces.empty() || out.pieces.back().chunk.id != far_chunks[el.chunk].id)
+      out.pieces.push_back({far_chunks[el.chunk], {}});
+    if (el.triangle != kWhole) out.pieces.back().triangles.push_back(el.triangle);
+  }
+  for (const FarPiece& p : out.pieces) out.geometry_triangles += p.triangle_count();
+  return out;
+}
+
+std::size_t drop_geometry_tiles(FaceMesh& mesh, std::uint32_t geometry_tiles) {
+  if (geometry_tiles == 0 || mesh.indices.empty()) return 0;
+  std::vector<std::uint32_t> kept;
+  kept.reserve(mesh.indices.size());
+  for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const int tile = triangle_tile(mesh, t);
+    if (tile >= 0 && (geometry_tiles >> tile & 1u)) continue;
+    kept.insert(kept.end(), mesh.indices.begin() + std::ptrdiff_t(3 * t), mesh.indices.begin() + std::ptrdiff_t(3 * t + 3));
+  }
+  const std::size_t removed = mesh.triangle_count() - kept.size() / 3;
+  if (removed == 0) return 0;
+  // Keep the vertices still used, in their order.
+  constexpr std::uint32_t kUnused = ~std::uint32_t{0};
+  std::vector<std::uint32_t> remap(mesh.positions.size(), kUnused);
+  for (std::uint32_t i : kept) remap[i] = 0;
+  std::uint32_t next = 0;
+  for (std::size_t v = 0; v < remap.size(); ++v)
+    if (remap[v] != kUnused) {
+      remap[v] = next;
+      mesh.positions[next] = mesh.positions[v];
+      if (!mesh.uvs.empty()) mesh.uvs[next] = mesh.uvs[v];
+      ++next;
+    }
+  mesh.positions.resize(next);
+  if (!mesh.uvs.empty()) mesh.uvs.resize(next);
+  for (std::uint32_t& i : kept) i = remap[i];
+  mesh.indices = std::move(kept);
+  return removed;
+}
+
+}  // namespace cellbake

@@ -1,0 +1,93 @@
+// The cheapest far field per face tile (issue #13): a cell's far field is,
+// tile by tile of each cube face, either the exact far geometry (the chunks
+// outside the near field that the tile's frustum can see from anywhere in the
+// cell, drawn whole) or the textured depth meshes of its samples (Wilson 2002
+// ch. 3/5). Exact geometry has no image error, so a tile takes it whenever it
+// costs no more triangles than the depth-mesh triangles it replaces; chunks
+// shared by several geometry tiles count once. The tiles are the viewer's
+// per-face culling grid (viewer/decoded_cell.h): a depth-mesh triangle belongs
+// to a tile when its texture coordinates lie within the tile.
+//
+// Correctness of the mix: a dropped depth-mesh triangle lies inside its tile's
+// frustum from its sample's eye and was made of that tile's pixels, so every
+// surface it showed is among what the sample saw through the tile: the
+// tile's geometry (or near field, drawn anyway). Geometry is never worse
+// than the depth meshes it replaces, and exact from every eye.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "stages/chunk_source.h"
+#include "stages/cube_map.h"
+#include "stages/geometry.h"
+
+namespace cellbake {
+
+enum class FarChoiceMode {
+  cheapest,  // per tile, the cheaper of geometry and depth meshes (ties: geometry)
+  tdm,       // depth meshes everywhere (the pre-#13 far field)
+  geometry,  // exact far geometry everywhere (no samples needed)
+};
+
+// Parses "cheapest" | "tdm" | "geometry"; throws std::invalid_argument otherwise.
+FarChoiceMode parse_far_choice_mode(const std::string& name);
+
+// The tiles (bit row * kFarTiles + column) of cube face `face` through which
+// some eye in `eyes` can see some point of `box`: a conservative test (each
+// frustum plane against the boxes separately), so it may include tiles that
+// cannot see the box but never misses one that can.
+std::uint32_t tiles_seeing_box(int face, const Box3d& eyes, const Box3d& box);
+
+// The tile (row * kFarTiles + column) whose texture-coordinate square holds
+// the whole triangle, or -1 when it spans tiles.
+int triangle_tile(const FaceMesh& mesh, std::size_t triangle);
+
+struct FaceFarChoice {
+  std::uint32_t geometry_tiles = 0;  // bit set: the tile draws exact geometry
+  std::uint64_t tdm_triangles = 0;       // depth-mesh triangles kept, over all samples
+  std::uint64_t replaced_triangles = 0;  // depth-mesh triangles dropped for geometry
+  std::uint64_t geometry_triangles = 0;  // triangles of the distinct chunks its geometry tiles need
+};
+
+// The far geometry of one source chunk: the whole chunk, or some of its triangles.
+struct FarPiece {
+  ChunkRef chunk;
+  std::vector<std::uint32_t> triangles;  // ascending; empty: the whole chunk
+  std::uint64_t triangle_count() const { return triangles.empty() ? chunk.triangle_count : triangles.size(); }
+};
+
+struct FarChoice {
+  std::array<FaceFarChoice, kCubeFaces> faces;
+  std::vector<FarPiece> pieces;  // the geometry drawn, by chunk id
+  std::uint64_t geometry_triangles = 0;
+};
+
+// One sample as the choice reads it: per face its depth mesh and the chunks
+// it saw there (CubeFace::seen).
+struct FarChoiceSample {
+  std::array<const FaceMesh*, kCubeFaces> meshes{};
+  std::array<const std::vector<SeenChunk>*, kCubeFaces> seen{};
+};
+
+// Chooses each face tile's representation. `far_chunks` are the chunks
+// outside the near field (sorted by id; seen chunks not among them are near
+// field, drawn anyway, and cost nothing). A tile's geometry is what the
+// samples saw through it: the triangles a ray caster saw, or whole chunks. Without samples every tile takes the chunks its
+// frustum from `eyes` (every eye the viewer may draw the cell from) can
+// reach (tiles_seeing_box), whatever `mode` says. Greedy and deterministic:
+// the whole cell, then each face, then each tile takes geometry when the
+// triangles of the chunks it adds are no more than the depth-mesh triangles
+// it drops, repeated until nothing changes. Counts only; meshes are not
+// modified.
+FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
+                           std::span<const FarChoiceSample> samples, FarChoiceMode mode);
+
+// Removes from `mesh` the triangles lying wholly within a tile of
+// `geometry_tiles` and the vertices only they used (order otherwise kept).
+// Returns how many triangles were removed.
+std::size_t drop_geometry_tiles(FaceMesh& mesh, std::uint32_t geometry_tiles);
+
+}  // namespace cellbake
