@@ -15,6 +15,7 @@
 
 #include "pipeline/input_error.h"
 #include "pipeline/readers/model_reader.h"
+#include "pipeline/readers/contained_paths.h"
 #include "pipeline/texture_import.h"
 #include "stages/chunking.h"
 #include "stages/hashing.h"
@@ -135,6 +136,12 @@ void attach_texture(Material& material, std::uint32_t index, const ModelInfo& in
     input.file = path.is_absolute() ? path : (model.parent_path() / path).lexically_normal();
   }
   const bool embedded = input.file.empty();
+  if (!embedded && !params.allow_outside_paths && !path_inside_folder(model.parent_path(), input.file)) {
+    report.texture_warnings.push_back(model.filename().string() + ": material '" + material.name + "': texture '" +
+                                      input.file.string() + "': " + kOutsideFolder + ": material colour used");
+    material.texture_id = 0;
+    return;
+  }
   const std::string key = embedded ? model.string() + "#" + material.texture : input.file.string();
   const std::string shown = embedded ? material.texture + " (embedded)" : input.file.string();
   bool has_alpha = false;
@@ -192,6 +199,7 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   content.f64(params.translate.x).f64(params.translate.y).f64(params.translate.z);
   // v3: normals, textures stored with their size cap.
   content.text("store-v3").u64(static_cast<std::uint64_t>(params.max_texture_size));
+  if (params.allow_outside_paths) content.text("outside-paths");  // the default keeps earlier stores' hashes
   for (const auto& model : models) {
     SourceFileRecord src;
     src.path = model.string();
@@ -220,7 +228,7 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
       ++file_triangles;
       if (progress && (report.triangles_read & 0xFFFF) == 0)
         progress("read " + model.filename().string(), report.triangles_read, 0);
-    });
+    }, ReadOptions{params.allow_outside_paths});
     for (std::uint32_t m = 0; m < info.materials.size(); ++m) {
       Material material = info.materials[m];
       if (!material.texture.empty())

@@ -32,6 +32,11 @@ struct IngestParams {
   std::size_t memory_budget_bytes = std::size_t(6) << 30;  // triangles beyond this go to a spill file
   std::filesystem::path temp_dir;          // for the spill file; empty = next to the store
   int max_texture_size = 2048;             // textures are halved until both sides fit (>= 1)
+  // Files a model names (mtllib, map_Kd, glTF buffers and images) are read only
+  // inside the model's folder and subfolders unless this is set; a refused one
+  // is a warning (input_warnings, texture_warnings), or an error when the
+  // model cannot load without it (pipeline/readers/contained_paths.h).
+  bool allow_outside_paths = false;
 };
 
 struct IngestReport {

@@ -16,6 +16,7 @@ void add_ingest_command(CLI::App& app) {
     std::vector<double> translate;
     std::string units = "m";
     int max_texture_size = 2048;
+    bool allow_outside_paths = false;
   };
   auto opt = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
@@ -31,12 +32,16 @@ void add_ingest_command(CLI::App& app) {
                   "Longest texture side kept in the store; larger textures are halved until they fit")
       ->capture_default_str()
       ->check(CLI::Range(1, 16384));
+  cmd->add_flag("--allow-outside-paths", opt->allow_outside_paths,
+                "Read files the models name (mtllib, map_Kd, glTF buffers and images) outside the model's folder; "
+                "by default such references are skipped with a warning");
   cmd->callback([opt] {
     std::vector<std::filesystem::path> models(opt->models.begin(), opt->models.end());
     IngestParams params;
     params.max_chunk_triangles = opt->chunk;
     params.units = opt->units;
     params.max_texture_size = opt->max_texture_size;
+    params.allow_outside_paths = opt->allow_outside_paths;
     if (opt->translate.size() == 3) params.translate = {opt->translate[0], opt->translate[1], opt->translate[2]};
     const IngestReport r = ingest_models(models, opt->store, params, tbb_parallel_for(), ingest_progress());
     print_ingest_summary(r, opt->store);

@@ -9,7 +9,10 @@
 // colour (glTF) or else diffuse texture is returned as a TextureInput: the
 // embedded image's bytes or texels, or the external file resolved against the
 // model's folder, with the material's wrap modes; a glTF material whose alpha
-// mode is OPAQUE never alpha-tests.
+// mode is OPAQUE never alpha-tests. Every file assimp opens itself (glTF
+// buffers, ...) goes through ContainedIOSystem, which refuses those outside
+// the model's folder (contained_paths.h) unless ReadOptions allow them.
+#include <assimp/DefaultIOSystem.h>
 #include <assimp/config.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
@@ -26,6 +29,7 @@
 #include "pipeline/input_error.h"
 #include "pipeline/readers/buffered_input.h"
 #include "pipeline/readers/colour_math.h"
+#include "pipeline/readers/contained_paths.h"
 #include "pipeline/readers/format_readers.h"
 
 namespace cellbake {
@@ -60,6 +64,46 @@ void check_glb_lengths(const std::string& name, std::uint64_t size, Read&& read)
     at += 8 + length;
   }
 }
+
+// The files assimp opens, checked against the model's folder. Relative names
+// are resolved against `base` (assimp joins references to the folder of the
+// path it was given, so `base` is empty; a model read from memory gets bare
+// references, resolved against its folder). Refused names are kept for the
+// warnings and errors; writes are always refused.
+class ContainedIOSystem : public Assimp::DefaultIOSystem {
+ public:
+  ContainedIOSystem(std::filesystem::path folder, std::filesystem::path base, bool allow_outside)
+      : folder_(std::move(folder)), base_(std::move(base)), allow_outside_(allow_outside) {}
+
+  bool Exists(const char* file) const override {
+    const std::string path = resolve(file);
+    return allowed(file, path) && DefaultIOSystem::Exists(path.c_str());
+  }
+
+  Assimp::IOStream* Open(const char* file, const char* mode = "rb") override {
+    const std::string path = resolve(file);
+    if (!mode || mode[0] != 'r' || !allowed(file, path)) return nullptr;
+    return DefaultIOSystem::Open(path.c_str(), mode);
+  }
+
+  const std::vector<std::string>& refused() const { return refused_; }
+
+ private:
+  std::string resolve(const char* file) const {
+    const std::filesystem::path p(file ? file : "");
+    return (p.is_absolute() || base_.empty() ? p : base_ / p).string();
+  }
+
+  bool allowed(const char* name, const std::string& path) const {
+    if (allow_outside_ || path_inside_folder(folder_, path)) return true;
+    if (std::find(refused_.begin(), refused_.end(), name) == refused_.end()) refused_.emplace_back(name);
+    return false;
+  }
+
+  std::filesystem::path folder_, base_;
+  bool allow_outside_;
+  mutable std::vector<std::string> refused_;  // Exists() is const
+};
 
 TextureWrap wrap_of(int mode) {
   switch (mode) {
@@ -187,9 +231,13 @@ bool assimp_supports(const std::string& extension) {
 }
 
 ModelInfo read_with_assimp(const std::filesystem::path& file, const std::string& extension, bool gzipped,
-                           const TriangleCallback& emit) {
+                           const TriangleCallback& emit, const ReadOptions& options) {
   const std::string name = file.string();
   Assimp::Importer importer;
+  // The importer owns and deletes the IOSystem.
+  auto* io = new ContainedIOSystem(file.parent_path(), gzipped ? file.parent_path() : std::filesystem::path(),
+                                   options.allow_outside_paths);
+  importer.SetIOHandler(io);
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   const aiScene* scene = nullptr;
   if (gzipped) {
@@ -221,9 +269,13 @@ ModelInfo read_with_assimp(const std::filesystem::path& file, const std::string&
     }
     scene = importer.ReadFile(name, kImportFlags);
   }
+  if (!scene && !io->refused().empty())
+    throw InputError(name, "", "needs '" + io->refused().front() + "', " + kOutsideFolder + " (assimp: " +
+                                   importer.GetErrorString() + ")");
   if (!scene) throw InputError(name, "", std::string("assimp: ") + importer.GetErrorString());
 
   ModelInfo info;
+  for (const std::string& refused : io->refused()) info.warnings.push_back(" reference '" + refused + "': " + kOutsideFolder);
   info.format = "assimp:" + extension;
   info.materials.push_back(default_material());
   for (unsigned m = 0; m < scene->mNumMaterials; ++m) {

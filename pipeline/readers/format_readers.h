@@ -12,8 +12,9 @@
 namespace cellbake {
 
 // Wavefront OBJ with its MTL libraries (plain or .gz). Streams faces; holds
-// the vertex, texcoord tables and materials.
-ModelInfo read_obj(const std::filesystem::path& file, const TriangleCallback& emit);
+// the vertex, texcoord tables and materials. Libraries outside the OBJ's folder
+// are skipped with a warning unless `options` allows them.
+ModelInfo read_obj(const std::filesystem::path& file, const TriangleCallback& emit, const ReadOptions& options);
 
 // Stanford PLY, ASCII or binary of either byte order (plain or .gz). Holds the
 // vertex table; streams faces (a file whose faces precede its vertices is read
@@ -30,9 +31,11 @@ ModelInfo read_stl(const std::filesystem::path& file, const TriangleCallback& em
 // Any other format assimp can import, loaded whole. `extension` is the
 // lower-case format extension without the dot ("gltf", "glb", "3ds", ...).
 // A ".gz" file is decompressed into memory and handed to assimp with
-// `extension` as the format hint.
+// `extension` as the format hint. Every file assimp opens goes through an
+// IOSystem that refuses those outside the model's folder unless `options`
+// allows them.
 ModelInfo read_with_assimp(const std::filesystem::path& file, const std::string& extension, bool gzipped,
-                           const TriangleCallback& emit);
+                           const TriangleCallback& emit, const ReadOptions& options);
 
 // True when assimp has an importer for `extension` (lower case, no dot).
 bool assimp_supports(const std::string& extension);

@@ -17,17 +17,17 @@ std::string lower_extension(const std::filesystem::path& file) {
 
 }  // namespace
 
-ModelInfo read_model(const std::filesystem::path& file, const TriangleCallback& emit) {
+ModelInfo read_model(const std::filesystem::path& file, const TriangleCallback& emit, const ReadOptions& options) {
   std::string ext = lower_extension(file);
   const bool gzipped = ext == ".gz";
   if (gzipped) ext = lower_extension(file.stem());
   const std::string format = ext.empty() ? std::string() : ext.substr(1);
 
-  if (format == "obj") return read_obj(file, emit);
+  if (format == "obj") return read_obj(file, emit, options);
   if (format == "ply") return read_ply(file, emit);
   if (format == "off") return read_off(file, emit);
   if (format == "stl") return read_stl(file, emit);
-  if (!format.empty() && assimp_supports(format)) return read_with_assimp(file, format, gzipped, emit);
+  if (!format.empty() && assimp_supports(format)) return read_with_assimp(file, format, gzipped, emit, options);
   throw InputError(file.string(), "", "unknown model format '" + ext + "'");
 }
 

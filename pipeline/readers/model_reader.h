@@ -57,6 +57,12 @@ struct ModelInfo {
 
 using TriangleCallback = std::function<void(const Triangle&)>;
 
+struct ReadOptions {
+  // Files the model names (mtllib, glTF buffers, ...) are read only inside its
+  // folder and subfolders unless this is set (pipeline/readers/contained_paths.h).
+  bool allow_outside_paths = false;
+};
+
 // Reads `file` and calls `emit` for every triangle, in file order. Material
 // colours are already multiplied into the per-corner colours; a vertex without
 // a colour gets the material colour (default light grey). Vertex colours
@@ -68,9 +74,13 @@ using TriangleCallback = std::function<void(const Triangle&)>;
 // them. ModelInfo::vertex_colours says which happened.
 // Throws InputError (naming file, line or byte offset, and the problem) for:
 // unknown/unsupported format, unreadable/truncated/malformed file, NaN or Inf
-// coordinates, out-of-range vertex indices. Degenerate triangles are emitted
+// coordinates, out-of-range vertex indices, and (assimp formats) a model that
+// cannot load without a file `options` refuses to read. Other refused references
+// are ModelInfo::warnings. Material textures are not opened here: their paths
+// are checked where they are read (ingest). Degenerate triangles are emitted
 // as they are (ingest counts and skips them). An empty model is not an error here.
-ModelInfo read_model(const std::filesystem::path& file, const TriangleCallback& emit);
+ModelInfo read_model(const std::filesystem::path& file, const TriangleCallback& emit,
+                     const ReadOptions& options = {});
 
 // One line for the ingest summary about `info`'s vertex colours, e.g.
 // "vertex colours: ignored (all equal: 0 0 0), material colours used";

@@ -22,6 +22,7 @@
 #include "pipeline/input_error.h"
 #include "pipeline/readers/buffered_input.h"
 #include "pipeline/readers/colour_math.h"
+#include "pipeline/readers/contained_paths.h"
 #include "pipeline/readers/format_readers.h"
 #include "pipeline/readers/mtl_reader.h"
 #include "pipeline/readers/text_scan.h"
@@ -39,8 +40,8 @@ struct ObjCorner {
 
 class ObjReader {
  public:
-  ObjReader(const std::filesystem::path& file, const TriangleCallback& emit)
-      : file_(file), in_(file), emit_(emit) {
+  ObjReader(const std::filesystem::path& file, const TriangleCallback& emit, const ReadOptions& options)
+      : file_(file), in_(file), emit_(emit), options_(options) {
     info_.format = "obj";
     info_.materials.push_back(default_material());
   }
@@ -233,21 +234,32 @@ class ObjReader {
 
   // "mtllib a.mtl [b.mtl ...]": names are resolved against the OBJ's folder; a
   // single name containing blanks is tried first. Missing or unreadable
-  // libraries are skipped with a warning (their materials stay default grey).
+  // libraries, and (unless allowed) those outside the OBJ's folder, are
+  // skipped with a warning (their materials stay default grey).
   void load_libraries(std::string_view operand) {
-    const std::filesystem::path folder = file_.parent_path();
     if (operand.empty()) return;
-    if (read_mtl(folder / std::string(operand), info_.materials, material_by_name_)) return;
+    if (contained(std::string(operand)) &&
+        read_mtl(file_.parent_path() / std::string(operand), info_.materials, material_by_name_))
+      return;
     TextScan names(operand);
-    for (std::string_view name = names.token(); !name.empty(); name = names.token())
-      if (!read_mtl(folder / std::string(name), info_.materials, material_by_name_))
-        info_.warnings.push_back(at_line(in_.line_number()) + ": mtllib '" + std::string(name) +
-                                 "': missing or unreadable; its materials are default grey");
+    for (std::string_view name = names.token(); !name.empty(); name = names.token()) {
+      const std::string library(name);
+      const std::string at = at_line(in_.line_number()) + ": mtllib '" + library + "': ";
+      if (!contained(library))
+        info_.warnings.push_back(at + kOutsideFolder + "; its materials are default grey");
+      else if (!read_mtl(file_.parent_path() / library, info_.materials, material_by_name_))
+        info_.warnings.push_back(at + "missing or unreadable; its materials are default grey");
+    }
+  }
+
+  bool contained(const std::string& library) const {
+    return options_.allow_outside_paths || path_inside_folder(file_.parent_path(), file_.parent_path() / library);
   }
 
   std::filesystem::path file_;
   BufferedInput in_;
   const TriangleCallback& emit_;
+  ReadOptions options_;
   ModelInfo info_;
   std::vector<Vec3d> positions_;
   std::vector<Rgba8> vertex_colours_;  // empty until the first coloured vertex
@@ -263,8 +275,8 @@ class ObjReader {
 
 }  // namespace
 
-ModelInfo read_obj(const std::filesystem::path& file, const TriangleCallback& emit) {
-  return ObjReader(file, emit).run();
+ModelInfo read_obj(const std::filesystem::path& file, const TriangleCallback& emit, const ReadOptions& options) {
+  return ObjReader(file, emit, options).run();
 }
 
 }  // namespace cellbake
