@@ -1,6 +1,7 @@
 #include "stages/far_choice.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -17,6 +18,22 @@ double max_dot(const Vec3d& w, const Box3d& b) {
 }
 
 double min_dot(const Vec3d& w, const Box3d& b) { return -max_dot(w * -1.0, b); }
+
+constexpr float kEdge = 1e-6f;  // texture coordinates on a tile border belong to both tiles
+
+struct UvBox {
+  float u0 = 1, u1 = 0, v0 = 1, v1 = 0;
+};
+
+UvBox uv_box(const FaceMesh& mesh, std::size_t triangle) {
+  UvBox b;
+  for (int c = 0; c < 3; ++c) {
+    const Uv& uv = mesh.uvs[mesh.indices[3 * triangle + std::size_t(c)]];
+    b.u0 = std::min(b.u0, uv.u), b.u1 = std::max(b.u1, uv.u);
+    b.v0 = std::min(b.v0, uv.v), b.v1 = std::max(b.v1, uv.v);
+  }
+  return b;
+}
 
 // Some p in `box` and e in `eyes` with w . (p - e) >= 0 (a little slack for rounding).
 bool plane_reaches(const Vec3d& w, const Box3d& eyes, const Box3d& box) {
@@ -56,25 +73,43 @@ std::uint32_t tiles_seeing_box(int face, const Box3d& eyes, const Box3d& box) {
 }
 
 int triangle_tile(const FaceMesh& mesh, std::size_t triangle) {
-  float u0 = 1, u1 = 0, v0 = 1, v1 = 0;
-  for (int c = 0; c < 3; ++c) {
-    const Uv& uv = mesh.uvs[mesh.indices[3 * triangle + std::size_t(c)]];
-    u0 = std::min(u0, uv.u), u1 = std::max(u1, uv.u);
-    v0 = std::min(v0, uv.v), v1 = std::max(v1, uv.v);
-  }
-  const int column = std::clamp(int(0.5f * (u0 + u1) * kFarTiles), 0, kFarTiles - 1);
-  const int row = std::clamp(int(0.5f * (v0 + v1) * kFarTiles), 0, kFarTiles - 1);
-  constexpr float kEdge = 1e-6f;  // texture coordinates on a tile border belong to both tiles
-  if (u0 < float(column) / kFarTiles - kEdge || u1 > float(column + 1) / kFarTiles + kEdge) return -1;
-  if (v0 < float(row) / kFarTiles - kEdge || v1 > float(row + 1) / kFarTiles + kEdge) return -1;
+  const UvBox b = uv_box(mesh, triangle);
+  const int column = std::clamp(int(0.5f * (b.u0 + b.u1) * kFarTiles), 0, kFarTiles - 1);
+  const int row = std::clamp(int(0.5f * (b.v0 + b.v1) * kFarTiles), 0, kFarTiles - 1);
+  if (b.u0 < float(column) / kFarTiles - kEdge || b.u1 > float(column + 1) / kFarTiles + kEdge) return -1;
+  if (b.v0 < float(row) / kFarTiles - kEdge || b.v1 > float(row + 1) / kFarTiles + kEdge) return -1;
   return row * kFarTiles + column;
 }
+
+namespace {
+
+// The tiles a triangle's texture-coordinate box reaches (bits as in
+// FaceFarChoice::geometry_tiles): one for a triangle within one tile, more
+// for one that spans tiles (never fewer than it covers).
+std::uint32_t triangle_tile_mask(const FaceMesh& mesh, std::size_t triangle) {
+  if (const int tile = triangle_tile(mesh, triangle); tile >= 0) return 1u << tile;
+  const UvBox b = uv_box(mesh, triangle);
+  const auto first = [](float lo) { return std::clamp(int(std::floor((lo + kEdge) * kFarTiles)), 0, kFarTiles - 1); };
+  const auto last = [](float hi, int from) {
+    return std::clamp(int(std::ceil((hi - kEdge) * kFarTiles)) - 1, from, kFarTiles - 1);
+  };
+  const int c0 = first(b.u0), c1 = last(b.u1, c0), r0 = first(b.v0), r1 = last(b.v1, r0);
+  std::uint32_t tiles = 0;
+  for (int r = r0; r <= r1; ++r)
+    for (int c = c0; c <= c1; ++c) tiles |= 1u << (r * kFarTiles + c);
+  return tiles;
+}
+
+}  // namespace
 
 FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
                            std::span<const FarChoiceSample> samples, FarChoiceMode mode) {
   FarChoice out;
-  // What each tile would drop: its depth-mesh triangles.
-  std::vector<std::uint64_t> removable(kAllTiles, 0), kept_elsewhere(kCubeFaces, 0);
+  // What each tile would drop: its depth-mesh triangles. Triangles spanning
+  // tiles are dropped only when all the tiles they reach take geometry (not
+  // counted as any tile's gain).
+  std::vector<std::uint64_t> removable(kAllTiles, 0);
+  std::array<std::vector<std::uint32_t>, kCubeFaces> spanning;  // per face: the tiles of each spanning triangle
   for (const FarChoiceSample& sample : samples)
     for (int f = 0; f < kCubeFaces; ++f) {
       if (!sample.meshes[std::size_t(f)]) continue;
@@ -82,7 +117,7 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
       for (std::size_t t = 0; t < m.triangle_count(); ++t) {
         const int tile = triangle_tile(m, t);
         if (tile < 0)
-          ++kept_elsewhere[std::size_t(f)];
+          spanning[std::size_t(f)].push_back(triangle_tile_mask(m, t));
         else
           ++removable[std::size_t(f * kFarTilesPerFace + tile)];
       }
@@ -201,7 +236,6 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
 
   for (int f = 0; f < kCubeFaces; ++f) {
     FaceFarChoice& face = out.faces[std::size_t(f)];
-    face.tdm_triangles = kept_elsewhere[std::size_t(f)];
     ++stamp;
     for (int k = 0; k < kFarTilesPerFace; ++k) {
       const std::size_t tile = std::size_t(f * kFarTilesPerFace + k);
@@ -214,6 +248,8 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
       for (std::uint32_t e : tile_elements[tile])
         if (stamp_of[e] != stamp) stamp_of[e] = stamp, face.geometry_triangles += elements[e].weight;
     }
+    for (std::uint32_t tiles : spanning[std::size_t(f)])
+      ++((tiles & ~face.geometry_tiles) == 0 ? face.replaced_triangles : face.tdm_triangles);
   }
   // Chosen elements grouped into pieces by chunk (chunks ascend by id).
   std::vector<std::uint32_t> order;
@@ -238,8 +274,7 @@ std::size_t drop_geometry_tiles(FaceMesh& mesh, std::uint32_t geometry_tiles) {
   std::vector<std::uint32_t> kept;
   kept.reserve(mesh.indices.size());
   for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-    const int tile = triangle_tile(mesh, t);
-    if (tile >= 0 && (geometry_tiles >> tile & 1u)) continue;
+    if ((triangle_tile_mask(mesh, t) & ~geometry_tiles) == 0) continue;
     kept.insert(kept.end(), mesh.indices.begin() + std::ptrdiff_t(3 * t), mesh.indices.begin() + std::ptrdiff_t(3 * t + 3));
   }
   const std::size_t removed = mesh.triangle_count() - kept.size() / 3;

@@ -6,12 +6,13 @@
 // costs no more triangles than the depth-mesh triangles it replaces; chunks
 // shared by several geometry tiles count once. The tiles are the viewer's
 // per-face culling grid (viewer/decoded_cell.h): a depth-mesh triangle belongs
-// to a tile when its texture coordinates lie within the tile.
+// to a tile when its texture coordinates lie within the tile; one spanning
+// tiles is dropped when every tile its texture coordinates reach draws geometry.
 //
-// Correctness of the mix: a dropped depth-mesh triangle lies inside its tile's
-// frustum from its sample's eye and was made of that tile's pixels, so every
-// surface it showed is among what the sample saw through the tile: the
-// tile's geometry (or near field, drawn anyway). Geometry is never worse
+// Correctness of the mix: a dropped depth-mesh triangle lies inside its
+// tiles' frusta from its sample's eye and was made of those tiles' pixels, so
+// every surface it showed is among what the sample saw through them: the
+// tiles' geometry (or near field, drawn anyway). Geometry is never worse
 // than the depth meshes it replaces, and exact from every eye.
 #pragma once
 
@@ -48,7 +49,7 @@ int triangle_tile(const FaceMesh& mesh, std::size_t triangle);
 struct FaceFarChoice {
   std::uint32_t geometry_tiles = 0;  // bit set: the tile draws exact geometry
   std::uint64_t tdm_triangles = 0;       // depth-mesh triangles kept, over all samples
-  std::uint64_t replaced_triangles = 0;  // depth-mesh triangles dropped for geometry
+  std::uint64_t replaced_triangles = 0;  // depth-mesh triangles dropped for geometry (within geometry tiles)
   std::uint64_t geometry_triangles = 0;  // triangles of the distinct chunks its geometry tiles need
 };
 
@@ -80,13 +81,15 @@ struct FarChoiceSample {
 // reach (tiles_seeing_box), whatever `mode` says. Greedy and deterministic:
 // the whole cell, then each face, then each tile takes geometry when the
 // triangles of the chunks it adds are no more than the depth-mesh triangles
-// it drops, repeated until nothing changes. Counts only; meshes are not
-// modified.
+// it drops, repeated until nothing changes (a triangle spanning tiles counts
+// as no tile's gain, but is dropped, and counted replaced, when all the tiles
+// it reaches take geometry). Counts only; meshes are not modified.
 FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
                            std::span<const FarChoiceSample> samples, FarChoiceMode mode);
 
-// Removes from `mesh` the triangles lying wholly within a tile of
-// `geometry_tiles` and the vertices only they used (order otherwise kept).
+// Removes from `mesh` the triangles whose texture coordinates lie wholly
+// within tiles of `geometry_tiles` (one tile, or several spanned, all in the
+// set) and the vertices only they used (order otherwise kept).
 // Returns how many triangles were removed.
 std::size_t drop_geometry_tiles(FaceMesh& mesh, std::uint32_t geometry_tiles);
 
