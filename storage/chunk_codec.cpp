@@ -155,6 +155,14 @@ void decode_chunk_blob(const std::uint8_t* data, std::size_t size, Chunk& chunk)
   const std::uint8_t* idata = in.take(ibytes, "index data");
 
   const bool has_uvs = flags & kHasUvs;
+  // Lower bounds of meshoptimizer's codecs, checked before anything is sized
+  // by the counts (a 30-byte blob could otherwise claim 2^24 vertices): the
+  // vertex codec spends at least one header byte per 64 vertices per vertex
+  // byte, the index codec at least one code byte per triangle.
+  const std::size_t vertex_size = has_uvs ? sizeof(PackedVertexUv) : sizeof(PackedVertex);
+  if (std::uint64_t(vbytes) * 64 < std::uint64_t(nv) * vertex_size)
+    throw std::runtime_error("chunk blob: vertex data too short for " + std::to_string(nv) + " vertices");
+  if (ibytes < ni / 3) throw std::runtime_error("chunk blob: index data too short for " + std::to_string(ni) + " indices");
   chunk.positions.resize(nv);
   chunk.colors.resize(nv);
   chunk.uvs.clear();
@@ -189,7 +197,7 @@ void decode_chunk_blob(const std::uint8_t* data, std::size_t size, Chunk& chunk)
   if (flags & kHasMaterials) {
     const std::uint8_t* m = in.take(std::size_t(ni / 3) * 4, "materials");
     chunk.materials.resize(ni / 3);
-    std::memcpy(chunk.materials.data(), m, chunk.materials.size() * 4);
+    if (!chunk.materials.empty()) std::memcpy(chunk.materials.data(), m, chunk.materials.size() * 4);
   }
   chunk.normals.clear();
   if (flags & kHasNormals) {

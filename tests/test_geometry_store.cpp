@@ -2,6 +2,8 @@
 // atomic replacement, metadata.
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include <random>
 
 #include "storage/chunk_codec.h"
@@ -85,6 +87,44 @@ TEST(ChunkCodec, RejectsCorruptBlobsWithoutCrashing) {
   EXPECT_GT(rejected, 1500);
   Chunk d;
   EXPECT_THROW(decode_chunk_blob(nullptr, 0, d), std::runtime_error);
+}
+
+// Found by tests/fuzz/fuzz_chunk_codec: a blob of a few bytes claiming 2^24
+// vertices made the decoder allocate ~600 MB before it looked at the data.
+TEST(ChunkCodec, CountsTheDataCannotHoldAreRejectedBeforeAllocating) {
+  const auto blob = encode_chunk_blob(make_chunk(1, {0, 0, 0}, false, false));
+  for (const std::uint32_t nv : {1u << 24, 1u << 20}) {
+    std::vector<std::uint8_t> bad(blob.begin(), blob.begin() + 16);  // magic, version, flags, counts
+    std::memcpy(bad.data() + 8, &nv, 4);
+    const std::uint32_t ni = 3 * nv, vbytes = 20, ibytes = 20;
+    std::memcpy(bad.data() + 12, &ni, 4);
+    bad.insert(bad.end(), reinterpret_cast<const std::uint8_t*>(&vbytes), reinterpret_cast<const std::uint8_t*>(&vbytes) + 4);
+    bad.insert(bad.end(), vbytes, 0);
+    bad.insert(bad.end(), reinterpret_cast<const std::uint8_t*>(&ibytes), reinterpret_cast<const std::uint8_t*>(&ibytes) + 4);
+    bad.insert(bad.end(), ibytes, 0);
+    Chunk d;
+    try {
+      decode_chunk_blob(bad.data(), bad.size(), d);
+      ADD_FAILURE() << "accepted " << nv << " vertices in " << bad.size() << " bytes";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("vertex data too short"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(d.positions.empty());
+  }
+}
+
+// Found by tests/fuzz/fuzz_chunk_codec: an empty chunk flagged as having
+// materials, uvs and normals copied zero material bytes from a null pointer
+// (undefined behaviour).
+TEST(ChunkCodec, AnEmptyChunkWithEveryFlagDecodes) {
+  const std::uint8_t input[] = {0x43, 0x42, 0x43, 0x4b, 0x1, 0x0, 0x7, 0x0, 0x0, 0x0, 0x0,  0x0,  0x0, 0x0, 0x0, 0x0, 0x0,
+                                0x0,  0x0,  0x0,  0x0,  0x0, 0x0, 0x0, 0x0, 0x0, 0xff, 0xff, 0x0, 0xc, 0x5b, 0x0, 0x0};
+  Chunk d;
+  try {
+    decode_chunk_blob(input, sizeof input, d);
+  } catch (const std::runtime_error&) {
+  }
+  EXPECT_EQ(d.triangle_count(), 0u);
 }
 
 TEST(GeometryStore, WritesQueriesAndLoads) {

@@ -69,7 +69,7 @@ PlyHeader read_ply_header(BufferedInput& in) {
     } else if (key == "element") {
       PlyElement element;
       element.name = std::string(scan.token());
-      std::int64_t count;
+      std::int64_t count = 0;
       if (element.name.empty() || !scan.integer(count) || count < 0 || !scan.at_end())
         fail("expected 'element <name> <count>'");
       element.count = static_cast<std::uint64_t>(count);
