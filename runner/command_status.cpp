@@ -55,6 +55,7 @@ void add_status_command(CLI::App& app) {
   cmd->add_flag("--repair", opt->repair, "As --check, then mark the damaged cells pending (the next bake redoes them)");
   cmd->callback([opt] {
     std::uint64_t bytes = 0, far = 0, samples = 0, delta_covered = 0, delta_removed = 0;
+    std::uint64_t far_geometry = 0, geometry_tiles = 0, face_tiles = 0, replaced = 0;
     CellDbBytes by_kind;
     std::map<std::string, double> stage_seconds;
     std::map<std::string, ConfigCells> configs;
@@ -71,8 +72,11 @@ void add_status_command(CLI::App& app) {
       cells.total = std::max(cells.total, meta_u64(db, "cells_total", 0));
       bytes += t.bytes;
       far += t.far_triangles;
+      far_geometry += t.far_geometry_triangles, geometry_tiles += t.geometry_tiles, face_tiles += t.face_tiles;
+      replaced += t.replaced_triangles;
       const CellDbBytes b = db.bytes_by_kind();
       by_kind.cells += b.cells, by_kind.colour += b.colour, by_kind.mesh += b.mesh, by_kind.near_list += b.near_list;
+      by_kind.far_geometry += b.far_geometry;
       samples += t.samples;
       delta_covered += t.delta_covered_pixels;
       delta_removed += t.delta_removed_pixels;
@@ -127,8 +131,13 @@ void add_status_command(CLI::App& app) {
       j["stage_seconds"] = stage_seconds;
       j["content_hash"] = h.hex();
       j["bytes"] = bytes;
-      j["bytes_by_kind"] = {{"colour", by_kind.colour}, {"mesh", by_kind.mesh}, {"near_list", by_kind.near_list}};
+      j["bytes_by_kind"] = {{"colour", by_kind.colour},
+                            {"mesh", by_kind.mesh},
+                            {"near_list", by_kind.near_list},
+                            {"far_geometry", by_kind.far_geometry}};
       j["far_triangles"] = far;
+      j["far_geometry_triangles"] = far_geometry;
+      j["far_choice"] = {{"geometry_tiles", geometry_tiles}, {"face_tiles", face_tiles}, {"replaced_triangles", replaced}};
       j["samples"] = samples;
       j["delta_covered_pixels"] = delta_covered;
       j["delta_removed_pixels"] = delta_removed;
@@ -142,11 +151,17 @@ void add_status_command(CLI::App& app) {
                   (unsigned long long)done, (unsigned long long)failed, (unsigned long long)pending);
       if (bad) std::printf(", %llu damaged", (unsigned long long)bad);
       std::printf("\n");
-      std::printf("stored: %.1f MB, %llu far-field triangles\n", bytes / 1e6, (unsigned long long)far);
+      std::printf("stored: %.1f MB, far field: %llu depth-mesh triangles, %llu exact geometry triangles\n",
+                  bytes / 1e6, (unsigned long long)far, (unsigned long long)far_geometry);
+      if (face_tiles > 0)
+        std::printf("far choice: %llu of %llu face tiles drawn as geometry (%.1f %%), replacing %llu depth-mesh "
+                    "triangles\n",
+                    (unsigned long long)geometry_tiles, (unsigned long long)face_tiles,
+                    100.0 * double(geometry_tiles) / double(face_tiles), (unsigned long long)replaced);
       if (by_kind.cells > 0) {
         const double k = 1e3 * double(by_kind.cells);
-        std::printf("per done cell: %.1f KB colour, %.1f KB mesh, %.1f KB near list\n", by_kind.colour / k,
-                    by_kind.mesh / k, by_kind.near_list / k);
+        std::printf("per done cell: %.1f KB colour, %.1f KB mesh, %.1f KB near list, %.1f KB far geometry\n",
+                    by_kind.colour / k, by_kind.mesh / k, by_kind.near_list / k, by_kind.far_geometry / k);
       }
       if (done > 0 && samples > 0)
         std::printf("samples: %.2f per done cell; delta scans: %.1f %% of their pixels removed (an ancestor holds them)\n",

@@ -189,6 +189,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
       result.near_list_bytes = pack_near_chunks(row->near_chunks).size();
       result.near_triangles = row->near_triangles;
       result.far_triangles = row->far_triangles;
+      result.far_geometry_triangles = row->far_geometry_triangles;
       const DecodedCell cell = decode_cell(*row);
       const bool flat = row->region >= 0 && row->region < int(regions.size()) &&
                         region_is_flat(regions[row->region], up, cell_size);
@@ -240,6 +241,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
           drawer->release_context();
           v.triangles_impostor = is.chunk_triangles + is.far_triangles;  // near + far geometry + depth meshes drawn
           v.triangles_truth = ts.chunk_triangles;
+          if (v.triangles_truth > 0) v.triangle_ratio = double(v.triangles_impostor) / double(v.triangles_truth);
           v.ms_impostor = is.milliseconds;
           v.ms_truth = ts.milliseconds;
         } catch (...) {

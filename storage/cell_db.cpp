@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <bit>
 #include <cstring>
 #include <stdexcept>
 
@@ -386,6 +387,12 @@ CellDbBytes CellDb::bytes_by_kind() const {
                         "SELECT total(length(image)), total(length(mesh)) FROM faces "
                         "WHERE cell_id IN (SELECT id FROM cells WHERE status = 'done')");
   if (faces.step()) b.colour = std::uint64_t(faces.column_double(0)), b.mesh = std::uint64_t(faces.column_double(1));
+  if (schema_version_ >= 4) {
+    SqliteStatement far(*db_,
+                        "SELECT total(length(geometry)) FROM far_geometry "
+                        "WHERE cell_id IN (SELECT id FROM cells WHERE status = 'done')");
+    if (far.step()) b.far_geometry = std::uint64_t(far.column_double(0));
+  }
   return b;
 }
 
@@ -411,6 +418,18 @@ CellDbTotals CellDb::totals() const {
         if (v.is_number()) t.stage_seconds[k] += v.get<double>();
   }
   t.content_hash = h.hex();
+  if (schema_version_ >= 4) {
+    SqliteStatement cells(*db_, "SELECT total(far_geometry_triangles) FROM cells WHERE status = 'done'");
+    if (cells.step()) t.far_geometry_triangles = std::uint64_t(cells.column_double(0));
+    SqliteStatement choice(*db_,
+                           "SELECT geometry_tiles, replaced_triangles FROM far_choice "
+                           "WHERE cell_id IN (SELECT id FROM cells WHERE status = 'done')");
+    while (choice.step()) {
+      t.geometry_tiles += std::uint64_t(std::popcount(std::uint32_t(choice.column_int(0))));
+      t.face_tiles += 16;
+      t.replaced_triangles += std::uint64_t(choice.column_int(1));
+    }
+  }
   SqliteStatement samples(*db_, schema_version_ >= 3
                                     ? "SELECT count(*), total(CASE WHEN parent >= 0 THEN covered_pixels END), "
                                       "total(CASE WHEN parent >= 0 THEN removed_pixels END) FROM samples"

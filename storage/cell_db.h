@@ -110,12 +110,18 @@ struct CellDbTotals {
   std::uint64_t samples = 0;                 // panoramic samples over all cells
   std::uint64_t delta_covered_pixels = 0;    // pixels with a surface in delta scans (samples with a parent)
   std::uint64_t delta_removed_pixels = 0;    // of those, removed because an ancestor holds them
+  // The far field's choice (issue #13) over done cells: exact far geometry
+  // triangles stored, face tiles drawn as geometry of the face tiles with a
+  // recorded choice (faces with anything to draw), and the depth-mesh
+  // triangles the geometry replaced.
+  std::uint64_t far_geometry_triangles = 0, geometry_tiles = 0, face_tiles = 0, replaced_triangles = 0;
 };
 
 // Stored bytes by kind over the done cells (issue #16): encoded colour images,
 // encoded face meshes, near-field lists.
 struct CellDbBytes {
   std::uint64_t cells = 0, colour = 0, mesh = 0, near_list = 0;
+  std::uint64_t far_geometry = 0;  // exact far geometry blobs (issue #13)
 };
 
 class CellDb {

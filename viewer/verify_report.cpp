@@ -119,6 +119,7 @@ const std::vector<MetricInfo>& verify_metrics() {
       {"skin_fraction", false, &VerifyViewResult::skin_fraction},
       {"extra_fraction", false, &VerifyViewResult::extra_fraction},
       {"depth_error_median", false, &VerifyViewResult::depth_error_median},
+      {"triangle_ratio", false, &VerifyViewResult::triangle_ratio},
       {"ms_impostor", false, &VerifyViewResult::ms_impostor},
       {"ms_truth", false, &VerifyViewResult::ms_truth},
   };
@@ -181,6 +182,7 @@ nlohmann::json to_json(const VerifyViewResult& v) {
           {"truth_blank", v.truth_blank},
           {"triangles_impostor", v.triangles_impostor},
           {"triangles_truth", v.triangles_truth},
+          {"triangle_ratio", number_or_null(v.triangle_ratio)},
           {"ms_impostor", number_or_null(v.ms_impostor)},
           {"ms_truth", number_or_null(v.ms_truth)}};
 }
@@ -199,6 +201,7 @@ nlohmann::json to_json(const VerifyCellResult& c) {
                    {"near_list_bytes", c.near_list_bytes},
                    {"near_triangles", c.near_triangles},
                    {"far_triangles", c.far_triangles},
+                   {"far_geometry_triangles", c.far_geometry_triangles},
                    {"void_curve", c.void_curve},
                    {"sample_seconds", c.sample_seconds},
                    {"views", views},
@@ -220,6 +223,7 @@ VerifyCellResult cell_from_json(const nlohmann::json& j) {
   c.near_list_bytes = j.value("near_list_bytes", std::uint64_t{0});
   c.near_triangles = j.at("near_triangles").get<std::uint64_t>();
   c.far_triangles = j.at("far_triangles").get<std::uint64_t>();
+  c.far_geometry_triangles = j.value("far_geometry_triangles", std::uint64_t{0});
   c.void_curve = j.value("void_curve", std::vector<double>{});
   c.sample_seconds = j.value("sample_seconds", std::vector<double>{});
   c.triptych = j.at("triptych").get<std::string>();
@@ -244,6 +248,7 @@ VerifyCellResult cell_from_json(const nlohmann::json& j) {
     r.truth_blank = v.value("truth_blank", false);
     r.triangles_impostor = v.at("triangles_impostor").get<std::uint64_t>();
     r.triangles_truth = v.at("triangles_truth").get<std::uint64_t>();
+    r.triangle_ratio = number_from(v, "triangle_ratio", kNaN);
     r.ms_impostor = number_from(v, "ms_impostor", kNaN);
     r.ms_truth = number_from(v, "ms_truth", kNaN);
     c.views.push_back(r);
@@ -448,6 +453,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
 
   h << "<h2>Cells</h2>\n<table><tr><th>cell</th><th>views</th><th>median PSNR</th><th>min PSNR</th><th>median SSIM</th>"
        "<th>max holes</th><th>max skins</th><th>median depth err</th><th>tris impostor</th><th>tris truth</th>"
+       "<th>max tris impostor / truth</th><th>far tris stored: depth meshes / geometry</th>"
        "<th>ms impostor</th><th>ms truth</th><th>bake s</th><th>bytes</th><th>KB colour / mesh / near list</th><th>samples</th>"
        "<th>median PSNR, root sample alone</th><th>max holes, root sample alone</th>"
        "<th class=\"l\">void curve (after each sample)</th><th class=\"l\">note</th></tr>\n";
@@ -456,6 +462,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
     std::vector<double> psnr, holes, skins;
     for (const auto& v : c.views) psnr.push_back(v.psnr_db), holes.push_back(v.hole_fraction), skins.push_back(v.skin_fraction);
     const double min_psnr = psnr.empty() ? kNaN : *std::min_element(psnr.begin(), psnr.end());
+    const double max_ratio = max_of(c, &VerifyViewResult::triangle_ratio);
     const bool bad = !c.error.empty() || (psnr_stats.count && c.id == psnr_stats.worst_cell);
     h << "<tr" << (bad ? " class=\"bad\"" : "") << "><td>" << c.id << "</td><td>" << c.views.size() << "</td><td>"
       << fmt(cell_median(c, &VerifyViewResult::psnr_db), "%.2f") << "</td><td>" << fmt(min_psnr, "%.2f") << "</td><td>"
@@ -466,6 +473,8 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
       << fmt(median_of([&] { std::vector<double> v; for (auto& x : c.views) v.push_back(double(x.triangles_impostor)); return v; }()), "%.0f")
       << "</td><td>"
       << fmt(median_of([&] { std::vector<double> v; for (auto& x : c.views) v.push_back(double(x.triangles_truth)); return v; }()), "%.0f")
+      << "</td><td>" << fmt(max_ratio, "%.2f") << (max_ratio > 1 ? " (draws more than the model)" : "") << "</td><td>"
+      << c.far_triangles << " / " << c.far_geometry_triangles
       << "</td><td>" << fmt(cell_median(c, &VerifyViewResult::ms_impostor), "%.1f") << "</td><td>"
       << fmt(cell_median(c, &VerifyViewResult::ms_truth), "%.1f") << "</td><td>" << fmt(c.bake_seconds_total(), "%.2f")
       << "</td><td>" << c.bytes << "</td><td>" << fmt(c.colour_bytes / 1024.0, "%.1f") << " / "

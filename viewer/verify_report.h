@@ -33,6 +33,10 @@ struct VerifyViewResult {
   // (is_blank, viewer/image_metrics.h): its PSNR says nothing.
   bool truth_blank = false;
   std::uint64_t triangles_impostor = 0, triangles_truth = 0;
+  // triangles_impostor / triangles_truth: what the cell draws (near field,
+  // far geometry, depth meshes) against the frustum-culled model (issue #13:
+  // at most 1). NaN when the truth draws nothing.
+  double triangle_ratio = std::numeric_limits<double>::quiet_NaN();
   double ms_impostor = 0, ms_truth = 0;  // warm frame, wall clock
 };
 
@@ -42,6 +46,7 @@ struct VerifyCellResult {
   std::string key;  // content hash + verify parameters: equal keys need no re-render
   std::map<std::string, double> bake_seconds;  // per stage, from the cell database
   std::uint64_t bytes = 0, near_triangles = 0, far_triangles = 0;
+  std::uint64_t far_geometry_triangles = 0;  // exact far geometry stored (issue #13)
   std::uint64_t colour_bytes = 0, mesh_bytes = 0, near_list_bytes = 0;  // stored bytes by kind (issue #16)
   std::vector<double> void_curve;  // per sample in the order taken: worst candidate's void fraction after it (-1: not measured)
   std::vector<double> sample_seconds;  // bake seconds per sample, same order
