@@ -78,19 +78,24 @@ Vec3d direction(const toml::node& n, const std::string& where, const std::string
   return v;
 }
 
-std::filesystem::path resolve(const BakeConfig& c, const std::string& p) {
+// A relative path written in a config file is relative to that file's folder;
+// one given on the command line (`where` = "--set KEY", from apply_override)
+// stays relative to the current directory, like --store and --out.
+std::filesystem::path resolve(const BakeConfig& c, const std::string& p, const std::string& where = "") {
   std::filesystem::path path(p);
-  if (path.is_relative() && !c.source.empty()) path = c.source.parent_path() / path;
+  const bool command_line = where.rfind("--set ", 0) == 0;
+  if (path.is_relative() && !c.source.empty() && !command_line) path = c.source.parent_path() / path;
   return path;
 }
 
 const std::map<std::string, Setter>& setters() {
   static const std::map<std::string, Setter> table = {
       {"model.store", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.store = resolve(c, text(n, w, "model.store"));
+         c.store = resolve(c, text(n, w, "model.store"), w);
        }},
       {"model.up", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.up = text(n, w, "model.up", {"z", "y"});
+         c.up_given = true;
        }},
       {"cells.size", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.cell_size = number(n, w, "cells.size", 1e-6, 1e9);
@@ -204,7 +209,7 @@ const std::map<std::string, Setter>& setters() {
          c.position_bits = int(integer(n, w, "encode.position_bits", 8, 24));
        }},
       {"output.database", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.database = resolve(c, text(n, w, "output.database"));
+         c.database = resolve(c, text(n, w, "output.database"), w);
        }},
   };
   return table;
@@ -320,6 +325,22 @@ void validate_bake_config(const BakeConfig& c) {
   if (c.store.empty()) throw std::runtime_error(where + ": no geometry store given ([model] store or --store)");
   if (c.regions.empty()) throw std::runtime_error(where + ": no regions given ([[regions]] or --region)");
   if (c.database.empty()) throw std::runtime_error(where + ": no output database given");
+}
+
+std::string resolve_up_axis(BakeConfig& c, const std::string& store_up, const std::string& store_up_source) {
+  const std::string why = store_up_source.empty() ? "" : " (" + store_up_source + ")";
+  if (c.up_given) {
+    if (!store_up.empty() && store_up != c.up)
+      return "warning: the bake's up axis is " + c.up + " but the geometry store records " + store_up + why +
+             "; cell layers stack along " + c.up;
+    return "";
+  }
+  if (store_up.empty()) {
+    c.up = "z";
+    return "note: up axis not recorded in the store; assuming z (--up y to change)";
+  }
+  c.up = store_up;
+  return "";
 }
 
 std::string describe_bake_config(const BakeConfig& c) {

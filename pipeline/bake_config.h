@@ -21,6 +21,9 @@ struct BakeConfig {
   // [model]
   std::filesystem::path store;   // geometry store (relative paths: to the config file)
   std::string up = "z";          // "z" or "y": the model's up axis (cell layers stack along it)
+  // Whether `up` was given (model.up, --set model.up, --up). When not, a bake
+  // uses the geometry store's recorded up axis (resolve_up_axis); not hashed.
+  bool up_given = false;
 
   // [[regions]]: boxes of eye positions, model units; cells only exist inside them.
   std::vector<Box3d> regions;
@@ -130,6 +133,13 @@ void validate_bake_config(const BakeConfig& config);
 // near_budget when the fraction is 0. A small model then keeps a far field
 // (the thesis' 100,000 would swallow a 36 k-triangle model whole).
 std::uint64_t effective_near_budget(const BakeConfig& config, std::uint64_t model_triangles);
+
+// When config.up was not given, the store's recorded up axis (`store_up`:
+// "z", "y" or "" when not recorded) replaces it. Returns a one-line note for
+// the user, or "": "up axis not recorded in the store; assuming z (--up y to
+// change)" when neither says, or a warning when a given axis differs from the
+// recorded one (`store_up_source` says why the store has it).
+std::string resolve_up_axis(BakeConfig& config, const std::string& store_up, const std::string& store_up_source);
 
 // A canonical text form of every parameter (for hashing and the database meta).
 std::string describe_bake_config(const BakeConfig& config);

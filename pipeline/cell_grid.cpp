@@ -1,5 +1,7 @@
 #include "pipeline/cell_grid.h"
 
+#include <cstdio>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -103,6 +105,22 @@ std::vector<CellSpec> select_cells(const std::vector<CellSpec>& cells, const std
                                 " cells (ids " + std::to_string(lo) + " to " + std::to_string(hi) + ")");
   }
   return out;
+}
+
+void check_regions_meet_model(const std::vector<Box3d>& regions, const Box3d& model, double cell_size) {
+  if (model.empty()) return;
+  const Box3d grown = Box3d{model.lo - Vec3d{cell_size, cell_size, cell_size}, model.hi + Vec3d{cell_size, cell_size, cell_size}};
+  auto box_text = [](const Box3d& b) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "%.6g,%.6g,%.6g .. %.6g,%.6g,%.6g", b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z);
+    return std::string(buf);
+  };
+  for (std::size_t i = 0; i < regions.size(); ++i)
+    if (!regions[i].overlaps(grown))
+      throw std::invalid_argument("region " + std::to_string(i + 1) + " (" + box_text(regions[i]) +
+                                  ") does not meet the model's bounds (" + box_text(model) +
+                                  ") grown by one cell; its cells would bake nothing nearby: move the region "
+                                  "(`cellbake status STORE.db` shows the bounds)");
 }
 
 }  // namespace cellbake

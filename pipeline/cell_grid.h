@@ -25,6 +25,12 @@ struct CellSpec {
 std::vector<CellSpec> enumerate_cells(const std::vector<Box3d>& regions, double cell_size,
                                       std::uint64_t max_cells = 50'000'000);
 
+// Refuses useless bakes: throws std::invalid_argument naming the region
+// (1-based, with its corners) and the model bounds when a region does not meet
+// `model_bounds` grown by one `cell_size` on every side (its cells would see
+// nothing nearby). An empty model (empty bounds) passes: nothing to compare.
+void check_regions_meet_model(const std::vector<Box3d>& regions, const Box3d& model_bounds, double cell_size);
+
 // Parses a cell selection like "1-10,15,20-" (ranges inclusive, open end = to the
 // last id) and keeps only the cells it names. Throws std::invalid_argument on bad
 // syntax and when a non-empty selection names none of a non-empty `cells`.

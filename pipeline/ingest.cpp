@@ -200,6 +200,11 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   // v3: normals, textures stored with their size cap.
   content.text("store-v3").u64(static_cast<std::uint64_t>(params.max_texture_size));
   if (params.allow_outside_paths) content.text("outside-paths");  // the default keeps earlier stores' hashes
+  // The up axis is metadata, not content: a store's hash (and so every bake
+  // hash) does not change when only the recorded axis does.
+  std::vector<std::string> up_claims;  // "FILE: y (reason)" for files that say
+  std::string up_from_files;
+  bool up_disagree = false;
   for (const auto& model : models) {
     SourceFileRecord src;
     src.path = model.string();
@@ -235,12 +240,32 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
         attach_texture(material, m, info, model, params, writer, texture_ids, content, report);
       materials.push_back(material);
     }
+    if (!info.up.empty()) {
+      up_claims.push_back(model.filename().string() + ": " + info.up + " (" + info.up_source + ")");
+      if (up_from_files.empty()) {
+        up_from_files = info.up;
+        report.up_source = model.filename().string() + ": " + info.up_source;
+      }
+      up_disagree |= info.up != up_from_files;
+    }
     report.polygons_triangulated += info.polygons_triangulated;
     for (const std::string& w : info.warnings) report.input_warnings.push_back(model.filename().string() + ":" + w);
     if (const std::string note = describe_vertex_colours(info); !note.empty())
       report.vertex_colour_notes.push_back(model.filename().string() + ": " + note);
     src.triangles = file_triangles;
     sources.push_back(src);
+  }
+  if (!params.up.empty()) {
+    if (params.up != "z" && params.up != "y") throw std::invalid_argument("ingest: up must be \"z\" or \"y\"");
+    report.up = params.up, report.up_source = "--up";
+  } else if (up_disagree) {
+    report.up_source = "the files disagree (";
+    for (std::size_t i = 0; i < up_claims.size(); ++i) report.up_source += (i ? "; " : "") + up_claims[i];
+    report.up_source += ")";
+  } else if (up_from_files.empty()) {
+    report.up_source = "the file format does not record one";
+  } else {
+    report.up = up_from_files;
   }
   spill.finish();
   if (spill.count() == 0)
@@ -309,6 +334,8 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   summary.skipped_duplicate = report.skipped_duplicate;
   summary.units = params.units;
   summary.content_hash = report.content_hash;
+  summary.up = report.up;
+  summary.up_source = report.up.empty() ? "" : report.up_source;
   writer.finish(summary);
   report.write_seconds = seconds_since(t_write);
   if (progress) progress("done", 0, 0);

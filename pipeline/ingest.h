@@ -37,6 +37,9 @@ struct IngestParams {
   // is a warning (input_warnings, texture_warnings), or an error when the
   // model cannot load without it (pipeline/readers/contained_paths.h).
   bool allow_outside_paths = false;
+  // The up axis to record in the store: "z" or "y"; "" = what the files say
+  // (ModelInfo::up; not recorded when none says or they disagree).
+  std::string up;
 };
 
 struct IngestReport {
@@ -61,6 +64,10 @@ struct IngestReport {
   std::vector<std::string> texture_warnings;
   // What the readers skipped, one line each: "FILE:line N: mtllib 'a.mtl': missing or unreadable; ...".
   std::vector<std::string> input_warnings;
+  // The up axis recorded in the store ("z", "y", "" = not recorded) and why:
+  // "--up", or "FILE: reason" (e.g. "a.glb: glTF is Y-up by specification"),
+  // or why none was recorded (no file says; files disagree).
+  std::string up, up_source;
 };
 
 // Ingests `models` into a new store at `store` (replacing an existing one only

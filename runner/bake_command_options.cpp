@@ -14,11 +14,17 @@ void add_bake_options(CLI::App& cmd, BakeCommandOptions& opt) {
       ->check(CLI::ExistingFile);
   cmd.add_option("--set", opt.sets, "Override a config key: section.key=value (repeatable)");
   cmd.add_option("--store", opt.store, "Geometry store (overrides [model] store)");
-  cmd.add_option("--up", opt.up, "Up axis: z or y")->check(CLI::IsMember({"z", "y"}));
+  cmd.add_option("--up", opt.up,
+                 "Up axis: z or y (default: [model] up, else the one the geometry store recorded at ingest, else z)")
+      ->check(CLI::IsMember({"z", "y"}));
   cmd.add_option("--region", opt.regions, "Box of eye positions X0,Y0,Z0,X1,Y1,Z1 (repeatable)");
   cmd.add_option("--cell-size", opt.cell_size, "Edge of a cubic view cell, model units")->check(CLI::PositiveNumber);
-  cmd.add_option("--near-budget", opt.near_budget, "Near-field triangle budget per cell")->check(CLI::NonNegativeNumber);
-  cmd.add_option("--face-size", opt.face_size, "Stored cube-face resolution, pixels")->check(CLI::Range(8, 4096));
+  cmd.add_option("--near-budget", opt.near_budget,
+                 "Near-field triangle budget per cell (default: [near] budget, 100000, or near.budget_fraction of a "
+                 "small model's triangles)")
+      ->check(CLI::NonNegativeNumber);
+  cmd.add_option("--face-size", opt.face_size, "Stored cube-face resolution, pixels (default: [sample] face_size, 512)")
+      ->check(CLI::Range(8, 4096));
   cmd.add_option("--out", opt.out, "Output cell database (overrides [output] database)");
   cmd.add_option("--threads", opt.run.threads, "Worker threads (0 = all cores)")
       ->check(CLI::Range(0, 1024))
@@ -32,7 +38,7 @@ void add_bake_options(CLI::App& cmd, BakeCommandOptions& opt) {
 BakeConfig bake_config_from_options(BakeCommandOptions& opt) {
   BakeConfig config = opt.config_file.empty() ? BakeConfig{} : load_bake_config(opt.config_file);
   if (!opt.store.empty()) config.store = opt.store;
-  if (!opt.up.empty()) config.up = opt.up;
+  if (!opt.up.empty()) config.up = opt.up, config.up_given = true;
   if (!opt.regions.empty()) {
     config.regions.clear();
     for (const auto& text : opt.regions) {

@@ -11,6 +11,7 @@
 #include <memory>
 #include <thread>
 
+#include "pipeline/cell_grid.h"
 #include "pipeline/cell_job.h"
 #include "runner/progress.h"
 #include "runner/shards.h"
@@ -31,6 +32,9 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
   if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", threads > 1 ? "1" : "2", 1);
 
   GeometryStore store(config.store);
+  const std::string up_note = resolve_up_axis(config, store.summary().up, store.summary().up_source);
+  if (!up_note.empty()) std::fprintf(stderr, "%s\n", up_note.c_str());  // even with --quiet: it changes the bake
+  check_regions_meet_model(config.regions, store.model_bounds(), config.cell_size);
   const std::uint64_t model_triangles = store.summary().triangles;
   config.near_budget = effective_near_budget(config, model_triangles);
   if (model_triangles <= config.near_budget && !options.quiet)

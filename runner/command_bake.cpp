@@ -7,6 +7,7 @@
 #include "runner/bake_command_options.h"
 #include "runner/bake_runner.h"
 #include "runner/commands.h"
+#include "runner/interrupt.h"
 
 namespace cellbake {
 
@@ -24,6 +25,7 @@ void add_bake_command(CLI::App& app) {
   add_bake_options(*cmd, *opt);
   cmd->callback([opt] {
     const BakeConfig config = bake_config_from_options(*opt);
+    exit_on_interrupt("interrupted — rerun the same command to resume");
     const BakeSummary s = run_bake(config, opt->run);
     print_bake_summary(s, config);
     if (s.cells_failed > 0) throw std::runtime_error(std::to_string(s.cells_failed) + " cell(s) failed; see messages above");

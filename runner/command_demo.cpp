@@ -54,7 +54,9 @@ void add_demo_command(CLI::App& app) {
       std::printf("[demo] generating plant (%llu triangles) -> %s\n", (unsigned long long)opt->triangles, ply.c_str());
       const SceneSummary s = generate_scene_to_ply(sp, ply);
       std::printf("[demo] %llu triangles; ingesting -> %s\n", (unsigned long long)s.triangles, store.c_str());
-      const IngestReport r = ingest_models({ply}, store, IngestParams{}, tbb_parallel_for(), ingest_progress());
+      IngestParams ingest;
+      ingest.up = "z";  // the generators build z-up scenes
+      const IngestReport r = ingest_models({ply}, store, ingest, tbb_parallel_for(), ingest_progress());
       print_ingest_summary(r, store.string());
     } else {
       std::printf("[demo] reusing geometry store %s\n", store.c_str());

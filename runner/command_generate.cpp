@@ -45,6 +45,7 @@ void add_generate_command(CLI::App& app) {
                 s.bounds.lo.y, s.bounds.lo.z, s.bounds.hi.x, s.bounds.hi.y, s.bounds.hi.z, opt->out.c_str(), secs);
     if (!opt->store.empty()) {
       IngestParams ip;
+      ip.up = "z";  // the generators build z-up scenes
       const IngestReport r = ingest_models({opt->out}, opt->store, ip, tbb_parallel_for(), ingest_progress());
       print_ingest_summary(r, opt->store);
     }

@@ -17,6 +17,7 @@ void add_ingest_command(CLI::App& app) {
     std::string units = "m";
     int max_texture_size = 2048;
     bool allow_outside_paths = false;
+    std::string up;
   };
   auto opt = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
@@ -35,6 +36,10 @@ void add_ingest_command(CLI::App& app) {
   cmd->add_flag("--allow-outside-paths", opt->allow_outside_paths,
                 "Read files the models name (mtllib, map_Kd, glTF buffers and images) outside the model's folder; "
                 "by default such references are skipped with a warning");
+  cmd->add_option("--up", opt->up,
+                  "The model's up axis, recorded in the store for bake: z or y (default: what the format says: "
+                  "glTF, IFC and COLLADA y, FBX its UpAxis; OBJ/PLY/OFF/STL record none and bake assumes z)")
+      ->check(CLI::IsMember({"z", "y"}));
   cmd->callback([opt] {
     std::vector<std::filesystem::path> models(opt->models.begin(), opt->models.end());
     IngestParams params;
@@ -42,6 +47,7 @@ void add_ingest_command(CLI::App& app) {
     params.units = opt->units;
     params.max_texture_size = opt->max_texture_size;
     params.allow_outside_paths = opt->allow_outside_paths;
+    params.up = opt->up;
     if (opt->translate.size() == 3) params.translate = {opt->translate[0], opt->translate[1], opt->translate[2]};
     const IngestReport r = ingest_models(models, opt->store, params, tbb_parallel_for(), ingest_progress());
     print_ingest_summary(r, opt->store);

@@ -1,7 +1,9 @@
 // `cellbake render DB --eye X,Y,Z --look X,Y,Z [--fov DEG] [--size WxH]
 //  [--mode impostor|truth|diff] [--cell ID] --out FILE.png [--json] [--path FILE]`:
 // headless rendering of a view cell's impostor, the ground truth, or their
-// false-colour difference with error metrics (docs/viewer.md).
+// false-colour difference with error metrics (docs/viewer.md). Given a
+// geometry store instead, it renders the model's ground truth (a look before
+// baking), by default from outside its bounds looking at its centre.
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -10,6 +12,7 @@
 #include <fstream>
 
 #include "runner/commands.h"
+#include "storage/database_kind.h"
 #include "viewer/camera_path.h"
 #include "viewer/sample_selection.h"
 #include "viewer/png_file.h"
@@ -70,29 +73,70 @@ std::string csv_number(double v) {
   return buf;
 }
 
+struct Options {
+  std::string database, eye, look, size = "512x512", mode = "impostor", out, path, store;
+  double fov = 60, near = 0.05;
+  std::int64_t cell = 0;
+  bool json = false;
+  std::optional<std::uint64_t> far_budget;
+  int max_samples = 0;
+};
+
+// `render STORE.db`: the ground truth of a geometry store, one view (eye and
+// look default to default_overview's), written to --out.
+void render_store(const Options& opt, bool mode_given) {
+  if (mode_given && opt.mode != "truth")
+    throw std::invalid_argument(opt.database + " is a geometry store (not baked): only --mode truth can be drawn");
+  if (!opt.path.empty()) throw std::invalid_argument("--path needs a cell database; " + opt.database + " is a geometry store");
+  ViewSession session(StoreOnly{}, opt.database);
+  ViewRequest request;
+  default_overview(session.store().model_bounds(), session.up(), request);
+  if (!opt.eye.empty()) request.eye = parse_point(opt.eye, "--eye");
+  if (!opt.look.empty()) request.look = parse_point(opt.look, "--look");
+  const auto [width, height] = parse_image_size(opt.size);
+  request.width = width, request.height = height;
+  request.fov_y_deg = opt.fov;
+  request.near_plane = opt.near;
+  const ViewResult r = session.render(request, ViewMode::truth, stderr);
+  write_result_image(r, ViewMode::truth, opt.out);
+  if (opt.json) {
+    nlohmann::json j = result_json(r);
+    j["eye"] = {request.eye.x, request.eye.y, request.eye.z};
+    j["look"] = {request.look.x, request.look.y, request.look.z};
+    std::printf("%s\n", j.dump(2).c_str());
+  } else {
+    std::printf("%s: ground truth of geometry store %s from eye %.6g,%.6g,%.6g looking at %.6g,%.6g,%.6g\n",
+                opt.out.c_str(), opt.database.c_str(), request.eye.x, request.eye.y, request.eye.z, request.look.x,
+                request.look.y, request.look.z);
+    std::printf("  truth:    %llu triangles, %.2f ms\n", (unsigned long long)r.triangles_truth,
+                r.truth_stats.milliseconds);
+  }
+}
+
 }  // namespace
 
 void add_render_command(CLI::App& app) {
-  struct Options {
-    std::string database, eye, look, size = "512x512", mode = "impostor", out, path, store;
-    double fov = 60, near = 0.05;
-    std::int64_t cell = 0;
-    bool json = false;
-    std::optional<std::uint64_t> far_budget;
-    int max_samples = 0;
-  };
   auto opt = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
       "render", "Render a view headless: a cell's impostor, the ground truth, or their difference with metrics");
-  cmd->add_option("database", opt->database, "Cell database")->required();
-  cmd->add_option("--eye", opt->eye, "Eye position X,Y,Z (model units)");
-  cmd->add_option("--look", opt->look, "Point looked at X,Y,Z");
-  cmd->add_option("--fov", opt->fov, "Vertical field of view, degrees")->check(CLI::Range(1.0, 179.0));
-  cmd->add_option("--size", opt->size, "Image size WxH");
-  cmd->add_option("--mode", opt->mode, "impostor | truth | diff (false-colour error image + metrics)")
-      ->check(CLI::IsMember({"impostor", "truth", "diff"}));
+  cmd->add_option("database", opt->database,
+                  "Cell database, or a geometry store (ground truth only: a look at the model before baking)")
+      ->required();
+  cmd->add_option("--eye", opt->eye,
+                  "Eye position X,Y,Z (model units); on a geometry store default: outside the model's bounds");
+  cmd->add_option("--look", opt->look, "Point looked at X,Y,Z; on a geometry store default: the model's centre");
+  cmd->add_option("--fov", opt->fov, "Vertical field of view, degrees")
+      ->check(CLI::Range(1.0, 179.0))
+      ->capture_default_str();
+  cmd->add_option("--size", opt->size, "Image size WxH")->capture_default_str();
+  cmd->add_option("--mode", opt->mode,
+                  "impostor | truth | diff (false-colour error image + metrics); a geometry store: truth only")
+      ->check(CLI::IsMember({"impostor", "truth", "diff"}))
+      ->capture_default_str();
   cmd->add_option("--cell", opt->cell, "Use this cell's impostor instead of the eye's cell");
-  cmd->add_option("--near", opt->near, "Near plane distance, model units")->check(CLI::PositiveNumber);
+  cmd->add_option("--near", opt->near, "Near plane distance, model units")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_option("--store", opt->store, "Geometry store (default: the one the database names)");
   cmd->add_option("--out", opt->out, "Output PNG (with --path: the base name of OUT_0000.png ... and OUT.csv)")
       ->required();
@@ -105,7 +149,11 @@ void add_render_command(CLI::App& app) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--path", opt->path, "Camera path file: one view per line, \"ex ey ez lx ly lz\"");
-  cmd->callback([opt] {
+  cmd->callback([cmd, opt] {
+    if (database_kind(opt->database) == DatabaseKind::geometry_store) {
+      render_store(*opt, cmd->count("--mode") > 0);
+      return;
+    }
     std::vector<PathView> views;
     if (!opt->path.empty()) {
       views = read_camera_path(opt->path);

@@ -2,7 +2,8 @@
 // and pending of the configuration's cells, totals, time per stage and a
 // content hash over every finished cell. --check recomputes each cell's
 // content hash from its rows and decodes every blob; --repair marks the
-// damaged cells pending so the next bake redoes them.
+// damaged cells pending so the next bake redoes them. A geometry store given
+// instead prints what it holds (runner/store_status.h).
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -10,10 +11,12 @@
 #include <stdexcept>
 
 #include "runner/commands.h"
+#include "runner/store_status.h"
 #include "stages/hashing.h"
 #include "storage/cell_check.h"
 #include "storage/cell_db.h"
 #include "storage/cell_db_lock.h"
+#include "storage/database_kind.h"
 #include "storage/meta_values.h"
 
 namespace cellbake {
@@ -46,14 +49,34 @@ void add_status_command(CLI::App& app) {
     bool json = false, check = false, repair = false;
   };
   auto opt = std::make_shared<Options>();
-  CLI::App* cmd = app.add_subcommand("status", "Show the state of cell databases (one, or the shards of a bake)");
-  cmd->add_option("databases", opt->dbs, "Cell database(s); several shards are summed")->required();
+  CLI::App* cmd = app.add_subcommand(
+      "status", "Show the state of cell databases (one, or the shards of a bake), or what a geometry store holds");
+  cmd->add_option("databases", opt->dbs,
+                  "Cell database(s), several shards are summed; or geometry store(s): bounds, size, triangles, "
+                  "up axis, sources")
+      ->required();
   cmd->add_flag("--json", opt->json, "Machine-readable output");
   cmd->add_flag("--check", opt->check,
                 "Recompute every cell's content hash from its rows and decode every blob; list damaged cells "
                 "(exit 1 when there are any)");
   cmd->add_flag("--repair", opt->repair, "As --check, then mark the damaged cells pending (the next bake redoes them)");
   cmd->callback([opt] {
+    // Geometry stores: their summary, and nothing else (a cell database's
+    // counts make no sense for them).
+    std::size_t stores = 0;
+    for (const auto& path : opt->dbs) stores += database_kind(path) == DatabaseKind::geometry_store;
+    if (stores > 0) {
+      if (stores != opt->dbs.size())
+        throw std::invalid_argument("give either geometry stores or cell databases, not both");
+      nlohmann::json list = nlohmann::json::array();
+      for (const auto& path : opt->dbs) {
+        const GeometryStore store(path);
+        if (opt->json) list.push_back(store_status_json(store));
+        else print_store_status(store, stdout);
+      }
+      if (opt->json) std::printf("%s\n", (list.size() == 1 ? list[0] : list).dump(2).c_str());
+      return;
+    }
     std::uint64_t bytes = 0, far = 0, samples = 0, delta_covered = 0, delta_removed = 0;
     std::uint64_t far_geometry = 0, geometry_tiles = 0, face_tiles = 0, replaced = 0;
     CellDbBytes by_kind;

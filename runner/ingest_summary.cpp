@@ -34,6 +34,10 @@ void print_ingest_summary(const IngestReport& r, const std::string& store) {
               r.bounds.hi.y, r.bounds.hi.z);
   std::printf("  time: read %.2f s, chunk %.2f s, write %.2f s, total %.2f s (%.2f M triangles/s)\n", r.read_seconds,
               r.chunk_seconds, r.write_seconds, total, total > 0 ? r.triangles_read / total / 1e6 : 0.0);
+  if (!r.up.empty())
+    std::printf("  up axis: %s (%s), recorded in the store\n", r.up.c_str(), r.up_source.c_str());
+  else
+    std::printf("  up axis: not recorded: %s; bake assumes z (ingest --up y|z records one)\n", r.up_source.c_str());
   for (const std::string& note : r.vertex_colour_notes) std::printf("  %s\n", note.c_str());
   if (r.textures > 0)
     std::printf("  %llu textures stored (%.1f MB decoded)\n", (unsigned long long)r.textures, r.texture_bytes / 1e6);

@@ -3,12 +3,36 @@
 
 #include <cstdio>
 #include <exception>
+#include <functional>
+#include <string>
+#include <vector>
 
 #include "runner/commands.h"
 
+namespace {
+
+// "generate, ingest, ..." in registration order.
+std::vector<CLI::App*> commands(CLI::App& app) {
+  return app.get_subcommands(std::function<bool(CLI::App*)>([](CLI::App*) { return true; }));
+}
+
+std::string command_list(CLI::App& app) {
+  std::string list;
+  for (const CLI::App* sub : commands(app)) list += (list.empty() ? "" : ", ") + sub->get_name();
+  return list;
+}
+
+bool is_command(CLI::App& app, const std::string& word) {
+  for (CLI::App* sub : commands(app))
+    if (sub->check_name(word)) return true;
+  return false;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   CLI::App app{"cellbake: bake huge 3D models into a view-cell database (near field + textured depth meshes)"};
-  app.set_version_flag("--version", std::string("cellbake ") + CELLBAKE_VERSION);
+  app.set_version_flag("-V,--version", std::string("cellbake ") + CELLBAKE_VERSION);
   app.require_subcommand(1);
   cellbake::add_generate_command(app);
   cellbake::add_ingest_command(app);
@@ -20,8 +44,22 @@ int main(int argc, char** argv) {
   cellbake::add_render_command(app);
   cellbake::add_view_command(app);
   cellbake::add_verify_command(app);
+  // An unknown first word is a mistyped command: say so and list the commands
+  // (CLI11 would answer "A subcommand is required", exit 106). Exit 2, like a usage error.
+  if (argc > 1 && argv[1][0] != '-' && !is_command(app, argv[1])) {
+    std::fprintf(stderr, "cellbake: unknown command '%s'\ncommands: %s\n(`cellbake --help` describes them)\n", argv[1],
+                 command_list(app).c_str());
+    return 2;
+  }
   try {
     app.parse(argc, argv);
+  } catch (const CLI::RequiredError& e) {
+    if (app.get_subcommands().empty() && std::string(e.what()).find("subcommand") != std::string::npos) {
+      std::fprintf(stderr, "cellbake: a command is needed: %s\n(`cellbake --help` describes them)\n",
+                   command_list(app).c_str());
+      return 2;
+    }
+    return app.exit(e);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const std::exception& e) {

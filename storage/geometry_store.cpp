@@ -210,6 +210,8 @@ void GeometryStoreWriter::finish(const StoreSummary& sum) {
   put("skipped_duplicate", std::to_string(sum.skipped_duplicate));
   put("units", sum.units);
   put("content_hash", sum.content_hash);
+  if (!sum.up.empty()) put("up", sum.up);
+  if (!sum.up.empty() && !sum.up_source.empty()) put("up_source", sum.up_source);
   db_->exec("COMMIT");
   insert_chunk_.reset();
   insert_rtree_.reset();
@@ -271,6 +273,7 @@ GeometryStore::GeometryStore(const std::filesystem::path& path, std::size_t cach
   summary_.skipped_duplicate = std::stoull(meta["skipped_duplicate"]);
   summary_.units = meta["units"];
   summary_.content_hash = meta["content_hash"];
+  if (meta["up"] == "z" || meta["up"] == "y") summary_.up = meta["up"], summary_.up_source = meta["up_source"];
   materials_ = read_materials(c->db);
   release(std::move(c));
 }
@@ -438,6 +441,18 @@ std::vector<SourceFileRecord> GeometryStore::sources() const {
 }
 
 std::vector<Material> GeometryStore::materials() const { return materials_; }
+
+std::uint64_t GeometryStore::texture_count() const {
+  if (schema_version_ < 2) return 0;
+  auto c = acquire();
+  std::uint64_t n = 0;
+  {
+    SqliteStatement s(c->db, "SELECT count(*) FROM textures");
+    if (s.step()) n = std::uint64_t(s.column_int(0));
+  }
+  release(std::move(c));
+  return n;
+}
 
 std::vector<ChunkRef> GeometryStore::all_chunks() const {
   auto c = acquire();

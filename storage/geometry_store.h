@@ -37,6 +37,11 @@ struct StoreSummary {
   std::uint64_t skipped_duplicate = 0;
   std::string units = "m";
   std::string content_hash;  // hash over sources and ingest parameters, hex
+  // The model's up axis as ingest recorded it: "z", "y", or "" when unknown
+  // (meta `up`, absent then; not part of content_hash), and what said so
+  // (meta `up_source`, e.g. "glTF: Y-up by specification", "--up").
+  std::string up;
+  std::string up_source;
 };
 
 // Writes a new store into a temporary file next to `final_path` and renames it
@@ -93,6 +98,8 @@ class GeometryStore : public ChunkSource {
   // 1 or 2 (docs/database.md).
   int schema_version() const { return schema_version_; }
   std::vector<ChunkRef> all_chunks() const;
+  // How many textures the store holds (0 for schema 1).
+  std::uint64_t texture_count() const;
   const std::filesystem::path& path() const { return path_; }
 
  private:

@@ -296,8 +296,12 @@ TEST(VerifyRun, TinyBakeReportIsCompleteAndResumable) {
   EXPECT_EQ(s.views_rendered, 4u);
   ASSERT_TRUE(std::filesystem::exists(report / "report.html"));
   const std::string html = read_text(report / "report.html");
-  EXPECT_NE(html.find("cell_map.svg"), std::string::npos);
-  EXPECT_NE(html.find("views/cell_"), std::string::npos);
+  // Self-contained: the cell map and plots inline (tooltips work), triptychs as data: URIs.
+  EXPECT_NE(html.find("<!-- cell_map.svg -->\n<svg"), std::string::npos);
+  EXPECT_EQ(count_of(html, "<svg"), 6u);  // cell map + 5 plots
+  EXPECT_EQ(html.find("<img src=\"plots/"), std::string::npos);
+  EXPECT_NE(html.find("<img src=\"data:image/png;base64,iVBORw0KGgo"), std::string::npos);
+  EXPECT_NE(html.find("views/cell_"), std::string::npos);  // named in the alt text
 
   const nlohmann::json j = nlohmann::json::parse(read_text(report / "report.json"));
   ASSERT_EQ(j["cells"].size(), 2u);

@@ -223,14 +223,18 @@ std::string ramp_color(double t) {
 std::string cell_map_svg(const CellMap& map) {
   double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
   double v_lo = x0, v_hi = -x0;
+  const double perfect = map.higher_is_better ? std::numeric_limits<double>::infinity()
+                                              : -std::numeric_limits<double>::infinity();
   const CellMapEntry* worst = nullptr;
   for (const auto& c : map.cells) {
     x0 = std::min(x0, c.x0), x1 = std::max(x1, c.x1), y0 = std::min(y0, c.y0), y1 = std::max(y1, c.y1);
-    if (!std::isfinite(c.value)) continue;
-    v_lo = std::min(v_lo, c.value), v_hi = std::max(v_hi, c.value);
+    if (std::isnan(c.value) || c.value == perfect) continue;
+    if (std::isfinite(c.value)) v_lo = std::min(v_lo, c.value), v_hi = std::max(v_hi, c.value);
     if (!worst || (map.higher_is_better ? c.value < worst->value : c.value > worst->value)) worst = &c;
   }
   if (!(x1 > x0) || !(y1 > y0)) x0 = 0, x1 = 1, y0 = 0, y1 = 1;
+  const bool absolute = std::isfinite(map.scale_worst) && std::isfinite(map.scale_best) &&
+                        map.scale_worst != map.scale_best;
   const double margin = 20, top = 56, legend_h = 60;
   const double plan_w = map.width - 2 * margin;
   const double scale = plan_w / (x1 - x0);
@@ -239,11 +243,16 @@ std::string cell_map_svg(const CellMap& map) {
   // Plan y grows upwards, SVG y downwards.
   auto sx = [&](double x) { return margin + (x - x0) * scale; };
   auto sy = [&](double y) { return top + (y1 - y) * scale; };
+  // 0 = best, 1 = worst.
   auto t_of = [&](double v) {
+    if (v == perfect) return 0.0;
+    if (!std::isfinite(v)) return 1.0;
+    if (absolute) return std::clamp((v - map.scale_best) / (map.scale_worst - map.scale_best), 0.0, 1.0);
     if (!(v_hi > v_lo)) return 0.0;
     const double t = (v - v_lo) / (v_hi - v_lo);
     return map.higher_is_better ? 1 - t : t;
   };
+  const std::string perfect_fill = "#1a7f3c", no_data_fill = "#bbbbbb";
 
   std::ostringstream o;
   o << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << map.width << "\" height=\"" << num(height)
@@ -251,44 +260,57 @@ std::string cell_map_svg(const CellMap& map) {
   o << "<rect x=\"0\" y=\"0\" width=\"" << map.width << "\" height=\"" << num(height) << "\" fill=\"white\"/>\n";
   o << "<text x=\"" << num(map.width / 2.0) << "\" y=\"20\" text-anchor=\"middle\" font-size=\"15\" font-weight=\"bold\">"
     << escape_xml(map.title) << "</text>\n";
-  std::string subtitle = "no cell has a value";
+  std::string subtitle = "no cell has a finite value";
   if (worst) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.4g", worst->value);
     subtitle = "worst: cell " + std::to_string(worst->id) + " (" + map.value_label + " " + buf +
-               "), outlined in black; plan view, grey = no data";
+               "), outlined in black; plan view";
   }
   o << "<text x=\"" << num(map.width / 2.0) << "\" y=\"40\" text-anchor=\"middle\">" << escape_xml(subtitle)
     << "</text>\n";
   const double font = std::clamp(scale * 0.3, 6.0, 12.0);
   for (const auto& c : map.cells) {
-    const std::string fill = std::isfinite(c.value) ? ramp_color(t_of(c.value)) : "#bbbbbb";
-    char value_text[32] = "no data";
-    if (std::isfinite(c.value)) std::snprintf(value_text, sizeof value_text, "%.4g", c.value);
+    std::string fill = ramp_color(t_of(c.value));
+    char value_text[64];
+    std::snprintf(value_text, sizeof value_text, "%.4g", c.value);
+    if (std::isnan(c.value)) fill = no_data_fill, std::snprintf(value_text, sizeof value_text, "no data");
+    if (c.value == perfect) fill = perfect_fill, std::snprintf(value_text, sizeof value_text, "perfect (%s)", c.value > 0 ? "inf" : "-inf");
     o << "<rect class=\"cell\" x=\"" << num(sx(c.x0)) << "\" y=\"" << num(sy(c.y1)) << "\" width=\""
       << num((c.x1 - c.x0) * scale) << "\" height=\"" << num((c.y1 - c.y0) * scale) << "\" fill=\"" << fill
       << "\" stroke=\"white\" stroke-width=\"1\"><title>cell " << c.id << ": " << escape_xml(map.value_label) << " "
       << value_text << "</title></rect>\n";
     o << "<text x=\"" << num(sx(0.5 * (c.x0 + c.x1))) << "\" y=\"" << num(sy(0.5 * (c.y0 + c.y1)) + font / 3)
-      << "\" text-anchor=\"middle\" font-size=\"" << num(font) << "\">" << c.id << "</text>\n";
+      << "\" text-anchor=\"middle\" font-size=\"" << num(font) << "\" pointer-events=\"none\">" << c.id << "</text>\n";
   }
   if (worst)
     o << "<rect x=\"" << num(sx(worst->x0)) << "\" y=\"" << num(sy(worst->y1)) << "\" width=\""
       << num((worst->x1 - worst->x0) * scale) << "\" height=\"" << num((worst->y1 - worst->y0) * scale)
       << "\" fill=\"none\" stroke=\"black\" stroke-width=\"3\"/>\n";
-  // Legend: a colour bar from best to worst with the value range.
+  // Legend: a colour bar from worst (left) to best (right) with its end values
+  // (the absolute thresholds, else the value range), then "perfect" and "no data".
   const double ly = top + plan_h + 18, lx = margin, lw = std::min(300.0, plan_w);
   for (int i = 0; i < 20; ++i)
     o << "<rect x=\"" << num(lx + lw * i / 20) << "\" y=\"" << num(ly) << "\" width=\"" << num(lw / 20 + 0.5)
-      << "\" height=\"12\" fill=\"" << ramp_color(i / 19.0) << "\"/>";
+      << "\" height=\"12\" fill=\"" << ramp_color(1 - i / 19.0) << "\"/>";
   o << "\n";
-  const double best = map.higher_is_better ? v_hi : v_lo, worst_v = map.higher_is_better ? v_lo : v_hi;
-  o << "<text x=\"" << num(lx) << "\" y=\"" << num(ly + 26) << "\">best "
-    << (worst ? escape_xml(format_tick(best)) : std::string("-")) << "</text>\n";
-  o << "<text x=\"" << num(lx + lw) << "\" y=\"" << num(ly + 26) << "\" text-anchor=\"end\">worst "
-    << (worst ? escape_xml(format_tick(worst_v)) : std::string("-")) << "</text>\n";
-  o << "<text x=\"" << num(lx + lw + 10) << "\" y=\"" << num(ly + 10) << "\">" << escape_xml(map.value_label)
+  const bool have_range = absolute || v_lo <= v_hi;
+  const double best = absolute ? map.scale_best : map.higher_is_better ? v_hi : v_lo;
+  const double worst_v = absolute ? map.scale_worst : map.higher_is_better ? v_lo : v_hi;
+  const std::string worse = map.higher_is_better ? "\u2264 " : "\u2265 ", better = map.higher_is_better ? "\u2265 " : "\u2264 ";
+  o << "<text x=\"" << num(lx) << "\" y=\"" << num(ly + 26) << "\">"
+    << (have_range ? escape_xml((absolute ? worse : "worst ") + format_tick(worst_v) + map.scale_unit) : std::string("-"))
     << "</text>\n";
+  o << "<text x=\"" << num(lx + lw) << "\" y=\"" << num(ly + 26) << "\" text-anchor=\"end\">"
+    << (have_range ? escape_xml((absolute ? better : "best ") + format_tick(best) + map.scale_unit) : std::string("-"))
+    << "</text>\n";
+  const double sw = lx + lw + 12;
+  o << "<rect x=\"" << num(sw) << "\" y=\"" << num(ly) << "\" width=\"12\" height=\"12\" fill=\"" << perfect_fill
+    << "\"/><text x=\"" << num(sw + 16) << "\" y=\"" << num(ly + 10) << "\">perfect</text>\n";
+  o << "<rect x=\"" << num(sw + 70) << "\" y=\"" << num(ly) << "\" width=\"12\" height=\"12\" fill=\"" << no_data_fill
+    << "\"/><text x=\"" << num(sw + 86) << "\" y=\"" << num(ly + 10) << "\">no data</text>\n";
+  o << "<text x=\"" << num(lx) << "\" y=\"" << num(ly + 44) << "\">" << escape_xml(map.value_label)
+    << (absolute ? " (fixed scale)" : " (scaled to the values)") << "</text>\n";
   o << "</svg>\n";
   return o.str();
 }

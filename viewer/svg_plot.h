@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -60,7 +61,10 @@ ScatterPlot scatter_plot_from_csv(const std::string& csv, const std::string& x_c
 struct CellMapEntry {
   std::int64_t id = 0;
   double x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // footprint in plan (model units), x1 > x0, y1 > y0
-  double value = 0;                         // non-finite: drawn grey ("no data")
+  // NaN: drawn grey ("no data"); the best infinity (+inf when higher is
+  // better: an impostor equal to the truth, PSNR = inf) is "perfect", drawn
+  // in the best colour; the other infinity counts as the worst value.
+  double value = 0;
 };
 
 struct CellMap {
@@ -68,12 +72,21 @@ struct CellMap {
   bool higher_is_better = true;  // colour ramp: the worst end is red
   int width = 720;               // pixels; the height follows the footprint's aspect
   std::vector<CellMapEntry> cells;
+  // An absolute colour scale: values at or past `scale_worst` are red, at or
+  // past `scale_best` green, linear in between (so a uniformly mediocre bake
+  // looks mediocre). NaN (the default) scales to the values' own range.
+  double scale_worst = std::numeric_limits<double>::quiet_NaN();
+  double scale_best = std::numeric_limits<double>::quiet_NaN();
+  std::string scale_unit;  // appended to the legend's numbers, e.g. " dB"
 };
 
 // A top-down map: one <rect> per cell (class "cell"), coloured from green
-// (best value) through yellow to red (worst value), labelled with its id, the
+// (best value) through yellow to red (worst value), on the map's absolute
+// scale when it has one, labelled with its id, a <title> tooltip naming the
+// cell and its value ("perfect" for the best infinity, "no data" for NaN), the
 // worst cell outlined in black and named in the subtitle, plus a colour-bar
-// legend with the value range. Cells are drawn in the given order (later ones on
+// legend (the scale's thresholds, or the value range) with "perfect" and
+// "no data" swatches. Cells are drawn in the given order (later ones on
 // top where footprints overlap). Deterministic.
 std::string cell_map_svg(const CellMap& map);
 

@@ -63,6 +63,41 @@ void write_svg(const std::filesystem::path& file, const std::string& svg, Verify
   files.plots.push_back(file);
 }
 
+// Standard base64 (RFC 4648, with padding), for data: URIs.
+std::string base64(const std::string& bytes) {
+  static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  std::size_t i = 0;
+  for (; i + 2 < bytes.size(); i += 3) {
+    const unsigned v = (unsigned char)bytes[i] << 16 | (unsigned char)bytes[i + 1] << 8 | (unsigned char)bytes[i + 2];
+    out += {k[v >> 18], k[(v >> 12) & 63], k[(v >> 6) & 63], k[v & 63]};
+  }
+  if (i + 1 == bytes.size()) {
+    const unsigned v = (unsigned char)bytes[i] << 16;
+    out += {k[v >> 18], k[(v >> 12) & 63], '=', '='};
+  } else if (i + 2 == bytes.size()) {
+    const unsigned v = (unsigned char)bytes[i] << 16 | (unsigned char)bytes[i + 1] << 8;
+    out += {k[v >> 18], k[(v >> 12) & 63], k[(v >> 6) & 63], '='};
+  }
+  return out;
+}
+
+// The file's bytes as a data: URI ("" when it cannot be read).
+std::string png_data_uri(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return "";
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return "data:image/png;base64," + base64(bytes.str());
+}
+
+// An SVG document for inlining into HTML: from its <svg element on (no XML prolog).
+std::string inline_svg(const std::string& svg) {
+  const auto at = svg.find("<svg");
+  return at == std::string::npos ? svg : svg.substr(at);
+}
+
 const char* kind_color(VerifyViewKind k) {
   switch (k) {
     case VerifyViewKind::centre: return "#1f77b4";
@@ -364,6 +399,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
   const std::string up = input.params.value("up", std::string("z"));
   const int a = up == "y" ? 2 : 0, b = up == "y" ? 0 : 1;  // y up: plan (z, x); z up: plan (x, y)
   CellMap map{"Cell map: median PSNR per cell", "median PSNR (dB)", true, 720, {}};
+  map.scale_worst = kVerifyPsnrRed, map.scale_best = kVerifyPsnrGreen, map.scale_unit = " dB";
   std::vector<const VerifyCellResult*> order;
   for (const auto& c : cells) order.push_back(&c);
   // Worst cells last, so the worst of a stack of layers shows on top.
@@ -375,7 +411,8 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
     map.cells.push_back({c->id, c->bounds.lo[a], c->bounds.lo[b], c->bounds.hi[a], c->bounds.hi[b],
                          cell_median(*c, &VerifyViewResult::psnr_db)});
   files.cell_map = dir / "cell_map.svg";
-  write_text_file_atomically(files.cell_map, cell_map_svg(map));
+  const std::string cell_map = cell_map_svg(map);
+  write_text_file_atomically(files.cell_map, cell_map);
 
   // report.html
   std::ostringstream h;
@@ -384,7 +421,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
        "body{font-family:sans-serif;margin:2em;color:#222;max-width:1400px}\n"
        "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}\n"
        "th{background:#f0f0f0}td.l,th.l{text-align:left}tr.bad td{background:#fde2e2}\n"
-       ".plots img{margin:4px;border:1px solid #ddd}.trip img{max-width:100%;border:1px solid #ddd}\n"
+       ".plots svg{margin:4px;border:1px solid #ddd}.trip img{max-width:100%;border:1px solid #ddd}\n"
        "code{background:#f4f4f4;padding:1px 4px}.note{color:#666;font-size:90%}\n"
        "</style></head><body>\n";
   h << "<h1>cellbake verify</h1>\n<p>Database <code>" << escape_xml(input.database) << "</code>; parameters <code>"
@@ -421,11 +458,20 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
     << fmt(summary["triangles_truth_median"].is_null() ? kNaN : summary["triangles_truth_median"].get<double>(), "%.0f")
     << ".</p>\n";
 
-  h << "<h2>Cell map</h2>\n<img src=\"cell_map.svg\" alt=\"cell map\">\n";
+  // Everything inline: the report is one file that can be copied or mailed
+  // alone; inline SVG keeps the tooltips (<title>) that <img> would disable.
+  h << "<h2>Cell map</h2>\n<p class=\"note\">Fixed colour scale: median PSNR &le; " << kVerifyPsnrRed
+    << " dB red, " << 0.5 * (kVerifyPsnrRed + kVerifyPsnrGreen) << " dB yellow, &ge; " << kVerifyPsnrGreen
+    << " dB green; perfect cells (impostor = truth, PSNR = &infin;) dark green, labelled perfect; grey: no "
+       "data. Hover a cell for its id and value.</p>\n<div class=\"map\"><!-- cell_map.svg -->\n"
+    << inline_svg(cell_map) << "</div>\n";
   h << "<h2>Plots</h2>\n<div class=\"plots\">\n";
-  for (const auto& p : files.plots)
-    h << "<img src=\"plots/" << escape_xml(p.filename().string()) << "\" alt=\"" << escape_xml(p.stem().string())
-      << "\">\n";
+  for (const auto& p : files.plots) {
+    std::ifstream in(p, std::ios::binary);
+    std::ostringstream svg;
+    svg << in.rdbuf();
+    h << "<!-- plots/" << escape_xml(p.filename().string()) << " -->\n" << inline_svg(svg.str()) << "\n";
+  }
   h << "</div>\n<p class=\"note\">Views whose impostor equals the truth exactly (PSNR = &infin;) are not drawn in "
        "PSNR plots.</p>\n";
 
@@ -448,7 +494,8 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
       << fmt(v.eye.x, "%.3f") << ", " << fmt(v.eye.y, "%.3f") << ", " << fmt(v.eye.z, "%.3f") << "), look ("
       << fmt(v.look.x, "%.3f") << ", " << fmt(v.look.y, "%.3f") << ", " << fmt(v.look.z, "%.3f")
       << "), " << fmt(v.distance_from_sample, "%.3f") << " from the sample point</p>\n<img src=\""
-      << escape_xml(c->triptych) << "\" alt=\"cell " << c->id << "\"></div>\n";
+      << png_data_uri(dir / c->triptych) << "\" alt=\"cell " << c->id << " (" << escape_xml(c->triptych)
+      << ")\"></div>\n";
   }
 
   h << "<h2>Cells</h2>\n<table><tr><th>cell</th><th>views</th><th>median PSNR</th><th>min PSNR</th><th>median SSIM</th>"

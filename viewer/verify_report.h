@@ -109,6 +109,11 @@ struct VerifyReportInput {
   int worst_views = 6;     // triptychs shown (cells with the worst views)
 };
 
+// The report's absolute colour scale for a cell's median PSNR, dB: at or below
+// kVerifyPsnrRed red, at or above kVerifyPsnrGreen green, yellow half way;
+// PSNR = inf (impostor equal to the truth) is "perfect".
+inline constexpr double kVerifyPsnrRed = 20, kVerifyPsnrGreen = 40;
+
 struct VerifyReportFiles {
   std::filesystem::path html, json;
   std::vector<std::filesystem::path> plots;  // SVG files
@@ -119,8 +124,10 @@ struct VerifyReportFiles {
 // plots/*.svg (median PSNR per cell vs bake seconds, vs triangles drawn, vs
 // stored bytes; PSNR and hole fraction per view vs distance from the sample
 // point), cell_map.svg (cell footprints coloured by median PSNR) and
-// report.html (inline CSS; images by relative path inside `dir`). The
-// triptych PNGs named by the cells must already be in `dir`. Throws
+// report.html, self-contained (inline CSS, the cell map and plots as inline
+// SVG so their tooltips work, the triptych PNGs as data: URIs), so it can be
+// copied or mailed alone. The triptych PNGs named by the cells must already be
+// in `dir` (one that cannot be read is left out). Throws
 // std::runtime_error naming a file that cannot be written.
 VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const VerifyReportInput& input);
 

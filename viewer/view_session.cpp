@@ -2,6 +2,7 @@
 
 #include "viewer/verify_views.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <stdexcept>
 
@@ -30,14 +31,35 @@ ViewMode parse_view_mode(const std::string& text) {
 }
 
 ViewSession::ViewSession(const std::filesystem::path& database, const std::filesystem::path& store_override)
-    : db_(database, CellDb::Mode::read_only),
-      store_(std::make_unique<GeometryStore>(store_of(db_, store_override))),
-      index_(db_),
-      up_(up_axis(db_.meta("up").value_or("z"))),
-      far_budget_(far_budget_of_config_text(db_.meta("config").value_or("")).value_or(SampleSelectionParams{}.far_budget)),
+    : db_(std::make_unique<CellDb>(database, CellDb::Mode::read_only)),
+      store_(std::make_unique<GeometryStore>(store_of(*db_, store_override))),
+      index_(*db_),
+      up_(up_axis(db_->meta("up").value_or("z"))),
+      far_budget_(far_budget_of_config_text(db_->meta("config").value_or("")).value_or(SampleSelectionParams{}.far_budget)),
       drawer_(std::make_unique<SceneDrawer>(std::shared_ptr<GlContext>(create_headless_gl_context(1, 1)),
                                             *store_)) {
-  drawer_->set_shading(shading_lights(shading_of_config_text(db_.meta("config").value_or("")), up_));
+  drawer_->set_shading(shading_lights(shading_of_config_text(db_->meta("config").value_or("")), up_));
+}
+
+ViewSession::ViewSession(StoreOnly, const std::filesystem::path& store)
+    : store_(std::make_unique<GeometryStore>(store)),
+      up_(up_axis(store_->summary().up.empty() ? "z" : store_->summary().up)),
+      far_budget_(SampleSelectionParams{}.far_budget),
+      drawer_(std::make_unique<SceneDrawer>(std::shared_ptr<GlContext>(create_headless_gl_context(1, 1)),
+                                            *store_)) {
+  drawer_->set_shading(shading_lights(ShadingParams{}, up_));
+}
+
+void default_overview(const Box3d& bounds, const Vec3d& up, ViewRequest& request) {
+  const Vec3d centre = (bounds.lo + bounds.hi) * 0.5;
+  const double diagonal = std::max(length(bounds.hi - bounds.lo), 1e-3);
+  // Two horizontal axes: x, and whichever of y / z is not up.
+  const Vec3d a{1, 0, 0};
+  const Vec3d b = up.z != 0 ? Vec3d{0, -1, 0} : Vec3d{0, 0, 1};
+  Vec3d dir = a * 0.8 + b + up * 0.7;
+  dir = dir * (1.0 / length(dir));
+  request.look = centre;
+  request.eye = centre + dir * diagonal;
 }
 
 ViewSession::~ViewSession() = default;
@@ -49,7 +71,7 @@ const DecodedCell* ViewSession::load_cell(std::int64_t id, std::string& reason, 
     return nullptr;
   }
   try {
-    const auto row = db_.get_cell(id, true);
+    const auto row = db_->get_cell(id, true);
     if (!row) throw std::runtime_error("cell " + std::to_string(id) + " is not in the database");
     auto cell = std::make_shared<const DecodedCell>(decode_cell(*row));
     if (decoded_.size() >= kDecodedCellsKept) decoded_.clear();  // a path walks on; the next cells reload
@@ -63,6 +85,9 @@ const DecodedCell* ViewSession::load_cell(std::int64_t id, std::string& reason, 
 }
 
 ViewResult ViewSession::render(const ViewRequest& r, ViewMode mode, std::FILE* warn) {
+  if (!db_ && mode != ViewMode::truth)
+    throw std::invalid_argument("view: " + store_->path().string() +
+                                " is a geometry store (not baked): only the ground truth can be drawn (--mode truth)");
   const RenderCamera camera = look_at_camera(r.eye, r.look, up_, r.fov_y_deg, r.width, r.height, r.near_plane);
   ViewResult result;
   const CellEntry* entry = r.cell ? index_.find(*r.cell) : index_.nearest(r.eye);

@@ -2,7 +2,8 @@
 // eye, decodes its far field (falling back to ground truth, with a warning,
 // when the cell is missing, failed or corrupt), and renders impostor and/or
 // ground-truth frames on an offscreen context (OSMesa when the build has it,
-// else EGL: create_headless_gl_context).
+// else EGL: create_headless_gl_context). A session over a geometry store
+// alone (StoreOnly) draws ground truth only: a model looked at before baking.
 #pragma once
 
 #include <cstdint>
@@ -49,12 +50,20 @@ struct ViewResult {
   std::optional<ImageMetrics> metrics;   // diff mode
 };
 
+// Tag for ViewSession's store-only constructor.
+struct StoreOnly {};
+
 class ViewSession {
  public:
   // Opens `database` and the geometry store its meta `store` names (or
   // `store_override`). Throws std::runtime_error naming the file when either
   // cannot be opened or the meta is missing.
   explicit ViewSession(const std::filesystem::path& database, const std::filesystem::path& store_override = {});
+  // Opens the geometry store `store` alone: render() draws truth frames only
+  // (ViewMode::truth; other modes throw std::invalid_argument), up axis = the
+  // store's recorded one (z when not recorded), default shading. Throws
+  // std::runtime_error naming the file when it is not a geometry store.
+  ViewSession(StoreOnly, const std::filesystem::path& store);
   ~ViewSession();
 
   // Renders one view. Warnings (cell fallback) go to `warn` (e.g. stderr).
@@ -64,12 +73,14 @@ class ViewSession {
 
   const CellIndex& cells() const { return index_; }
   const Vec3d& up() const { return up_; }
+  const GeometryStore& store() const { return *store_; }
+  bool store_only() const { return !db_; }
 
  private:
   // The decoded cell, or nullptr with `reason` set (cached either way).
   const DecodedCell* load_cell(std::int64_t id, std::string& reason, std::FILE* warn);
 
-  CellDb db_;
+  std::unique_ptr<CellDb> db_;  // null in a store-only session
   std::unique_ptr<GeometryStore> store_;
   CellIndex index_;
   Vec3d up_;
@@ -78,5 +89,11 @@ class ViewSession {
   std::map<std::int64_t, std::shared_ptr<const DecodedCell>> decoded_;
   std::map<std::int64_t, std::string> failures_;
 };
+
+// A default view of a model with bounds `bounds` and up axis `up` (unit +z or
+// +y): from outside the bounds (one bounding-box diagonal from the centre,
+// above it and off two horizontal axes), looking at the centre, so that the
+// whole model fits a 60 degree field of view. Sets eye and look of `request`.
+void default_overview(const Box3d& bounds, const Vec3d& up, ViewRequest& request);
 
 }  // namespace cellbake

@@ -223,6 +223,27 @@ bool emit_mesh(const std::string& file, unsigned mesh_index, const aiMesh& mesh,
   return ignored;
 }
 
+// The up axis of what assimp hands over (after aiProcess_PreTransformVertices):
+// glTF is Y-up by specification; assimp rotates IFC (Z-up) and COLLADA files
+// to Y-up; other importers (FBX, ...) may record the file's axis in the scene
+// metadata "UpAxis" (0 = x, 1 = y, 2 = z) with "UpAxisSign" without rotating.
+void detect_up_axis(const aiScene& scene, const std::string& extension, ModelInfo& info) {
+  if (extension == "gltf" || extension == "glb") {
+    info.up = "y", info.up_source = "glTF is Y-up by specification";
+  } else if (extension == "ifc" || extension == "ifczip") {
+    info.up = "y", info.up_source = "assimp turns IFC's Z-up into Y-up";
+  } else if (extension == "dae") {
+    info.up = "y", info.up_source = "assimp turns COLLADA files into Y-up";
+  } else if (scene.mMetaData) {
+    std::int32_t axis = -1, sign = 1;
+    if (!scene.mMetaData->Get("UpAxis", axis)) return;
+    scene.mMetaData->Get("UpAxisSign", sign);
+    if (sign < 0 || (axis != 1 && axis != 2)) return;  // x or downward axes: not one we bake
+    info.up = axis == 1 ? "y" : "z";
+    info.up_source = "the file's UpAxis metadata";
+  }
+}
+
 }  // namespace
 
 bool assimp_supports(const std::string& extension) {
@@ -277,6 +298,7 @@ ModelInfo read_with_assimp(const std::filesystem::path& file, const std::string&
   ModelInfo info;
   for (const std::string& refused : io->refused()) info.warnings.push_back(" reference '" + refused + "': " + kOutsideFolder);
   info.format = "assimp:" + extension;
+  detect_up_axis(*scene, extension, info);
   info.materials.push_back(default_material());
   for (unsigned m = 0; m < scene->mNumMaterials; ++m) {
     const aiMaterial& material = *scene->mMaterials[m];

@@ -51,6 +51,9 @@ struct ModelInfo {
   std::uint64_t triangles_emitted = 0;
   std::uint64_t polygons_triangulated = 0;  // faces with > 3 corners split into fans
   std::string format;                       // "obj", "ply", "off", "stl", "assimp:<ext>"
+  // The model's up axis as the format or file says: "y", "z", or "" when it
+  // does not say (OBJ, PLY, OFF, STL), and why, e.g. "glTF is Y-up by specification".
+  std::string up, up_source;
   // What the reader skipped, one line each ("line 3: mtllib 'a.mtl': ..."), for the ingest summary.
   std::vector<std::string> warnings;
 };
