@@ -65,13 +65,15 @@ TEST(SlurmScripts, SubmitDryRunPrintsBothScriptsAndSubmitsNothing) {
                    "[output]\ndatabase = \"cells.db\"\n");
   const auto r = test::run_cellbake("submit " + (dir / "bake.toml").string() +
                                     " --shards 3 --partition short --mem 2G --dry-run --set sample.face_size=32"
-                                    " --set output.database=elsewhere.db");
+                                    " --set output.database=" + (dir / "elsewhere.db").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("#SBATCH --array=0-2"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("#SBATCH --partition=short"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("#SBATCH --mem=2G"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("'--set' 'sample.face_size=32'"), std::string::npos) << r.output;
-  EXPECT_EQ(r.output.find("'output.database=elsewhere.db'"), std::string::npos) << r.output;  // only for the merge
+  // Command-line paths are relative to the current directory; this one is absolute.
+  EXPECT_EQ(r.output.find("'output.database=" + (dir / "elsewhere.db").string() + "'"), std::string::npos)
+      << r.output;  // only for the merge
   EXPECT_NE(r.output.find("' merge '" + (dir / "elsewhere.db").string() + "'"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find((dir / "elsewhere_shards/shard_2.db").string()), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("nothing submitted"), std::string::npos) << r.output;
