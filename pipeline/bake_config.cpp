@@ -112,6 +112,12 @@ const std::map<std::string, Setter>& setters() {
       {"far.geometry_below", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.far_geometry_below = static_cast<std::uint64_t>(integer(n, w, "far.geometry_below", 0, std::int64_t(1) << 40));
        }},
+      {"far.geometry_factor", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.far_geometry_factor = number(n, w, "far.geometry_factor", 0, 1e6);
+       }},
+      {"far.seen_rings", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.far_seen_rings = int(integer(n, w, "far.seen_rings", 0, 8));
+       }},
       {"sample.face_size", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.face_size = int(integer(n, w, "sample.face_size", 8, 4096));
        }},
@@ -348,7 +354,8 @@ std::string describe_bake_config(const BakeConfig& c) {
   o.precision(17);
   o << "up=" << c.up << "\ncells.size=" << c.cell_size << "\nnear.budget=" << c.near_budget
     << "\nnear.budget_fraction=" << c.near_budget_fraction << "\nfar.choice=" << c.far_choice
-    << "\nfar.geometry_below=" << c.far_geometry_below
+    << "\nfar.geometry_below=" << c.far_geometry_below << "\nfar.seen_rings=" << c.far_seen_rings
+    << "\nfar.geometry_factor=" << c.far_geometry_factor
     << "\nsample.face_size=" << c.face_size << "\nsample.supersample=" << c.supersample
     << "\nsample.near_plane=" << c.near_plane << "\nsample.seam_shell_px=" << c.seam_shell_px
     << "\nsample.backend=" << c.sample_backend << "\nsample.embree_cache_mb=" << c.embree_cache_mb

@@ -44,6 +44,14 @@ struct BakeConfig {
   // A far field of at most this many triangles is drawn as geometry without
   // taking samples (a depth mesh rarely costs fewer, and sampling costs time).
   std::uint64_t far_geometry_below = 256;
+  // What the samples' rays hit is grown by this many rings of triangles
+  // sharing a vertex before it stands in for depth meshes (stages/far_choice.h
+  // grow_seen_triangles): slivers next to a hit, seen from elsewhere in the cell.
+  int far_seen_rings = 1;
+  // A tile takes exact geometry when it costs at most this many times the
+  // depth-mesh triangles it replaces (geometry is exact; a view never draws
+  // more than the model).
+  double far_geometry_factor = 2.0;
 
   // [sample]
   int face_size = 512;           // stored cube-face resolution, pixels

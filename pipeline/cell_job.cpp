@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <unordered_map>
 
 #include "stages/depth_mesh.h"
 #include "stages/encode.h"
@@ -75,6 +76,8 @@ CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::str
   in.text("encode").u64(StageVersions::encode).text(c.image_format).u64(c.image_quality).u64(c.position_bits)
       .text(c.mesh_codec).f64(c.mesh_depth_error);
   in.text("far_choice").u64(StageVersions::far_choice).text(c.far_choice).u64(c.far_geometry_below);
+  if (c.far_seen_rings != 0) in.text("seen_rings").u64(std::uint64_t(c.far_seen_rings));
+  in.text("geometry_factor").f64(c.far_geometry_factor);
   h.input = in.hex();
   return h;
 }
@@ -261,6 +264,24 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
   StageTimer timer(work, "far_choice");
   // Every eye the viewer may draw the cell from: the cell, and the samples in it.
   Box3d eyes = work.cell.bounds;
+  // What the samples saw, grown by far.seen_rings rings of neighbouring
+  // triangles (each chunk's adjacency built once per cell).
+  if (config.far_seen_rings > 0) {
+    std::unordered_map<std::int64_t, std::pair<std::shared_ptr<const Chunk>, VertexTriangles>> chunks;
+    std::vector<std::uint16_t> scratch;
+    for (SampleWork& s : work.samples)
+      for (CubeFace& face : s.cube.faces)
+        for (SeenChunk& seen : face.seen) {
+          if (seen.whole()) continue;
+          auto it = chunks.find(seen.id);
+          if (it == chunks.end()) {
+            std::shared_ptr<const Chunk> chunk = source.load(seen.id);
+            VertexTriangles adjacency = vertex_triangles(*chunk);
+            it = chunks.emplace(seen.id, std::make_pair(std::move(chunk), std::move(adjacency))).first;
+          }
+          grow_seen_triangles(seen, *it->second.first, it->second.second, config.far_seen_rings, scratch);
+        }
+  }
   std::vector<FarChoiceSample> samples;
   for (const SampleWork& s : work.samples) {
     eyes.expand(s.cube.eye);
@@ -271,7 +292,8 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
     }
     samples.push_back(c);
   }
-  work.far = choose_far_field(eyes, work.far_chunks, samples, parse_far_choice_mode(config.far_choice));
+  work.far = choose_far_field(eyes, work.far_chunks, samples, parse_far_choice_mode(config.far_choice),
+                              config.far_geometry_factor);
   for (SampleWork& s : work.samples)
     for (int f = 0; f < kCubeFaces; ++f)
       drop_geometry_tiles(s.simplified[std::size_t(f)], work.far->faces[std::size_t(f)].geometry_tiles);

@@ -103,7 +103,7 @@ std::uint32_t triangle_tile_mask(const FaceMesh& mesh, std::size_t triangle) {
 }  // namespace
 
 FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
-                           std::span<const FarChoiceSample> samples, FarChoiceMode mode) {
+                           std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor) {
   FarChoice out;
   // What each tile would drop: its depth-mesh triangles. Triangles spanning
   // tiles are dropped only when all the tiles they reach take geometry (not
@@ -215,7 +215,7 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
         if (!chosen[e] && stamp_of[e] != stamp) stamp_of[e] = stamp, extra += elements[e].weight;
     }
     if (!any || extra + gain == 0) return false;
-    if (!force && extra > gain) return false;
+    if (!force && double(extra) > geometry_factor * double(gain)) return false;
     for (int k = first; k < first + count; ++k) {
       if (geometry[std::size_t(k)]) continue;
       if (tile_elements[std::size_t(k)].empty() && removable[std::size_t(k)] == 0) continue;
@@ -267,6 +267,59 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
   }
   for (const FarPiece& p : out.pieces) out.geometry_triangles += p.triangle_count();
   return out;
+}
+
+VertexTriangles vertex_triangles(const Chunk& chunk) {
+  VertexTriangles a;
+  a.offsets.assign(chunk.positions.size() + 1, 0);
+  for (std::uint32_t i : chunk.indices)
+    if (i < chunk.positions.size()) ++a.offsets[i + 1];
+  for (std::size_t v = 1; v < a.offsets.size(); ++v) a.offsets[v] += a.offsets[v - 1];
+  a.triangles.resize(a.offsets.back());
+  std::vector<std::uint32_t> next(a.offsets.begin(), a.offsets.end() - 1);
+  for (std::size_t k = 0; k < chunk.indices.size(); ++k)
+    if (const std::uint32_t i = chunk.indices[k]; i < chunk.positions.size())
+      a.triangles[next[i]++] = std::uint32_t(k / 3);
+  return a;
+}
+
+void grow_seen_triangles(SeenChunk& seen, const Chunk& chunk, const VertexTriangles& adjacency, int rings,
+                         std::vector<std::uint16_t>& scratch) {
+  if (seen.whole() || rings <= 0) return;
+  const std::size_t n = chunk.triangle_count();
+  scratch.assign(n, 0);
+  std::vector<std::uint32_t> frontier;
+  for (std::size_t k = 0; k < seen.triangles.size(); ++k)
+    if (seen.triangles[k] < n) {
+      scratch[seen.triangles[k]] |= seen.triangle_tiles[k];
+      frontier.push_back(seen.triangles[k]);
+    }
+  for (int ring = 0; ring < rings && !frontier.empty(); ++ring) {
+    std::vector<std::uint32_t> added;
+    for (std::uint32_t t : frontier) {
+      const std::uint16_t tiles = scratch[t];
+      for (int c = 0; c < 3; ++c) {
+        const std::uint32_t v = chunk.indices[3 * std::size_t(t) + std::size_t(c)];
+        if (v + 1 >= adjacency.offsets.size()) continue;
+        for (std::uint32_t k = adjacency.offsets[v]; k < adjacency.offsets[v + 1]; ++k) {
+          const std::uint32_t u = adjacency.triangles[k];
+          if ((scratch[u] | tiles) == scratch[u]) continue;
+          if (scratch[u] == 0) added.push_back(u);
+          scratch[u] |= tiles;
+        }
+      }
+    }
+    frontier = std::move(added);
+  }
+  seen.triangles.clear();
+  seen.triangle_tiles.clear();
+  seen.tiles = 0;
+  for (std::size_t t = 0; t < n; ++t)
+    if (scratch[t]) {
+      seen.triangles.push_back(std::uint32_t(t));
+      seen.triangle_tiles.push_back(scratch[t]);
+      seen.tiles |= scratch[t];
+    }
 }
 
 std::size_t drop_geometry_tiles(FaceMesh& mesh, std::uint32_t geometry_tiles) {

@@ -80,12 +80,31 @@ struct FarChoiceSample {
 // frustum from `eyes` (every eye the viewer may draw the cell from) can
 // reach (tiles_seeing_box), whatever `mode` says. Greedy and deterministic:
 // the whole cell, then each face, then each tile takes geometry when the
-// triangles of the chunks it adds are no more than the depth-mesh triangles
-// it drops, repeated until nothing changes (a triangle spanning tiles counts
+// triangles it adds are no more than `geometry_factor` times the depth-mesh
+// triangles it drops (exact geometry has no image error and, being part of
+// the model, never makes a view draw more than the model: a factor above 1
+// buys image quality with triangles), repeated until nothing changes (a triangle spanning tiles counts
 // as no tile's gain, but is dropped, and counted replaced, when all the tiles
 // it reaches take geometry). Counts only; meshes are not modified.
 FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
-                           std::span<const FarChoiceSample> samples, FarChoiceMode mode);
+                           std::span<const FarChoiceSample> samples, FarChoiceMode mode,
+                           double geometry_factor = 1.0);
+
+// Which triangles use each vertex of a chunk (compressed rows: the triangles
+// of vertex v are triangles[offsets[v] .. offsets[v + 1])).
+struct VertexTriangles {
+  std::vector<std::uint32_t> offsets, triangles;
+};
+VertexTriangles vertex_triangles(const Chunk& chunk);
+
+// Grows what a face saw of `chunk` (a SeenChunk listing triangles; whole
+// ones are left alone) by `rings` rings of triangles sharing a vertex, each
+// added triangle taking the tiles of the seen triangles it touches. Rays
+// through pixel centres miss thin slivers next to what they hit (the far
+// side of a pipe, a rail's edge) that an eye elsewhere in the cell sees.
+// `scratch` is reused between calls.
+void grow_seen_triangles(SeenChunk& seen, const Chunk& chunk, const VertexTriangles& adjacency, int rings,
+                         std::vector<std::uint16_t>& scratch);
 
 // Removes from `mesh` the triangles whose texture coordinates lie wholly
 // within tiles of `geometry_tiles` (one tile, or several spanned, all in the
