@@ -3,6 +3,8 @@
 #include <nlohmann/json.hpp>
 
 #include <bit>
+#include <chrono>
+#include <thread>
 #include <cstring>
 #include <stdexcept>
 
@@ -88,7 +90,12 @@ void refuse_foreign_database(SqliteDb& db, const std::filesystem::path& path, in
       std::string kind = "an SQLite file with other tables";
       try {
         SqliteStatement s(db, "SELECT value FROM meta WHERE key = 'kind'");
-        if (s.step()) kind = "its kind is '" + s.column_text(0) + "'";
+        if (s.step()) {
+          // Ours, created by another process between reading the version
+          // and listing the tables.
+          if (s.column_text(0) == "cellbake-cell-database") return;
+          kind = "its kind is '" + s.column_text(0) + "'";
+        }
       } catch (const std::exception&) {
       }
       throw std::runtime_error(refusal + kind + advice);
@@ -158,7 +165,17 @@ CellDb::CellDb(const std::filesystem::path& path, Mode mode) {
     return;
   }
   refuse_foreign_database(*db_, path, user_version(*db_));
-  db_->exec("PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;");
+  // Switching to WAL needs the file to itself and SQLite does not wait for it
+  // (no busy handler): retry while another process opens it at the same moment.
+  for (int attempt = 0;; ++attempt) {
+    try {
+      db_->exec("PRAGMA journal_mode=WAL; PRAGMA synchronous=NORMAL;");
+      break;
+    } catch (const std::runtime_error& e) {
+      if (attempt >= 600 || std::string(e.what()).find("database is locked") == std::string::npos) throw;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  }
   // Schema creation and migrations in one write transaction, the version read
   // inside it: of two processes opening a new file at once, the second waits
   // and then finds the schema made (never "table cells already exists").
