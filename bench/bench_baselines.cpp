@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_program.h"
 #include "pipeline/cell_grid.h"
 #include "stages/render/chunk_renderer.h"
 #include "stages/render/gl_context.h"
@@ -302,10 +303,5 @@ int run(int argc, char** argv) {
 }  // namespace cellbake
 
 int main(int argc, char** argv) {
-  try {
-    return cellbake::run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_baselines: %s\n", e.what());
-    return 1;
-  }
+  return cellbake::run_bench_program("bench_baselines", cellbake::run, argc, argv);
 }

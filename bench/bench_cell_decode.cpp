@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_program.h"
 #include "stages/encode.h"
 #include "storage/cell_db.h"
 
@@ -60,10 +61,5 @@ int run(int argc, char** argv) {
 }  // namespace cellbake
 
 int main(int argc, char** argv) {
-  try {
-    return cellbake::run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_cell_decode: %s\n", e.what());
-    return 1;
-  }
+  return cellbake::run_bench_program("bench_cell_decode", cellbake::run, argc, argv);
 }

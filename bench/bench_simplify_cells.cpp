@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_program.h"
 #include "pipeline/bake_config.h"
 #include "pipeline/cell_grid.h"
 #include "pipeline/cell_job.h"
@@ -163,10 +164,5 @@ int run(int argc, char** argv) {
 }  // namespace cellbake
 
 int main(int argc, char** argv) {
-  try {
-    return cellbake::run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_simplify_cells: %s\n", e.what());
-    return 1;
-  }
+  return cellbake::run_bench_program("bench_simplify_cells", cellbake::run, argc, argv);
 }

@@ -14,9 +14,16 @@
 
 #include "stages/encode.h"
 #include "stages/encode_grid_mesh.h"
+#include "stages/little_endian.h"
 
 namespace cellbake {
 namespace {
+
+using little_endian::put_u32;
+using little_endian::get_u32;
+using little_endian::put_f32;
+using little_endian::get_f32;
+
 
 constexpr std::array<std::uint8_t, 4> kMagic = {'C', 'B', 'F', 'M'};
 constexpr std::uint8_t kVersion = 1;
@@ -42,25 +49,6 @@ struct Header {
   std::uint32_t index_bytes = 0;
 };
 
-void put_u32(std::uint8_t* p, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
-}
-std::uint32_t get_u32(const std::uint8_t* p) {
-  std::uint32_t v = 0;
-  for (int i = 0; i < 4; ++i) v |= std::uint32_t{p[i]} << (8 * i);
-  return v;
-}
-void put_f32(std::uint8_t* p, float f) {
-  std::uint32_t v;
-  std::memcpy(&v, &f, 4);
-  put_u32(p, v);
-}
-float get_f32(const std::uint8_t* p) {
-  const std::uint32_t v = get_u32(p);
-  float f;
-  std::memcpy(&f, &v, 4);
-  return f;
-}
 
 // Layout: magic[4] version bits uv_bits flags | vertex_count index_count |
 // pos_lo[3] pos_hi[3] uv_lo[2] uv_hi[2] (f32) | vertex_bytes index_bytes.

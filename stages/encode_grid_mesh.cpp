@@ -9,6 +9,7 @@
 // simplifier's depth bound uses. Predictions are integer-only, so the encoder
 // and any decoder agree bit for bit.
 #include "stages/encode_grid_mesh.h"
+#include "stages/little_endian.h"
 
 #include <meshoptimizer.h>
 #include <zstd.h>
@@ -24,6 +25,12 @@
 namespace cellbake {
 namespace {
 
+using little_endian::put_u32;
+using little_endian::get_u32;
+using little_endian::put_f64;
+using little_endian::get_f64;
+
+
 constexpr std::array<std::uint8_t, 4> kMagic = {'C', 'B', 'F', 'M'};
 constexpr std::size_t kHeaderSize = 48;
 constexpr std::uint8_t kFlagZstd = 1;
@@ -33,26 +40,6 @@ constexpr int kZstdLevel = 19;
 
 [[noreturn]] void fail(const std::string& what) { throw std::runtime_error("face mesh blob: " + what); }
 
-void put_u32(std::uint8_t* p, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) p[i] = static_cast<std::uint8_t>(v >> (8 * i));
-}
-std::uint32_t get_u32(const std::uint8_t* p) {
-  std::uint32_t v = 0;
-  for (int i = 0; i < 4; ++i) v |= std::uint32_t{p[i]} << (8 * i);
-  return v;
-}
-void put_f64(std::uint8_t* p, double d) {
-  std::uint64_t v;
-  std::memcpy(&v, &d, 8);
-  put_u32(p, static_cast<std::uint32_t>(v));
-  put_u32(p + 4, static_cast<std::uint32_t>(v >> 32));
-}
-double get_f64(const std::uint8_t* p) {
-  const std::uint64_t v = get_u32(p) | (std::uint64_t{get_u32(p + 4)} << 32);
-  double d;
-  std::memcpy(&d, &v, 8);
-  return d;
-}
 
 // Layout: magic[4] version face flags reserved | face_size vertex_count
 // index_count (u32) | log_step (f64) | q_min (i32) q_range | index_bytes
