@@ -129,11 +129,18 @@ MergeSummary merge_shards(const std::filesystem::path& out, const std::vector<st
   // The reference: the output's own meta when it already holds a merge, else the first shard.
   std::string ref_name, ref_store_hash, ref_config;
   if (std::filesystem::exists(out)) {
-    CellDb existing(out, CellDb::Mode::read_only);
-    if (auto h = existing.meta("store_hash")) {
+    std::optional<CellDb> existing;
+    try {
+      existing.emplace(out, CellDb::Mode::read_only);
+    } catch (const std::exception&) {
+      // No cell schema yet (a merge killed before it committed one, or not
+      // ours at all): the read-write open below adopts an empty file and
+      // refuses anything else.
+    }
+    if (auto h = existing ? existing->meta("store_hash") : std::nullopt) {
       ref_name = out.string();
       ref_store_hash = *h;
-      ref_config = existing.meta("config").value_or("");
+      ref_config = existing->meta("config").value_or("");
     }
   }
   if (ref_name.empty() && !inputs.empty()) {

@@ -3,6 +3,8 @@
 // from other inputs, tolerance of a missing shard, failed-vs-done precedence.
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include <memory>
 #include <set>
 
@@ -154,6 +156,17 @@ TEST_F(Merge, MergingTheSameShardsAgainChangesNothing) {
   for (const auto& p : shard_paths(shared())) merge_shards(dir / "incremental.db", {p}, ignore);
   EXPECT_EQ(content_hash(dir / "incremental.db"), first);
   EXPECT_EQ(CellDb(dir / "incremental.db", CellDb::Mode::read_only).meta("cells_total"), "16");
+}
+
+TEST_F(Merge, ResumesIntoTheEmptyFileOfAMergeKilledBeforeItsSchema) {
+  test::TempDir dir;
+  { std::ofstream empty(dir / "merged.db"); }  // what a merge killed right after creating its file leaves
+  const MergeSummary s = merge_shards(dir / "merged.db", shard_paths(shared()), ignore);
+  EXPECT_EQ(s.cells_copied, 16u);
+  EXPECT_EQ(content_hash(dir / "merged.db"), content_hash(shared() / "single.db"));
+  // Anything else that is not a cell database is still refused.
+  std::ofstream(dir / "other.db") << "not a database at all, just text";
+  EXPECT_THROW(merge_shards(dir / "other.db", shard_paths(shared()), ignore), std::runtime_error);
 }
 
 TEST_F(Merge, RefusesShardsFromOtherParametersOrStores) {
