@@ -10,6 +10,8 @@
 //
 // Not a Google Benchmark program: it needs a geometry store and reports
 // error figures next to sizes and times.
+#include <CLI/CLI.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -52,37 +54,24 @@ std::vector<Codec> default_codecs() {
   return c;
 }
 
-std::vector<Codec> parse_codecs(const std::string& list) {
-  std::vector<Codec> out;
-  for (std::size_t p = 0; p < list.size();) {
-    const std::size_t q = std::min(list.find(',', p), list.size());
-    const std::string item = list.substr(p, q - p);
-    const std::size_t colon = item.find(':');
-    if (colon == std::string::npos) throw std::invalid_argument("codec '" + item + "' is not FORMAT:QUALITY");
-    out.push_back({item.substr(0, colon), std::stoi(item.substr(colon + 1))});
-    p = q + 1;
-  }
-  return out;
-}
-
 Args parse_args(int argc, char** argv) {
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string s = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::invalid_argument("missing value after " + s);
-      return argv[++i];
-    };
-    if (s == "--store") a.store = value();
-    else if (s == "--cells") a.cells = value();
-    else if (s == "--codecs") a.codecs = parse_codecs(value());
-    else if (s == "-h" || s == "--help") {
-      std::printf("usage: bench_image_codecs CONFIG.toml [--store STORE.db] [--cells LIST] [--codecs F:Q,...]\n");
-      std::exit(0);
-    } else if (a.config.empty()) a.config = s;
-    else throw std::invalid_argument("unexpected argument " + s);
+  std::vector<std::string> codecs;
+  CLI::App app{"Colour codecs' bytes against PSNR on the covered pixels of baked faces", "bench_image_codecs"};
+  app.add_option("config", a.config, "Bake configuration (TOML)")->required();
+  app.add_option("--store", a.store, "Geometry store (default: the configuration's)");
+  app.add_option("--cells", a.cells, "Cells to bake and measure")->capture_default_str();
+  app.add_option("--codecs", codecs, "FORMAT:QUALITY,... (default: a sweep of jpeg, webp, avif, jxl)")->delimiter(',');
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    std::exit(app.exit(e));
   }
-  if (a.config.empty()) throw std::invalid_argument("a bake configuration is required (see --help)");
+  for (const std::string& item : codecs) {
+    const std::size_t colon = item.find(':');
+    if (colon == std::string::npos) throw std::invalid_argument("codec '" + item + "' is not FORMAT:QUALITY");
+    a.codecs.push_back({item.substr(0, colon), std::stoi(item.substr(colon + 1))});
+  }
   if (a.codecs.empty()) a.codecs = default_codecs();
   return a;
 }

@@ -15,6 +15,8 @@
 //
 // Not a Google Benchmark program: it needs a geometry store and reports
 // per-face error figures next to the times.
+#include <CLI/CLI.hpp>
+
 #include <meshoptimizer.h>
 
 #include <algorithm>
@@ -46,23 +48,19 @@ struct Args {
 
 Args parse_args(int argc, char** argv) {
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string s = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::invalid_argument("missing value after " + s);
-      return argv[++i];
-    };
-    if (s == "--store") a.store = value();
-    else if (s == "--cells") a.cells = value();
-    else if (s == "--repeat") a.repeat = std::max(1, std::stoi(value()));
-    else if (s == "--no-meshopt") a.meshopt = false;
-    else if (s == "-h" || s == "--help") {
-      std::printf("usage: bench_simplify_cells CONFIG.toml [--store STORE.db] [--cells LIST] [--repeat R] [--no-meshopt]\n");
-      std::exit(0);
-    } else if (a.config.empty()) a.config = s;
-    else throw std::invalid_argument("unexpected argument " + s);
+  bool no_meshopt = false;
+  CLI::App app{"Our simplifier against meshopt_simplify on the dense faces of baked cells", "bench_simplify_cells"};
+  app.add_option("config", a.config, "Bake configuration (TOML)")->required();
+  app.add_option("--store", a.store, "Geometry store (default: the configuration's)");
+  app.add_option("--cells", a.cells, "Cells to sample and simplify")->capture_default_str();
+  app.add_option("--repeat", a.repeat, "Timed repetitions")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_flag("--no-meshopt", no_meshopt, "Skip the meshopt_simplify comparison");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    std::exit(app.exit(e));
   }
-  if (a.config.empty()) throw std::invalid_argument("a bake configuration is required (see --help)");
+  a.meshopt = !no_meshopt;
   return a;
 }
 
