@@ -1,6 +1,6 @@
 // Baselines side by side with the cell impostors (Wilson 2002, ch. 7 compares
 // textured depth meshes with geometric LOD): for each selected cell of a baked
-// database, at the verify viewpoints (viewer/verify_views.h), draws
+// database, at the verify viewpoints (runner/verify/verify_views.h), draws
 //  * truth     - every chunk in the frustum;
 //  * impostor  - the cell's near field + textured depth meshes (cellbake);
 //  * lod-meshopt    - the same near field + the whole far field (every triangle
@@ -32,17 +32,18 @@
 
 #include "bench/bench_program.h"
 #include "pipeline/cell_grid.h"
+#include "runner/verify/verify_report.h"
+#include "runner/verify/verify_views.h"
 #include "stages/render/chunk_renderer.h"
 #include "stages/render/gl_context.h"
 #include "storage/cell_db.h"
 #include "storage/geometry_store.h"
+#include "viewer/baked_config_text.h"
 #include "viewer/camera_path.h"
 #include "viewer/cell_index.h"
 #include "viewer/decoded_cell.h"
 #include "viewer/image_metrics.h"
 #include "viewer/scene_drawer.h"
-#include "viewer/verify_report.h"
-#include "viewer/verify_views.h"
 #include "viewer/view_camera.h"
 
 namespace cellbake {

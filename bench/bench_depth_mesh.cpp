@@ -9,8 +9,8 @@
 #include <benchmark/benchmark.h>
 
 #include "bench/bench_room_scene.h"
+#include "pipeline/scenes/depth_mesh_analytic_scene.h"
 #include "stages/depth_mesh.h"
-#include "stages/depth_mesh_analytic_scene.h"
 
 namespace {
 

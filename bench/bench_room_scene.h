@@ -3,7 +3,7 @@
 // (no background). Header-only.
 #pragma once
 
-#include "stages/depth_mesh_analytic_scene.h"
+#include "pipeline/scenes/depth_mesh_analytic_scene.h"
 
 namespace cellbake {
 

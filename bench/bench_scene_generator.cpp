@@ -1,6 +1,6 @@
-// Procedural scene generation speed (stages/scene_generator.h): generating a
+// Procedural scene generation speed (pipeline/scenes/scene_generator.h): generating a
 // scene in memory (parts handed to a no-op callback) and writing it as binary
-// PLY (pipeline/scene_ply_writer.h) to the system temp directory. Reports
+// PLY (pipeline/scenes/scene_ply_writer.h) to the system temp directory. Reports
 // triangles per second. Run as
 //   build/bench/bench_scene_generator --benchmark_filter=Ply
 #include <benchmark/benchmark.h>
@@ -8,8 +8,8 @@
 #include <filesystem>
 #include <string>
 
-#include "pipeline/scene_ply_writer.h"
-#include "stages/scene_generator.h"
+#include "pipeline/scenes/scene_generator.h"
+#include "pipeline/scenes/scene_ply_writer.h"
 
 namespace cellbake {
 namespace {

@@ -19,8 +19,8 @@
 #include <cmath>
 
 #include "bench/bench_room_scene.h"
+#include "pipeline/scenes/depth_mesh_analytic_scene.h"
 #include "stages/depth_mesh.h"
-#include "stages/depth_mesh_analytic_scene.h"
 #include "stages/simplify.h"
 
 namespace {

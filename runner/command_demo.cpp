@@ -7,13 +7,13 @@
 #include "pipeline/bake_config.h"
 #include "pipeline/embedded_configs.h"
 #include "pipeline/ingest.h"
-#include "pipeline/scene_ply_writer.h"
+#include "pipeline/scenes/scene_ply_writer.h"
 #include "runner/bake_command_options.h"
 #include "runner/bake_runner.h"
 #include "runner/commands.h"
 #include "runner/ingest_summary.h"
 #include "runner/parallel.h"
-#include "runner/verify_runner.h"
+#include "runner/verify/verify_runner.h"
 #include "storage/geometry_store.h"
 
 namespace cellbake {

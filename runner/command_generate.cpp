@@ -5,7 +5,7 @@
 #include <cstdio>
 
 #include "pipeline/ingest.h"
-#include "pipeline/scene_ply_writer.h"
+#include "pipeline/scenes/scene_ply_writer.h"
 #include "runner/commands.h"
 #include "runner/ingest_summary.h"
 #include "runner/parallel.h"

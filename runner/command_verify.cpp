@@ -1,7 +1,7 @@
 // `cellbake verify DB [--views-per-cell N] [--cells SEL] [--size WxH]
 //  [--threads N] --report DIR`: renders each cell's impostor against the ground
 // truth from viewpoints inside the cell and writes DIR/report.html +
-// DIR/report.json (runner/verify_runner.h). Also registers its helper
+// DIR/report.json (runner/verify/verify_runner.h). Also registers its helper
 // `cellbake plot CSV --x COL --y COL [--series COL] --out FILE.svg` (the
 // report's SVG scatter plot over any CSV; scripts/sweep.sh uses it).
 #include <CLI/CLI.hpp>
@@ -14,10 +14,10 @@
 #include <string>
 
 #include "runner/commands.h"
-#include "runner/verify_runner.h"
+#include "runner/verify/svg_plot.h"
+#include "runner/verify/verify_report.h"
+#include "runner/verify/verify_runner.h"
 #include "viewer/camera_path.h"
-#include "viewer/svg_plot.h"
-#include "viewer/verify_report.h"
 
 namespace cellbake {
 

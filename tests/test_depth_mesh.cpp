@@ -9,8 +9,8 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "pipeline/scenes/depth_mesh_analytic_scene.h"
 #include "stages/depth_mesh.h"
-#include "stages/depth_mesh_analytic_scene.h"
 
 namespace cellbake {
 namespace {

@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "pipeline/bake_config.h"
+#include "runner/verify/svg_plot.h"
 #include "storage/cell_db.h"
-#include "viewer/svg_plot.h"
 #include "tests/fixture_room_obj.h"
 #include "tests/fixture_textured.h"
 #include "tests/test_support.h"

@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "pipeline/sample_backend.h"
+#include "pipeline/scenes/scene_generator.h"
 #include "stages/chunking.h"
 #include "stages/cull_box.h"
 #include "stages/raycast/chunk_bvh_cache.h"
@@ -26,7 +27,6 @@
 #include "stages/render/gl_context.h"
 #include "stages/render/gl_cube_sampler.h"
 #include "stages/sample.h"
-#include "stages/scene_generator.h"
 #include "tests/fixture_chunk_source.h"
 
 namespace cellbake {

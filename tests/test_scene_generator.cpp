@@ -10,11 +10,11 @@
 #include <stdexcept>
 #include <utility>
 
-#include "pipeline/scene_ply_writer.h"
-#include "stages/scene_generator.h"
-#include "stages/scene_math.h"
-#include "stages/scene_primitives.h"
-#include "stages/scene_random.h"
+#include "pipeline/scenes/scene_generator.h"
+#include "pipeline/scenes/scene_math.h"
+#include "pipeline/scenes/scene_ply_writer.h"
+#include "pipeline/scenes/scene_primitives.h"
+#include "pipeline/scenes/scene_random.h"
 #include "test_support.h"
 
 namespace cellbake {

@@ -21,13 +21,13 @@
 #include "stages/render/shading.h"
 #include "storage/cell_db.h"
 #include "storage/geometry_store.h"
-#include "tests/fixture_chunk_source.h"
 #include "tests/fixture_cameras.h"
+#include "tests/fixture_chunk_source.h"
 #include "tests/fixture_room_obj.h"
 #include "tests/test_support.h"
+#include "viewer/baked_config_text.h"
 #include "viewer/decoded_cell.h"
 #include "viewer/scene_drawer.h"
-#include "viewer/verify_views.h"
 
 namespace cellbake {
 namespace {

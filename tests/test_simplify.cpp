@@ -11,8 +11,8 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "pipeline/scenes/depth_mesh_analytic_scene.h"
 #include "stages/depth_mesh.h"
-#include "stages/depth_mesh_analytic_scene.h"
 #include "stages/simplify.h"
 
 namespace cellbake {

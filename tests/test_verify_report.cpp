@@ -15,12 +15,13 @@
 #include "pipeline/ingest.h"
 #include "runner/bake_runner.h"
 #include "runner/parallel.h"
-#include "runner/verify_runner.h"
+#include "runner/verify/svg_plot.h"
+#include "runner/verify/verify_report.h"
+#include "runner/verify/verify_runner.h"
+#include "runner/verify/verify_views.h"
 #include "storage/cell_db.h"
 #include "test_support.h"
-#include "viewer/svg_plot.h"
-#include "viewer/verify_report.h"
-#include "viewer/verify_views.h"
+#include "viewer/baked_config_text.h"
 
 namespace cellbake {
 namespace {

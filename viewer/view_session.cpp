@@ -1,6 +1,6 @@
 #include "viewer/view_session.h"
 
-#include "viewer/verify_views.h"
+#include "viewer/baked_config_text.h"
 
 #include <algorithm>
 #include <cstdio>

@@ -22,6 +22,7 @@
 #include "stages/render/gl_functions.h"
 #include "storage/cell_db.h"
 #include "storage/geometry_store.h"
+#include "viewer/baked_config_text.h"
 #include "viewer/camera_path.h"
 #include "viewer/cell_cache.h"
 #include "viewer/fly_camera.h"
@@ -29,7 +30,6 @@
 #include "viewer/interactive/glfw_window_context.h"
 #include "viewer/png_file.h"
 #include "viewer/scene_drawer.h"
-#include "viewer/verify_views.h"
 #include "viewer/view_camera.h"
 
 namespace cellbake {

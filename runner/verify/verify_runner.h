@@ -1,8 +1,8 @@
 // `cellbake verify`: renders every selected (done) cell's impostor and the
-// ground truth from several viewpoints inside the cell (viewer/verify_views.h)
+// ground truth from several viewpoints inside the cell (runner/verify/verify_views.h)
 // in parallel (oneTBB, one OSMesa context per worker thread, released after
 // each view), compares them (viewer/image_metrics.h) and writes the report
-// folder (viewer/verify_report.h). Resumable: per-cell results are kept in
+// folder (runner/verify/verify_report.h). Resumable: per-cell results are kept in
 // DIR/verify-cells.json keyed by the cell's content hash and the verify
 // parameters, so a rerun renders only changed or missing cells.
 #pragma once

@@ -1,4 +1,4 @@
-#include "viewer/svg_plot.h"
+#include "runner/verify/svg_plot.h"
 
 #include <algorithm>
 #include <cmath>

@@ -2,15 +2,15 @@
 // generator searches the scene density (SceneDensity) with exact triangle
 // counts from counting passes of the same layout code, so the scene is built
 // once, at the density whose count is nearest the target.
-#include "stages/scene_generator.h"
+#include "pipeline/scenes/scene_generator.h"
 
 #include <cmath>
 #include <stdexcept>
 
-#include "stages/scene_builder.h"
-#include "stages/scene_city.h"
-#include "stages/scene_house.h"
-#include "stages/scene_plant.h"
+#include "pipeline/scenes/scene_builder.h"
+#include "pipeline/scenes/scene_city.h"
+#include "pipeline/scenes/scene_house.h"
+#include "pipeline/scenes/scene_plant.h"
 
 namespace cellbake {
 namespace {

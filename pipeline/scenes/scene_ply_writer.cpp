@@ -1,4 +1,4 @@
-#include "pipeline/scene_ply_writer.h"
+#include "pipeline/scenes/scene_ply_writer.h"
 
 #include <bit>
 #include <cerrno>

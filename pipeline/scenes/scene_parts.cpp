@@ -1,10 +1,10 @@
-#include "stages/scene_parts.h"
+#include "pipeline/scenes/scene_parts.h"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
-#include "stages/scene_math.h"
+#include "pipeline/scenes/scene_math.h"
 
 namespace cellbake {
 namespace {

@@ -1,11 +1,11 @@
-// Writes a procedural scene (stages/scene_generator.h) straight to a binary
+// Writes a procedural scene (pipeline/scenes/scene_generator.h) straight to a binary
 // little-endian PLY file, streaming: vertices go to the output as parts
 // arrive, faces to a temporary file next to it that is appended at the end.
 #pragma once
 
 #include <filesystem>
 
-#include "stages/scene_generator.h"
+#include "pipeline/scenes/scene_generator.h"
 
 namespace cellbake {
 

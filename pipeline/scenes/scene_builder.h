@@ -9,9 +9,9 @@
 #include <functional>
 #include <span>
 
+#include "pipeline/scenes/scene_generator.h"
+#include "pipeline/scenes/scene_primitives.h"
 #include "stages/geometry.h"
-#include "stages/scene_generator.h"
-#include "stages/scene_primitives.h"
 
 namespace cellbake {
 

@@ -6,7 +6,7 @@
 
 #include <cstdint>
 
-#include "stages/scene_builder.h"
+#include "pipeline/scenes/scene_builder.h"
 
 namespace cellbake {
 

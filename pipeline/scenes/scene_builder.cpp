@@ -1,11 +1,11 @@
-#include "stages/scene_builder.h"
+#include "pipeline/scenes/scene_builder.h"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
-#include "stages/scene_random.h"
+#include "pipeline/scenes/scene_random.h"
 
 namespace cellbake {
 

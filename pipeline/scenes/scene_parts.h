@@ -6,7 +6,7 @@
 
 #include <vector>
 
-#include "stages/scene_builder.h"
+#include "pipeline/scenes/scene_builder.h"
 
 namespace cellbake {
 

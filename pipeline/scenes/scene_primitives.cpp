@@ -1,10 +1,10 @@
-#include "stages/scene_primitives.h"
+#include "pipeline/scenes/scene_primitives.h"
 
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
-#include "stages/scene_math.h"
+#include "pipeline/scenes/scene_math.h"
 
 namespace cellbake {
 namespace {

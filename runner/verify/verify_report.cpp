@@ -1,4 +1,4 @@
-#include "viewer/verify_report.h"
+#include "runner/verify/verify_report.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "viewer/svg_plot.h"
+#include "runner/verify/svg_plot.h"
 
 namespace cellbake {
 namespace {

@@ -1,6 +1,6 @@
 // Ray casting of analytic boxes and cylinders (slab test; quadratic for the
 // cylinder side). See depth_mesh_analytic_scene.h.
-#include "stages/depth_mesh_analytic_scene.h"
+#include "pipeline/scenes/depth_mesh_analytic_scene.h"
 
 #include <cmath>
 #include <cstdint>

@@ -1,4 +1,4 @@
-#include "stages/scene_math.h"
+#include "pipeline/scenes/scene_math.h"
 
 #include <cmath>
 

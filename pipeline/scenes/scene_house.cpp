@@ -1,15 +1,15 @@
 // Layout of the house scene (see scene_house.h). Reference: D. Wilson,
 // "Spatially Encoded Image-Space Simplifications for Interactive Walkthrough",
 // PhD thesis, UNC 2002 (the house test environment, Fig. 1.1).
-#include "stages/scene_house.h"
+#include "pipeline/scenes/scene_house.h"
 
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
-#include "stages/scene_math.h"
-#include "stages/scene_parts.h"
-#include "stages/scene_random.h"
+#include "pipeline/scenes/scene_math.h"
+#include "pipeline/scenes/scene_parts.h"
+#include "pipeline/scenes/scene_random.h"
 
 namespace cellbake {
 namespace {

@@ -8,7 +8,7 @@
 
 #include <cstdint>
 
-#include "stages/scene_builder.h"
+#include "pipeline/scenes/scene_builder.h"
 
 namespace cellbake {
 

@@ -1,4 +1,4 @@
-#include "runner/verify_runner.h"
+#include "runner/verify/verify_runner.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -18,16 +18,17 @@
 
 #include "pipeline/cell_grid.h"
 #include "runner/progress.h"
+#include "runner/verify/verify_report.h"
 #include "stages/render/gl_context.h"
 #include "storage/cell_db.h"
-#include "storage/meta_values.h"
 #include "storage/geometry_store.h"
+#include "storage/meta_values.h"
+#include "viewer/baked_config_text.h"
 #include "viewer/cell_index.h"
 #include "viewer/decoded_cell.h"
 #include "viewer/image_metrics.h"
 #include "viewer/png_file.h"
 #include "viewer/scene_drawer.h"
-#include "viewer/verify_report.h"
 #include "viewer/view_camera.h"
 
 namespace cellbake {

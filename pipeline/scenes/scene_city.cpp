@@ -1,12 +1,12 @@
 // Layout of the city scene (see scene_city.h).
-#include "stages/scene_city.h"
+#include "pipeline/scenes/scene_city.h"
 
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
-#include "stages/scene_math.h"
-#include "stages/scene_random.h"
+#include "pipeline/scenes/scene_math.h"
+#include "pipeline/scenes/scene_random.h"
 
 namespace cellbake {
 namespace {

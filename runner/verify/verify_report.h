@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "runner/verify/verify_views.h"
 #include "stages/geometry.h"
-#include "viewer/verify_views.h"
 
 namespace cellbake {
 

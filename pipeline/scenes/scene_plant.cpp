@@ -1,15 +1,15 @@
 // Layout of the plant scene (see scene_plant.h). Reference: D. Wilson, "Spatially
 // Encoded Image-Space Simplifications for Interactive Walkthrough", PhD thesis,
 // UNC 2002, ch. 7 (the power plant test model).
-#include "stages/scene_plant.h"
+#include "pipeline/scenes/scene_plant.h"
 
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
-#include "stages/scene_math.h"
-#include "stages/scene_parts.h"
-#include "stages/scene_random.h"
+#include "pipeline/scenes/scene_math.h"
+#include "pipeline/scenes/scene_parts.h"
+#include "pipeline/scenes/scene_random.h"
 
 namespace cellbake {
 namespace {
