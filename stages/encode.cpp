@@ -44,6 +44,18 @@ std::string sniff_format(const std::uint8_t* data, std::size_t size) {
   return "";
 }
 
+// Whether an encoded PNG or JPEG ends as every complete file does (PNG: the
+// IEND chunk; JPEG: the EOI marker). A cut file may still decode: libjpeg pads
+// the missing rows with grey, only warning, and libpng stops before IEND.
+bool ends_complete(const std::string& format, const std::uint8_t* data, std::size_t size) {
+  if (format == "png") {
+    static constexpr std::uint8_t iend[12] = {0, 0, 0, 0, 'I', 'E', 'N', 'D', 0xae, 0x42, 0x60, 0x82};
+    return size >= 12 && std::memcmp(data + size - 12, iend, 12) == 0;
+  }
+  if (format == "jpg") return size >= 2 && data[size - 2] == 0xff && data[size - 1] == 0xd9;
+  return true;  // WebP, AVIF and JPEG XL carry their lengths: their decoders refuse cut files
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> encode_image(const std::vector<Rgba8>& pixels, int width, int height,
@@ -98,6 +110,9 @@ DecodedImage decode_image(const std::uint8_t* data, std::size_t size) {
   if (format.empty()) throw std::runtime_error("image blob: not a PNG, JPEG, WebP, AVIF or JPEG XL image");
   if (format == "avif") return decode_avif(data, size, kMaxImageSide, kMaxImagePixels);
   if (format == "jxl") return decode_jxl(data, size, kMaxImageSide, kMaxImagePixels);
+  if (!ends_complete(format, data, size))
+    throw std::runtime_error("image blob: truncated " + format + " (no " + (format == "png" ? "IEND chunk" : "EOI marker") +
+                             " at the end)");
 
   OIIO::Filesystem::IOMemReader proxy(data, size);
   OIIO::Filesystem::IOProxy* proxy_ptr = &proxy;
@@ -124,6 +139,11 @@ DecodedImage decode_image(const std::uint8_t* data, std::size_t size) {
     const std::string message = input->geterror();
     throw std::runtime_error("image blob: decoding " + format + " failed: " + message);
   }
+  // A decoder's warning ("Premature end of JPEG file", "Corrupt JPEG data")
+  // means pixels were made up: the image is damaged. OpenImageIO 2.4 keeps the
+  // text without has_error() saying so.
+  if (std::string warning = input->geterror(); !warning.empty())
+    throw std::runtime_error("image blob: damaged " + format + ": " + warning);
   input->close();
   image.pixels.resize(count);
   for (std::size_t i = 0; i < count; ++i) {

@@ -42,7 +42,9 @@ std::vector<std::uint8_t> encode_image(const std::vector<Rgba8>& pixels, int wid
 // JPEG, WebP, AVIF, JPEG XL), on the calling thread alone. Grey and grey+alpha images are expanded to RGBA; images without
 // alpha get 255. Throws std::runtime_error("image blob: ...") on anything it
 // cannot decode, including images above 16384 pixels on a side or 2^26 pixels
-// in all. Never crashes on garbage.
+// in all, and on damaged images a decoder would fill in: a PNG or JPEG cut
+// short (no IEND chunk / EOI marker at the end) or one its decoder warns
+// about. Never crashes on garbage.
 DecodedImage decode_image(const std::uint8_t* data, std::size_t size);
 inline DecodedImage decode_image(const std::vector<std::uint8_t>& bytes) {
   return decode_image(bytes.data(), bytes.size());

@@ -1,5 +1,6 @@
 #include "storage/cell_check.h"
 
+#include <algorithm>
 #include <exception>
 #include <set>
 
@@ -9,6 +10,27 @@
 #include "storage/sqlite_db.h"
 
 namespace cellbake {
+namespace {
+
+// The face size the cells were baked at (the `sample.face_size=N` line of meta
+// `config`), or 0 when the database does not say (unknown: faces are then
+// only compared with each other).
+int baked_face_size(const CellDb& db) {
+  const std::string config = db.meta("config").value_or("");
+  const std::string key = "sample.face_size=";
+  std::size_t at = config.rfind("\n" + key);
+  at = at != std::string::npos ? at + 1 : config.rfind(key, 0);
+  if (at == std::string::npos) return 0;
+  const std::size_t from = at + key.size(), end = std::min(config.find('\n', from), config.size());
+  int size = 0;
+  for (std::size_t i = from; i < end; ++i) {
+    if (config[i] < '0' || config[i] > '9' || size > 100000) return 0;
+    size = size * 10 + (config[i] - '0');
+  }
+  return end > from ? size : 0;
+}
+
+}  // namespace
 
 std::string check_cell(const CellDb& db, std::int64_t id) {
   std::optional<CellRow> row;
@@ -20,6 +42,8 @@ std::string check_cell(const CellDb& db, std::int64_t id) {
   if (!row) return "not in the database";
   if (row->status == "failed") return "";
   if (row->status != "done") return "unknown status '" + row->status + "'";
+  // Face images are face_size x face_size; a face without triangles may hold a 1 x 1 one.
+  int face_size = baked_face_size(db);
   for (const auto& s : row->samples) {
     const std::string at = "sample " + std::to_string(s.index);
     std::set<int> faces;
@@ -28,10 +52,17 @@ std::string check_cell(const CellDb& db, std::int64_t id) {
       return at + " has " + std::to_string(s.faces.size()) + " faces (6 expected, one per cube face)";
     for (const auto& f : s.faces) {
       const std::string face = at + " face " + std::to_string(f.face);
+      DecodedImage image;
       try {
-        decode_image(f.image);
+        image = decode_image(f.image);
       } catch (const std::exception& e) {
         return face + " image: " + e.what();
+      }
+      if (!(image.width == 1 && image.height == 1 && f.triangles == 0)) {
+        if (face_size == 0) face_size = image.width;  // unknown: the first face's size holds for the rest
+        if (image.width != face_size || image.height != face_size)
+          return face + " image: " + std::to_string(image.width) + "x" + std::to_string(image.height) + ", not " +
+                 std::to_string(face_size) + "x" + std::to_string(face_size);
       }
       try {
         decode_face_mesh(f.mesh);

@@ -139,6 +139,35 @@ TEST(DecodeImage, GarbageThrowsOrDecodesWithoutCrashing) {
   }
 }
 
+// A cut image is an error in every format, however little is missing (libjpeg
+// pads a cut JPEG with grey and only warns; libpng never reads the IEND chunk).
+TEST(DecodeImage, CutImagesAreErrorsInEveryFormat) {
+  const auto px = test_image(64, 48, false);
+  for (const char* format : {"jpeg", "webp", "png", "avif", "jxl"}) {
+    const auto good = encode_image(px, 64, 48, {format, 85});
+    ASSERT_NO_THROW(decode_image(good)) << format;
+    for (std::size_t len : {good.size() / 2, good.size() * 9 / 10, good.size() - 2, good.size() - 1}) {
+      const std::vector<std::uint8_t> cut(good.begin(), good.begin() + std::ptrdiff_t(len));
+      EXPECT_THROW(decode_image(cut), std::runtime_error) << format << " cut to " << len << " of " << good.size();
+    }
+  }
+  const auto jpeg = encode_image(test_image(256, 192, false), 256, 192, {"jpeg", 85});  // mostly entropy-coded data
+  try {
+    decode_image(std::vector<std::uint8_t>(jpeg.begin(), jpeg.begin() + std::ptrdiff_t(jpeg.size() / 2)));
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "image blob: truncated jpg (no EOI marker at the end)");
+  }
+  // The end marker alone does not make a cut JPEG whole: libjpeg's warning is an error too.
+  std::vector<std::uint8_t> patched(jpeg.begin(), jpeg.begin() + std::ptrdiff_t(jpeg.size() * 3 / 4));
+  patched.insert(patched.end(), {0xff, 0xd9});
+  try {
+    decode_image(patched);
+    ADD_FAILURE() << "a JPEG cut to 3/4 decoded";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("image blob: damaged jpg: "), std::string::npos) << e.what();
+  }
+}
+
 // ------------------------------------------------------------- face meshes
 
 // A w x h grid of quads over a wavy depth field, uvs in [0, 1].

@@ -143,6 +143,87 @@ TEST_F(Integrity, CheckCellDecodesEveryBlobAndRecomputesTheHash) {
   EXPECT_NE(check.output.find("5 damaged cell(s)"), std::string::npos) << check.output;
 }
 
+// Cuts the image blob of face `face` of sample 0 of cell `id` to `keep` bytes
+// and stamps the cell's content hash anew, so only decoding can tell.
+void cut_image_and_restamp(const std::string& database, std::int64_t id, int face, const std::string& keep) {
+  {
+    SqliteDb d(database, SqliteDb::Mode::read_write_create);
+    d.exec("UPDATE faces SET image = substr(image, 1, " + keep + ") WHERE cell_id = " + std::to_string(id) +
+           " AND sample_index = 0 AND face = " + std::to_string(face));
+  }
+  const std::string hash = cell_content_hash(*CellDb(database, CellDb::Mode::read_only).get_cell(id, true));
+  SqliteDb d(database, SqliteDb::Mode::read_write_create);
+  d.exec("UPDATE cells SET content_hash = '" + hash + "' WHERE id = " + std::to_string(id));
+}
+
+TEST_F(Integrity, CutOrWrongSizedFaceImagesAreDamagedThoughTheHashIsRestamped) {
+  const std::vector<Rgba8> pixels = [] {
+    std::vector<Rgba8> p;
+    for (int i = 0; i < 32 * 32; ++i) p.push_back({std::uint8_t(i * 7), std::uint8_t(i / 5), std::uint8_t(i % 32 * 8), 255});
+    return p;
+  }();
+  const std::vector<std::string> formats = {"jpeg", "png", "webp", "avif", "jxl"};
+  {
+    CellDb cells(db("cells.db"), CellDb::Mode::read_write);
+    for (std::size_t k = 0; k < formats.size(); ++k) {
+      CellRow c = sound_cell(std::int64_t(k) + 1);
+      for (FaceRow& f : c.samples[0].faces)
+        f.image_format = formats[k], f.image = encode_image(pixels, 32, 32, {formats[k], 80});
+      c.content_hash = cell_content_hash(c);
+      cells.put_cell(c);
+    }
+    CellRow small = sound_cell(6);  // one face 16 x 16 among 32 x 32 ones (restamped: only the size tells)
+    for (FaceRow& f : small.samples[0].faces) f.image = encode_image(pixels, 32, 32, {"png", 80});
+    small.samples[0].faces[4].image = encode_image(std::vector<Rgba8>(256, Rgba8{1, 2, 3, 255}), 16, 16, {"png", 80});
+    small.content_hash = cell_content_hash(small);
+    cells.put_cell(small);
+    CellRow empty_face = sound_cell(7);  // a face without triangles keeps a 1 x 1 image: sound
+    for (FaceRow& f : empty_face.samples[0].faces) f.image = encode_image(pixels, 32, 32, {"png", 80});
+    empty_face.samples[0].faces[1].triangles = 0;
+    empty_face.samples[0].faces[1].image = encode_image({Rgba8{0, 0, 0, 0}}, 1, 1, {"png", 80});
+    empty_face.content_hash = cell_content_hash(empty_face);
+    cells.put_cell(empty_face);
+  }
+  for (std::size_t k = 0; k < formats.size(); ++k) cut_image_and_restamp(db("cells.db"), std::int64_t(k) + 1, 3, "length(image) / 2");
+  CellDb cells(db("cells.db"), CellDb::Mode::read_only);
+  for (std::size_t k = 0; k < formats.size(); ++k) {
+    const std::string problem = check_cell(cells, std::int64_t(k) + 1);
+    EXPECT_EQ(problem.rfind("sample 0 face 3 image: image blob: ", 0), 0u) << formats[k] << ": " << problem;
+  }
+  EXPECT_EQ(check_cell(cells, 6), "sample 0 face 4 image: 16x16, not 32x32");
+  EXPECT_EQ(check_cell(cells, 7), "");
+}
+
+TEST_F(Integrity, StatusCheckListsACellWithAHalvedJpegAndRepairRedoesIt) {
+  ASSERT_EQ(bake("ref.db", "--set encode.image_format=jpeg").exit_code, 0);
+  ASSERT_EQ(bake("cells.db", "--set encode.image_format=jpeg").exit_code, 0);
+  std::int64_t victim = 0;
+  int face = -1;
+  {
+    SqliteDb d(db("cells.db"), SqliteDb::Mode::read_only);
+    SqliteStatement s(d, "SELECT cell_id, face FROM faces WHERE sample_index = 0 AND triangles > 0 "
+                         "ORDER BY length(image) DESC, cell_id LIMIT 1");
+    ASSERT_TRUE(s.step()) << "no face with an image";
+    victim = s.column_int(0), face = int(s.column_int(1));
+  }
+  cut_image_and_restamp(db("cells.db"), victim, face, "length(image) / 2");
+  const std::string where = "cell " + std::to_string(victim) + ": sample 0 face " + std::to_string(face) + " image: ";
+
+  const auto check = test::run_cellbake("status --check " + db("cells.db"));
+  EXPECT_NE(check.exit_code, 0) << check.output;
+  EXPECT_NE(check.output.find(where + "image blob: truncated jpg"), std::string::npos) << check.output;
+  EXPECT_NE(check.output.find("1 damaged cell(s)"), std::string::npos) << check.output;
+
+  const auto repair = test::run_cellbake("status --repair " + db("cells.db") + " --json");
+  EXPECT_EQ(repair.exit_code, 0) << repair.output;
+  EXPECT_EQ(json_field(repair.output, "cells_pending"), "1") << repair.output;
+  EXPECT_FALSE(CellDb(db("cells.db"), CellDb::Mode::read_only).get_cell(victim, false).has_value());
+  ASSERT_EQ(bake("cells.db", "--set encode.image_format=jpeg").exit_code, 0);
+  EXPECT_EQ(CellDb(db("cells.db"), CellDb::Mode::read_only).totals().content_hash,
+            CellDb(db("ref.db"), CellDb::Mode::read_only).totals().content_hash);
+  EXPECT_EQ(test::run_cellbake("status --check " + db("cells.db")).exit_code, 0);
+}
+
 TEST_F(Integrity, StatusRepairMarksDamagedCellsPendingAndTheBakeRedoesThem) {
   ASSERT_EQ(bake("ref.db").exit_code, 0);
   ASSERT_EQ(bake("cells.db").exit_code, 0);
