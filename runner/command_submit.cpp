@@ -1,7 +1,9 @@
-// `cellbake submit CONFIG --shards N [--partition P] [--time T] [--mem M]
-// [--set k=v]... [--out MERGED.db] [--out-dir DIR] [--dry-run]`: a distributed
-// bake on Slurm — a job array of shard bakes plus a merge job that runs after
-// every task succeeded (see runner/slurm_scripts.h).
+// `cellbake submit CONFIG --shards N [--partition P] [--account A] [--qos Q]
+// [--time T] [--mem M] [--cpus-per-task C] [--sbatch-arg OPT]... [--merge-time T]
+// [--merge-mem M] [--merge-sbatch-arg OPT]... [--set k=v]... [--out MERGED.db]
+// [--out-dir DIR] [--dry-run]`: a distributed bake on Slurm — a job array of
+// shard bakes plus a merge job that runs after every task succeeded (see
+// runner/slurm_scripts.h).
 #include <CLI/CLI.hpp>
 
 #include <array>
@@ -17,9 +19,10 @@ namespace cellbake {
 namespace {
 
 struct SubmitOptions {
-  std::string config_file, out, out_dir, partition, time, mem;
-  std::vector<std::string> sets;
-  int shards = 0;
+  std::string config_file, out, out_dir, partition, account, qos, time, mem;
+  SlurmBakeJob defaults;  // the merge job's limits
+  std::vector<std::string> sets, sbatch_args, merge_sbatch_args;
+  int shards = 0, cpus_per_task = 0;
   bool dry_run = false;
 };
 
@@ -70,12 +73,29 @@ void add_submit_command(CLI::App& app) {
   cmd->add_option("--set", opt->sets, "Override a config key: section.key=value (repeatable; passed to every task)");
   cmd->add_option("--out", opt->out, "Merged cell database (default: the config's [output] database)");
   cmd->add_option("--out-dir", opt->out_dir, "Folder for shard databases, scripts and logs (default: MERGED_shards)");
-  cmd->add_option("--partition", opt->partition, "Slurm partition (sbatch --partition)");
-  cmd->add_option("--time", opt->time, "Time limit per task (sbatch --time)");
-  cmd->add_option("--mem", opt->mem, "Memory per task (sbatch --mem)");
+  cmd->add_option("--partition", opt->partition, "Slurm partition of both jobs (sbatch --partition)");
+  cmd->add_option("--account", opt->account, "Account charged for both jobs (sbatch --account)");
+  cmd->add_option("--qos", opt->qos, "Quality of service of both jobs (sbatch --qos)");
+  cmd->add_option("--time", opt->time, "Time limit per bake task (sbatch --time; default: the partition's)");
+  cmd->add_option("--mem", opt->mem, "Memory per bake task (sbatch --mem; default: the partition's)");
+  cmd->add_option("--cpus-per-task", opt->cpus_per_task,
+                  "Cores per bake task (sbatch --cpus-per-task); each task bakes with that many threads "
+                  "(default: the cluster's allocation, and as many threads as CPUs the task may use)")
+      ->check(CLI::Range(1, 1024));
+  cmd->add_option("--sbatch-arg", opt->sbatch_args,
+                  "One more sbatch option for the bake tasks, as one word: --sbatch-arg=--gres=gpu:1 (repeatable)")
+      ->allow_extra_args(false);
+  cmd->add_option("--merge-time", opt->defaults.merge_time, "Time limit of the merge job (sbatch --time)")
+      ->capture_default_str();
+  cmd->add_option("--merge-mem", opt->defaults.merge_mem, "Memory of the merge job (sbatch --mem)")->capture_default_str();
+  cmd->add_option("--merge-sbatch-arg", opt->merge_sbatch_args,
+                  "One more sbatch option for the merge job, as one word (repeatable)")
+      ->allow_extra_args(false);
   cmd->add_flag("--dry-run", opt->dry_run, "Print both scripts and submit nothing");
   cmd->callback([opt] {
-    // Validate the configuration here, before anything reaches the cluster.
+    // Validate the configuration and options here, before anything reaches the cluster.
+    for (const auto& a : opt->sbatch_args) check_sbatch_arg(a, "--sbatch-arg");
+    for (const auto& a : opt->merge_sbatch_args) check_sbatch_arg(a, "--merge-sbatch-arg");
     BakeCommandOptions bake;
     bake.config_file = opt->config_file;
     bake.sets = opt->sets;
@@ -94,8 +114,15 @@ void add_submit_command(CLI::App& app) {
                                                      : std::filesystem::path(opt->out_dir));
     job.workdir = absolute_text(std::filesystem::current_path());
     job.partition = opt->partition;
+    job.account = opt->account;
+    job.qos = opt->qos;
     job.time = opt->time;
     job.mem = opt->mem;
+    job.cpus_per_task = opt->cpus_per_task;
+    job.sbatch_args = opt->sbatch_args;
+    job.merge_time = opt->defaults.merge_time;
+    job.merge_mem = opt->defaults.merge_mem;
+    job.merge_sbatch_args = opt->merge_sbatch_args;
 
     const std::string array_file = job.out_dir + "/bake_array.sbatch", merge_file = job.out_dir + "/merge.sbatch";
     if (opt->dry_run) {

@@ -153,6 +153,12 @@ TEST(Slurm, SubmittedShardBakeMergesToTheSingleMachineResult) {
   const double merge_s = seconds_since(t_submit);
   EXPECT_EQ(unfinished_tasks(merge_job, 1), "") << logs_of(dir / "shards" / "logs");
   ASSERT_TRUE(std::filesystem::exists(dir / "merged.db")) << logs_of(dir / "shards" / "logs");
+  {
+    // Task logs hold the bake's progress lines (tasks do not run --quiet).
+    std::ifstream log0(dir / "shards" / "logs" / "shard_0.out");
+    const std::string text(std::istreambuf_iterator<char>(log0), {});
+    EXPECT_TRUE(std::regex_search(text, std::regex("bake: \\d+/\\d+ cells \\("))) << text;
+  }
 
   // The same config baked on this machine in one process.
   const auto t_local = Clock::now();
