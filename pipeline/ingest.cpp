@@ -127,7 +127,7 @@ struct StoredTexture {
 // image that cannot be read becomes a warning and the material stays untextured.
 void attach_texture(Material& material, std::uint32_t index, const ModelInfo& info,
                     const std::filesystem::path& model, const IngestParams& params, GeometryStoreWriter& writer,
-                    std::map<std::string, StoredTexture>& texture_ids, Hasher& content, IngestReport& report) {
+                    std::map<std::string, StoredTexture>& texture_ids, IngestReport& report) {
   TextureInput input;
   if (const auto found = info.textures.find(index); found != info.textures.end()) {
     input = found->second;
@@ -151,10 +151,6 @@ void attach_texture(Material& material, std::uint32_t index, const ModelInfo& in
   } else {
     try {
       const TextureImage image = import_texture(input, "'" + shown + "'", {params.max_texture_size});
-      if (!embedded) {
-        std::uint64_t bytes = 0;
-        content.text(hash_file(input.file, bytes));
-      }
       material.texture_id = writer.add_texture(image, shown);
       ++report.textures;
       report.texture_bytes += image.bytes();
@@ -192,14 +188,9 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   std::vector<Material> materials;
   std::vector<SourceFileRecord> sources;
   std::vector<TriangleKey> keys;
-  Hasher content;
-  content.text("cellbake-store-v1").u64(params.max_chunk_triangles);
-  // What the readers make of the same file: v2, uniform vertex colours give way to material colours.
-  content.text("readers-v2");
-  content.f64(params.translate.x).f64(params.translate.y).f64(params.translate.z);
-  // v3: normals, textures stored with their size cap.
-  content.text("store-v3").u64(static_cast<std::uint64_t>(params.max_texture_size));
-  if (params.allow_outside_paths) content.text("outside-paths");  // the default keeps earlier stores' hashes
+  // The store's content hash is the writer's, over what it stores (chunks,
+  // materials, textures): whatever reaches the store through any file a model
+  // names (.mtl colours, textures, glTF buffers) or any parameter changes it.
   // The up axis is metadata, not content: a store's hash (and so every bake
   // hash) does not change when only the recorded axis does.
   std::vector<std::string> up_claims;  // "FILE: y (reason)" for files that say
@@ -209,8 +200,7 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
     SourceFileRecord src;
     src.path = model.string();
     require_regular_file(model);
-    src.hash = hash_file(model, src.bytes);
-    content.text(src.hash);
+    src.hash = hash_file(model, src.bytes);  // provenance (the sources table), not the content hash
     const auto material_offset = static_cast<std::uint32_t>(materials.size());
     std::uint64_t file_triangles = 0;
     const bool translate = params.translate != Vec3d{0, 0, 0};
@@ -237,7 +227,7 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
     for (std::uint32_t m = 0; m < info.materials.size(); ++m) {
       Material material = info.materials[m];
       if (!material.texture.empty())
-        attach_texture(material, m, info, model, params, writer, texture_ids, content, report);
+        attach_texture(material, m, info, model, params, writer, texture_ids, report);
       materials.push_back(material);
     }
     if (!info.up.empty()) {
@@ -322,8 +312,7 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
     if (progress) progress("write", first + n, ranges.size());
   }
   report.skipped_duplicate = spill.count() - report.triangles_stored;
-  content.u64(report.triangles_stored);
-  report.content_hash = content.hex();
+  report.content_hash = writer.content_hash();
 
   StoreSummary summary;
   summary.bounds = report.bounds;

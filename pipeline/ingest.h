@@ -52,7 +52,7 @@ struct IngestReport {
   std::uint64_t vertices = 0;
   Box3d bounds;
   double read_seconds = 0, chunk_seconds = 0, write_seconds = 0;
-  std::string content_hash;
+  std::string content_hash;  // the store's: GeometryStoreWriter::content_hash(), over what it holds
   // One line per model file with vertex colours: "FILE: vertex colours: ..."
   // (describe_vertex_colours in pipeline/readers/model_reader.h).
   std::vector<std::string> vertex_colour_notes;

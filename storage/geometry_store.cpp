@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "stages/encode.h"
+#include "stages/hashing.h"
 #include "storage/chunk_codec.h"
 #include "storage/sqlite_db.h"
 
@@ -100,6 +101,32 @@ void remove_stale_temporaries(const std::filesystem::path& store) {
   }
 }
 
+// The rows of each kind as the content hash sees them (GeometryStoreWriter
+// while writing, stored_content_hash from the file): values as bound, in id order.
+void hash_texture(Hasher& h, std::int64_t id, std::int64_t width, std::int64_t height, std::int64_t wrap_u,
+                  std::int64_t wrap_v, std::int64_t has_alpha, const std::vector<Rgba8>& top_down) {
+  h.u64(std::uint64_t(id)).u64(std::uint64_t(width)).u64(std::uint64_t(height));
+  h.u64(std::uint64_t(wrap_u)).u64(std::uint64_t(wrap_v)).u64(std::uint64_t(has_alpha));
+  h.bytes(top_down.data(), top_down.size() * sizeof(Rgba8));  // texels, not PNG bytes: a libpng update changes nothing
+}
+void hash_material(Hasher& h, std::int64_t index, const std::string& name, const std::int64_t (&rgba)[4],
+                   const std::string& texture, std::int64_t texture_id, std::int64_t alpha_test) {
+  h.u64(std::uint64_t(index)).text(name);
+  for (std::int64_t c : rgba) h.u64(std::uint64_t(c));
+  h.text(texture).u64(std::uint64_t(texture_id)).u64(std::uint64_t(alpha_test));
+}
+void hash_chunk(Hasher& h, std::int64_t id, const double (&origin_and_bounds)[9], std::int64_t triangles,
+                std::int64_t vertices, const void* blob, std::size_t size) {
+  h.u64(std::uint64_t(id));
+  for (double v : origin_and_bounds) h.f64(v);
+  h.u64(std::uint64_t(triangles)).u64(std::uint64_t(vertices)).bytes(blob, size).u64(size);
+}
+std::string combine_content_hash(const Hasher& textures, const Hasher& materials, const Hasher& chunks) {
+  Hasher h;
+  h.text("cellbake-store-content-v1").text(textures.hex()).text(materials.hex()).text(chunks.hex());
+  return h.hex();
+}
+
 std::string fmt_double(double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.17g", v);
@@ -112,7 +139,10 @@ std::string fmt_double(double v) {
 
 GeometryStoreWriter::GeometryStoreWriter(const std::filesystem::path& final_path)
     : final_path_(final_path),
-      temp_path_(final_path.string() + ".tmp-" + std::to_string(::getpid())) {
+      temp_path_(final_path.string() + ".tmp-" + std::to_string(::getpid())),
+      textures_hash_(std::make_unique<Hasher>()),
+      materials_hash_(std::make_unique<Hasher>()),
+      chunks_hash_(std::make_unique<Hasher>()) {
   check_store_target(final_path);
   remove_stale_temporaries(final_path);
   std::error_code ec;
@@ -141,6 +171,8 @@ void GeometryStoreWriter::add_material(std::uint32_t index, const Material& m) {
   s.bind(5, std::int64_t(m.color.b)).bind(6, std::int64_t(m.color.a)).bind(7, m.texture);
   s.bind(8, m.texture_id).bind(9, std::int64_t(m.alpha_test ? 1 : 0));
   s.run();
+  hash_material(*materials_hash_, std::int64_t(index), m.name, {m.color.r, m.color.g, m.color.b, m.color.a}, m.texture,
+                m.texture_id, m.alpha_test ? 1 : 0);
 }
 
 std::int64_t GeometryStoreWriter::add_texture(const TextureImage& image, const std::string& source) {
@@ -161,6 +193,8 @@ std::int64_t GeometryStoreWriter::add_texture(const TextureImage& image, const s
   s.bind(5, std::int64_t(image.wrap_u)).bind(6, std::int64_t(image.wrap_v)).bind(7, std::int64_t(image.has_alpha));
   s.bind_blob(8, blob.data(), blob.size());
   s.run();
+  hash_texture(*textures_hash_, id, image.width, image.height, std::int64_t(image.wrap_u), std::int64_t(image.wrap_v),
+               std::int64_t(image.has_alpha), top_down);
   return id;
 }
 
@@ -181,6 +215,10 @@ std::int64_t GeometryStoreWriter::add_chunk(const Chunk& chunk) {
   s.bind(11, std::int64_t(chunk.triangle_count())).bind(12, std::int64_t(chunk.positions.size()));
   s.bind_blob(13, blob.data(), blob.size());
   s.run();
+  hash_chunk(*chunks_hash_, id,
+             {chunk.origin.x, chunk.origin.y, chunk.origin.z, chunk.bounds.lo.x, chunk.bounds.lo.y, chunk.bounds.lo.z,
+              chunk.bounds.hi.x, chunk.bounds.hi.y, chunk.bounds.hi.z},
+             std::int64_t(chunk.triangle_count()), std::int64_t(chunk.positions.size()), blob.data(), blob.size());
   // SQLite's R*Tree stores float32 and rounds outward, so its boxes stay conservative.
   auto& r = *insert_rtree_;
   r.bind(1, id);
@@ -193,6 +231,10 @@ std::int64_t GeometryStoreWriter::add_chunk(const Chunk& chunk) {
     pending_ = 0;
   }
   return id;
+}
+
+std::string GeometryStoreWriter::content_hash() const {
+  return combine_content_hash(*textures_hash_, *materials_hash_, *chunks_hash_);
 }
 
 void GeometryStoreWriter::finish(const StoreSummary& sum) {
@@ -471,6 +513,47 @@ std::vector<ChunkRef> GeometryStore::all_chunks() const {
   }
   release(std::move(c));
   return out;
+}
+
+// ---------------------------------------------------------------- content hash
+
+std::string stored_content_hash(const std::filesystem::path& path) {
+  const std::string where = path.string() + ": ";
+  SqliteDb db(path, SqliteDb::Mode::read_only);
+  {
+    SqliteStatement v(db, "SELECT value FROM meta WHERE key = 'schema_version'");
+    if (!v.step() || v.column_text(0) != std::to_string(kStoreSchemaVersion))
+      throw std::runtime_error(where + "not a schema " + std::to_string(kStoreSchemaVersion) + " geometry store");
+  }
+  Hasher textures, materials, chunks;
+  SqliteStatement t(db, "SELECT id, width, height, wrap_u, wrap_v, has_alpha, image FROM textures ORDER BY id");
+  while (t.step()) {
+    std::size_t size = 0;
+    const std::uint8_t* data = t.column_blob_data(6, size);
+    DecodedImage image;
+    try {
+      image = decode_image(data, size);
+    } catch (const std::exception& e) {
+      throw std::runtime_error(where + "texture " + std::to_string(t.column_int(0)) + ": " + e.what());
+    }
+    hash_texture(textures, t.column_int(0), t.column_int(1), t.column_int(2), t.column_int(3), t.column_int(4),
+                 t.column_int(5), image.pixels);
+  }
+  SqliteStatement m(db, "SELECT id, name, r, g, b, a, texture, texture_id, alpha_test FROM materials ORDER BY id");
+  while (m.step())
+    hash_material(materials, m.column_int(0), m.column_text(1),
+                  {m.column_int(2), m.column_int(3), m.column_int(4), m.column_int(5)}, m.column_text(6), m.column_int(7),
+                  m.column_int(8));
+  SqliteStatement c(db, "SELECT id, origin_x, origin_y, origin_z, min_x, min_y, min_z, max_x, max_y, max_z, "
+                        "triangle_count, vertex_count, geometry FROM chunks ORDER BY id");
+  while (c.step()) {
+    double v[9];
+    for (int i = 0; i < 9; ++i) v[i] = c.column_double(1 + i);
+    std::size_t size = 0;
+    const std::uint8_t* blob = c.column_blob_data(12, size);
+    hash_chunk(chunks, c.column_int(0), v, c.column_int(10), c.column_int(11), blob, size);
+  }
+  return combine_content_hash(textures, materials, chunks);
 }
 
 }  // namespace cellbake

@@ -18,6 +18,7 @@
 
 namespace cellbake {
 
+class Hasher;
 class SqliteDb;
 class SqliteStatement;
 
@@ -36,7 +37,7 @@ struct StoreSummary {
   std::uint64_t skipped_degenerate = 0;
   std::uint64_t skipped_duplicate = 0;
   std::string units = "m";
-  std::string content_hash;  // hash over sources and ingest parameters, hex
+  std::string content_hash;  // GeometryStoreWriter::content_hash(): over what the store holds, hex
   // The model's up axis as ingest recorded it: "z", "y", or "" when unknown
   // (meta `up`, absent then; not part of content_hash), and what said so
   // (meta `up_source`, e.g. "glTF: Y-up by specification", "--up").
@@ -64,6 +65,16 @@ class GeometryStoreWriter {
   void add_source(const SourceFileRecord& source);
   // Adds a chunk (its id is assigned here, 1, 2, 3 ... in call order).
   std::int64_t add_chunk(const Chunk& chunk);
+  // The content hash (32 hex digits) of what has been added: every texture
+  // (id, size, wrap modes, alpha flag, texels), every material row (index,
+  // name, colour, texture name and id, alpha test) and every chunk row (id,
+  // origin, bounds, counts, blob), each kind in call order (= id order when
+  // materials are added by ascending index, as ingest does). Sources, units
+  // and the up axis are metadata, not content. Whatever changes what a bake
+  // reads from the store changes it (geometry, a material colour in a .mtl, a
+  // texture's texels), and only that. stored_content_hash() recomputes it
+  // from a finished store.
+  std::string content_hash() const;
   // Writes the metadata, commits, and atomically renames onto the final path.
   void finish(const StoreSummary& summary);
 
@@ -73,6 +84,7 @@ class GeometryStoreWriter {
   std::unique_ptr<SqliteStatement> insert_chunk_, insert_rtree_;
   std::int64_t next_id_ = 1;
   std::int64_t next_texture_id_ = 1;
+  std::unique_ptr<Hasher> textures_hash_, materials_hash_, chunks_hash_;
   std::size_t pending_ = 0;
   bool finished_ = false;
 };
@@ -127,5 +139,12 @@ class GeometryStore : public ChunkSource {
   };
   mutable std::unordered_map<std::int64_t, CacheEntry> cache_;
 };
+
+// Recomputes a finished store's content hash from its rows, as
+// GeometryStoreWriter::content_hash() computed it while writing (equal for
+// stores written since that hash; earlier stores hashed their source files).
+// Throws std::runtime_error naming the path when the file is not a schema 2
+// store or a texture does not decode.
+std::string stored_content_hash(const std::filesystem::path& path);
 
 }  // namespace cellbake

@@ -9,8 +9,10 @@
 #include "pipeline/ingest.h"
 #include "runner/parallel.h"
 #include "stages/hashing.h"
+#include "storage/cell_db.h"
 #include "storage/geometry_store.h"
 #include "test_support.h"
+#include "tests/fixture_textured.h"
 
 namespace cellbake {
 namespace {
@@ -94,6 +96,84 @@ TEST(Ingest, SameChunksWhateverTheThreadCount) {
     EXPECT_EQ(x->indices, y->indices);
     EXPECT_EQ(x->origin, y->origin);
   }
+}
+
+// The store's content hash is over what the store holds, so everything that
+// reaches it through any file (the .mtl's colours, a texture's texels, the
+// geometry) changes it, and nothing else does (the model file's other bytes,
+// the recorded up axis). GeometryStoreWriter's hash equals the one recomputed
+// from the finished file.
+TEST(Ingest, TheStoreHashCoversMaterialsTexturesAndGeometryAsStored) {
+  test::TempDir dir;
+  const auto texels = test::checker_texels(2, 2);  // 4 x 4
+  test::write_png_bottom_up(dir / "tex.png", texels, 4, 4);
+  const auto wall = [&](const std::string& kd, const test::TexturedQuad& quad = test::checker_wall()) {
+    return test::write_textured_quad_obj(dir.path(), "wall", quad, "wall", "tex.png", kd);
+  };
+  const auto obj = wall("1 0 0");
+  int stores = 0;
+  const auto ingest = [&](IngestParams params = {}) {
+    const auto store = dir / ("s" + std::to_string(++stores) + ".db");
+    const IngestReport r = ingest_models({obj}, store, params, serial());
+    EXPECT_EQ(r.textures, 1u);
+    EXPECT_EQ(GeometryStore(store).summary().content_hash, r.content_hash);
+    EXPECT_EQ(stored_content_hash(store), r.content_hash) << "recomputed from the rows of " << store;
+    return r.content_hash;
+  };
+  const std::string first = ingest();
+  EXPECT_EQ(ingest(), first) << "deterministic";
+
+  wall("0 1 0");  // a material colour in the .mtl
+  EXPECT_NE(ingest(), first);
+  wall("1 0 0");
+  EXPECT_EQ(ingest(), first);
+
+  auto changed = texels;  // one texel of the texture
+  changed[5].r ^= 1;
+  test::write_png_bottom_up(dir / "tex.png", changed, 4, 4);
+  EXPECT_NE(ingest(), first);
+  test::write_png_bottom_up(dir / "tex.png", texels, 4, 4);
+
+  test::TexturedQuad moved = test::checker_wall();  // the geometry
+  moved.c11.z += 0.25;
+  wall("1 0 0", moved);
+  EXPECT_NE(ingest(), first);
+  wall("1 0 0");
+
+  { std::ofstream(obj, std::ios::app) << "# the same model in other bytes\n"; }
+  IngestParams y_up;
+  y_up.up = "y";
+  EXPECT_EQ(ingest(y_up), first) << "file bytes that store nothing and the up axis are not content";
+}
+
+// The regression: a bake redoes its cells when only a .mtl colour changed and
+// the model was ingested again (the store hash used to cover the model files'
+// bytes alone, so the cells' input hashes stayed and the bake skipped them).
+TEST(Ingest, ABakeRedoesItsCellsAfterAMaterialColourChanged) {
+  test::TempDir dir;
+  test::write_png_bottom_up(dir / "tex.png", test::checker_texels(2, 2), 4, 4);
+  const auto obj = test::write_textured_quad_obj(dir.path(), "wall", test::checker_wall(), "wall", "tex.png", "1 0 0");
+  const std::string bake = "bake --store " + (dir / "s.db").string() + " --out " + (dir / "cells.db").string() +
+                           " --region=2,5.5,1,3.5,6.5,2 --cell-size 1 --face-size 16 --quiet --threads 1";
+  ingest_models({obj}, dir / "s.db", IngestParams{}, serial());
+  const auto first = test::run_cellbake(bake);
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  const auto input_hashes = [&] {
+    std::vector<std::string> hashes;
+    CellDb cells(dir / "cells.db", CellDb::Mode::read_only);
+    for (std::int64_t id : cells.cell_ids()) hashes.push_back(cells.get_cell(id, false)->input_hash);
+    return hashes;
+  };
+  const std::vector<std::string> before = input_hashes();
+  ASSERT_FALSE(before.empty());
+
+  test::write_textured_quad_obj(dir.path(), "wall", test::checker_wall(), "wall", "tex.png", "0 0 1");
+  ingest_models({obj}, dir / "s.db", IngestParams{}, serial());
+  const auto again = test::run_cellbake(bake);
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  const std::vector<std::string> after = input_hashes();
+  ASSERT_EQ(after.size(), before.size());
+  for (std::size_t i = 0; i < after.size(); ++i) EXPECT_NE(after[i], before[i]) << "cell " << i << " was not redone";
 }
 
 TEST(Ingest, SpillFileGivesTheSameStoreAsMemory) {
