@@ -1,7 +1,8 @@
 // `cellbake view DB [options]`: the interactive viewer. It needs a window
 // OpenGL context (GLFW + libGL) while this executable links OSMesa, so it is a
-// separate program, `cellbake-view`, built next to this one; this command
-// replaces the process with it, passing every argument through.
+// separate program, `cellbake-view`, built next to this one and installed
+// into libexec/cellbake/; this command replaces the process with it, passing
+// every argument through.
 #include <CLI/CLI.hpp>
 
 #include <unistd.h>
@@ -18,15 +19,21 @@
 namespace cellbake {
 namespace {
 
-// cellbake-view next to this executable, else in the build tree's viewer/ folder.
+// cellbake-view beside this executable (the build tree), else in the install
+// layout's libexec folder relative to it (bin/../libexec/cellbake).
 std::filesystem::path find_view_program() {
   std::error_code ec;
   const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
   if (ec) throw std::runtime_error("cannot locate this executable through /proc/self/exe: " + ec.message());
-  for (const auto& candidate : {self.parent_path() / "cellbake-view", self.parent_path().parent_path() / "viewer" / "cellbake-view"})
+  const std::filesystem::path candidates[] = {
+      self.parent_path() / "cellbake-view",
+      (self.parent_path() / CELLBAKE_VIEW_DIR_FROM_BIN / "cellbake-view").lexically_normal()};
+  for (const auto& candidate : candidates)
     if (std::filesystem::exists(candidate)) return candidate;
-  throw std::runtime_error("cellbake-view not found next to " + self.string() +
-                           " (build it: it needs libglfw3-dev and libimgui-dev, see scripts/install-deps.sh)");
+  throw std::runtime_error("cellbake-view not found (looked for " + candidates[0].string() + " and " +
+                           candidates[1].string() +
+                           "); it is built only when libglfw3-dev and libimgui-dev are installed "
+                           "(scripts/install-deps.sh), and `cmake --install` puts it in the second place");
 }
 
 }  // namespace

@@ -17,7 +17,7 @@ asan_tests=(test_readers test_input_checks test_geometry_store test_encode test_
             test_output_guards test_cell_db_migration test_ingest test_integrity test_merge test_bake)
 tsan_tests=(test_geometry_store test_cell_db_migration test_integrity test_merge test_bake)
 
-bash scripts/install-deps.sh
+bash scripts/install-deps.sh build test
 if ! command -v clang++ > /dev/null || ! dpkg-query -W -f='${Status}' libclang-rt-dev 2>/dev/null | grep -q "ok installed"; then
   echo "[sanitize] installing clang"
   SUDO=""

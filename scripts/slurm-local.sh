@@ -16,6 +16,7 @@ set -euo pipefail
 dir=${CELLBAKE_SLURM_DIR:-/tmp/cellbake-slurm}
 port=${CELLBAKE_SLURM_PORT:-6817}
 conf=$dir/slurm.conf
+scripts=$(cd "$(dirname "$0")" && pwd)
 host=$(hostname -s)
 export SLURM_CONF=$conf
 
@@ -117,8 +118,16 @@ wait_for() {
 node_idle() { [ "$(sinfo -h -n "$host" -o %T 2>/dev/null)" = idle ]; }
 
 start() {
+  local p
   for p in munged slurmctld slurmd scontrol sinfo sbatch; do
-    command -v "$p" >/dev/null || die "$p not found; install slurmctld slurmd slurm-client munge (scripts/install-deps.sh)"
+    if ! command -v "$p" >/dev/null; then
+      say "$p not found: installing the Slurm packages"
+      bash "$scripts/install-deps.sh" slurm || die "cannot install slurmctld slurmd slurm-client munge"
+      break
+    fi
+  done
+  for p in munged slurmctld slurmd scontrol sinfo sbatch; do
+    command -v "$p" >/dev/null || die "$p not found after installing the Slurm packages"
   done
   if [ -n "$(live_pid "$dir/run/slurmctld.pid" slurmctld)" ]; then
     say "already running in $dir"
