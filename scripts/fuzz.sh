@@ -7,8 +7,41 @@
 # crash, leak, timeout or out-of-memory; the input is kept as
 # ${dir}/crashes/TARGET-*, to be fixed and added to the unit tests.
 #   scripts/fuzz.sh [SECONDS] [TARGET...]     (targets: fuzz_obj_reader, ...)
+#
+# `replay` mode (what scripts/test.sh runs; no clang): the same targets built
+# with the default compiler, -O1 and ASan + UBSan, each linked with the replay
+# driver (tests/fuzz/fuzz_replay.cpp: seeds + RUNS fixed pseudo-random mutants,
+# default 10000) in ${CELLBAKE_FUZZ_REPLAY_DIR:-build-fuzz-replay}, run with
+# CTest (`fuzz_replay.*`). A finding fails its test; the input is kept as
+# ${dir}/tests/fuzz/fuzz-finding-TARGET.
+#   scripts/fuzz.sh replay [RUNS]
 set -euo pipefail
 cd "$(dirname "$0")/.."
+
+if [ "${1:-}" = replay ]; then
+  runs="${2:-10000}"
+  dir="${CELLBAKE_FUZZ_REPLAY_DIR:-build-fuzz-replay}"
+  bash scripts/install-deps.sh
+  start=$(date +%s)
+  echo "[fuzz] replay: building ${dir} (ASan + UBSan, -O1)"
+  cmake -S . -B "${dir}" -G Ninja -DCMAKE_BUILD_TYPE=None -DCMAKE_C_FLAGS="-O1 -g1" -DCMAKE_CXX_FLAGS="-O1 -g1" \
+    -DCELLBAKE_FUZZ=ON -DCELLBAKE_FUZZ_ENGINE=replay -DCELLBAKE_FUZZ_REPLAY_RUNS="${runs}" \
+    -DCELLBAKE_BUILD_TESTS=OFF -DCELLBAKE_BUILD_BENCH=OFF > "${dir}.configure.log" 2>&1 \
+    || { cat "${dir}.configure.log"; exit 1; }
+  cmake --build "${dir}" --target fuzz_all -j "$(nproc)"
+  built=$(date +%s)
+  echo "[fuzz] replay: built in $(( built - start )) s; ${runs} mutants per target"
+  # Leaks and third-party reports as scripts/sanitize.sh; one allocation over
+  # 2560 MiB is a finding (scripts/fuzz.sh's -rss_limit_mb).
+  export ASAN_OPTIONS="detect_leaks=1:fast_unwind_on_malloc=0:max_allocation_size_mb=2560:${ASAN_OPTIONS:-}"
+  export LSAN_OPTIONS="suppressions=${PWD}/tests/sanitizers/lsan.supp:print_suppressions=0:${LSAN_OPTIONS:-}"
+  export UBSAN_OPTIONS="suppressions=${PWD}/tests/sanitizers/ubsan.supp:print_stacktrace=1:halt_on_error=1:${UBSAN_OPTIONS:-}"
+  status=0
+  (cd "${dir}" && ctest --output-on-failure -j "$(nproc)" --timeout 900 -L '^fuzz_replay$') || status=1
+  echo "[fuzz] replay: $([ ${status} = 0 ] && echo "no findings" || echo FAILED) (run $(( $(date +%s) - built )) s)"
+  exit ${status}
+fi
+
 seconds="${1:-60}"
 shift || true
 dir="${CELLBAKE_FUZZ_DIR:-build-fuzz}"
@@ -23,7 +56,7 @@ fi
 
 echo "[fuzz] building ${dir} (clang, libFuzzer + ASan + UBSan)"
 cmake -S . -B "${dir}" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
-  -DCMAKE_CXX_COMPILER=clang++ -DCELLBAKE_FUZZ=ON -DCELLBAKE_BUILD_TESTS=OFF -DCELLBAKE_BUILD_BENCH=OFF \
+  -DCMAKE_CXX_COMPILER=clang++ -DCELLBAKE_FUZZ=ON -DCELLBAKE_FUZZ_ENGINE=libfuzzer -DCELLBAKE_BUILD_TESTS=OFF -DCELLBAKE_BUILD_BENCH=OFF \
   > "${dir}.configure.log" 2>&1 || { cat "${dir}.configure.log"; exit 1; }
 cmake --build "${dir}" --target fuzz_all -j "$(nproc)"
 
@@ -31,7 +64,7 @@ targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
   for t in tests/fuzz/fuzz_*.cpp; do
     name="$(basename "${t}" .cpp)"
-    [ "${name}" = fuzz_seeds ] || targets+=("${name}")
+    [ "${name}" = fuzz_seeds ] || [ "${name}" = fuzz_replay ] || targets+=("${name}")
   done
 fi
 
