@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
-# The test command: installs what is missing, builds, and runs the whole suite
-# with CTest, then the fuzz targets' replay under ASan + UBSan (scripts/fuzz.sh
-# replay). Idempotent. Exit code: CTest's, or 1 when only the replay failed.
+# The test command: installs what is missing (build and test packages, and the
+# Slurm daemons tests/test_slurm runs a one-node cluster with), builds with the
+# tests, and runs the whole suite with CTest, then the fuzz targets' replay
+# under ASan + UBSan. Idempotent. Exit code: CTest's, or 1 when only the replay failed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/build.sh -DCELLBAKE_BUILD_TESTS=ON -DCELLBAKE_BUILD_BENCH=OFF
+bash scripts/install-deps.sh build test slurm
+bash scripts/build.sh --no-deps -DCELLBAKE_BUILD_TESTS=ON -DCELLBAKE_BUILD_BENCH=OFF
 build_dir="${CELLBAKE_BUILD_DIR:-build}"
 echo "[test] running ctest"
 status=0
