@@ -43,14 +43,14 @@ run_job() {
   cmake -S . -B "${dir}" -G Ninja -DCMAKE_BUILD_TYPE=None -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
     -DCMAKE_C_FLAGS="-O1 -g1 ${flags}" -DCMAKE_CXX_FLAGS="-O1 -g1 ${flags}" \
     -DCMAKE_EXE_LINKER_FLAGS="${flags}" -DCMAKE_SHARED_LINKER_FLAGS="${flags}" \
-    -DCELLBAKE_BUILD_TESTS=ON -DCELLBAKE_BUILD_BENCH=OFF > "${dir}.configure.log" 2>&1 \
+    -DCELLBAKE_BUILD_TESTS=ON -DCELLBAKE_BUILD_BENCH=OFF -DCELLBAKE_TEST_TIMEOUT=3600 > "${dir}.configure.log" 2>&1 \
     || { cat "${dir}.configure.log"; return 1; }
   # (inside `run_job || ...` set -e is off: every step checks its status)
   cmake --build "${dir}" -j "$(nproc)" --target cellbake "${tests[@]}" || return 1
   echo "[sanitize] ${job}: built in $(( $(date +%s) - start )) s; running ${tests[*]}"
   local labels status=0
   labels="^($(IFS='|'; echo "${tests[*]}"))$"  # tests/CMakeLists.txt labels each test with its executable
-  (cd "${dir}" && ctest --output-on-failure -j "$(nproc)" --timeout 1800 -L "${labels}") || status=1
+  (cd "${dir}" && ctest --output-on-failure -j "$(nproc)" --timeout 3600 -L "${labels}") || status=1
   echo "[sanitize] ${job}: $([ ${status} = 0 ] && echo ok || echo FAILED) in $(( $(date +%s) - start )) s"
   return ${status}
 }
