@@ -18,7 +18,7 @@
 #include "stages/simplify.h"
 #include "stages/chunk_subset.h"
 #include "storage/cell_content_hash.h"
-#include "storage/chunk_codec.h"
+#include "stages/encode_triangle_list.h"
 
 namespace cellbake {
 namespace {
@@ -298,7 +298,8 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
     for (int f = 0; f < kCubeFaces; ++f)
       drop_geometry_tiles(s.simplified[std::size_t(f)], work.far->faces[std::size_t(f)].geometry_tiles);
   work.far_chunks.clear();
-  // The row's far geometry: whole chunks by reference, seen triangles as chunks of their own.
+  // The row's far geometry: whole chunks by reference, seen triangles by their
+  // numbers in the stored chunk (the viewer cuts them out of the store's chunk).
   CellRow& row = work.row;
   row.far_geometry.clear();
   row.far_choice.clear();
@@ -313,7 +314,7 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
       const Chunk part = chunk_subset(*source.load(piece.chunk.id), piece.triangles);
       g.origin = part.origin;
       g.bounds = part.bounds;
-      g.geometry = encode_chunk_blob(part);
+      g.geometry = encode_triangle_list(piece.triangles);
       row.bytes += g.geometry.size();
     }
     row.far_geometry.push_back(std::move(g));

@@ -33,7 +33,7 @@ struct StageVersions {
   static constexpr int depth_mesh = 2;  // 2: delta scans lose the pixels their ancestors hold
   static constexpr int simplify = 3;
   static constexpr int encode = 3;      // 2: background texels filled from their covered neighbours; 3: grid mesh codec, avif
-  static constexpr int far_choice = 2;  // 1: exact far geometry per face tile where it is cheaper (issue #13); 2: depth-mesh triangles spanning geometry tiles dropped too
+  static constexpr int far_choice = 3;  // 1: exact far geometry per face tile where it is cheaper (issue #13); 2: depth-mesh triangles spanning geometry tiles dropped too; 3: seen triangles stored as numbers into the store's chunk
 };
 
 // The stage names, in order, as used in stage_seconds and error messages.

@@ -6,6 +6,7 @@
 
 #include "stages/encode.h"
 #include "storage/cell_content_hash.h"
+#include "stages/encode_triangle_list.h"
 #include "storage/chunk_codec.h"
 #include "storage/sqlite_db.h"
 
@@ -74,10 +75,16 @@ std::string check_cell(const CellDb& db, std::int64_t id) {
   for (const auto& g : row->far_geometry) {
     if (g.whole) continue;
     try {
-      Chunk chunk;
-      decode_chunk_blob(g.geometry.data(), g.geometry.size(), chunk);
-      if (chunk.triangle_count() != g.triangles)
-        return "far geometry of chunk " + std::to_string(g.chunk_id) + ": " + std::to_string(chunk.triangle_count()) +
+      std::size_t triangles = 0;
+      if (is_triangle_list_blob(g.geometry)) {
+        triangles = decode_triangle_list(g.geometry).size();
+      } else {  // a chunk blob of its own (cells baked before far_choice version 3)
+        Chunk chunk;
+        decode_chunk_blob(g.geometry.data(), g.geometry.size(), chunk);
+        triangles = chunk.triangle_count();
+      }
+      if (triangles != g.triangles)
+        return "far geometry of chunk " + std::to_string(g.chunk_id) + ": " + std::to_string(triangles) +
                " triangles, " + std::to_string(g.triangles) + " recorded";
     } catch (const std::exception& e) {
       return "far geometry of chunk " + std::to_string(g.chunk_id) + ": " + e.what();

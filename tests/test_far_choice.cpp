@@ -955,7 +955,7 @@ TEST(FarChoiceBake, StatusCheckReportsACorruptFarGeometryBlob) {
   EXPECT_EQ(ok.exit_code, 0) << ok.output;
   {
     SqliteDb db(c.database, SqliteDb::Mode::read_write_create);
-    db.exec("UPDATE far_geometry SET geometry = substr(geometry, 1, 12) WHERE cell_id = 1");
+    db.exec("UPDATE far_geometry SET geometry = substr(geometry, 1, length(geometry) - 1) WHERE cell_id = 1");
   }
   {
     CellDb db(c.database, CellDb::Mode::read_only);

@@ -141,7 +141,7 @@ void CellCache::run() {
       const auto row = db->get_cell(id, true);
       missing = !row;
       if (!row) throw std::runtime_error("cell " + std::to_string(id) + " is not in the database (yet)");
-      cell = std::make_shared<const DecodedCell>(decode_cell(*row));
+      cell = std::make_shared<const DecodedCell>(decode_cell(*row, params_.source));
     } catch (const std::exception& e) {
       error = e.what();
     }

@@ -25,6 +25,7 @@ namespace cellbake {
 struct CellCacheParams {
   std::size_t max_bytes = std::size_t{1} << 30;  // decoded cells kept (host memory); the newest is always kept
   double index_refresh_seconds = 2.0;            // how often the cell index is re-read
+  const ChunkSource* source = nullptr;  // the cells' geometry store (thread-safe): far pieces cut on the loader thread (decode_cell)
 };
 
 struct CellCacheStats {

@@ -5,19 +5,36 @@
 #include <stdexcept>
 #include <string>
 
+#include "stages/chunk_subset.h"
+#include "stages/encode_triangle_list.h"
 #include "storage/chunk_codec.h"
 
 namespace cellbake {
 
 std::size_t DecodedCell::bytes() const {
   std::size_t b = (near_ids.size() + far_whole_ids.size()) * sizeof(std::int64_t);
-  for (const auto& c : far_pieces)
-    b += c->positions.size() * (sizeof(Vec3f) + sizeof(Rgba8)) + c->uvs.size() * sizeof(Uv) +
-         c->normals.size() * sizeof(Vec3f) + (c->indices.size() + c->materials.size()) * sizeof(std::uint32_t);
+  for (const DecodedFarPiece& p : far_pieces) {
+    b += sizeof(DecodedFarPiece) + p.triangles.size() * sizeof(std::uint32_t);
+    if (const Chunk* c = p.chunk.get())
+      b += c->positions.size() * (sizeof(Vec3f) + sizeof(Rgba8)) + c->uvs.size() * sizeof(Uv) +
+           c->normals.size() * sizeof(Vec3f) + (c->indices.size() + c->materials.size()) * sizeof(std::uint32_t);
+  }
   for (const DecodedFace& f : faces)
     b += f.mesh.positions.size() * sizeof(Vec3f) + f.mesh.uvs.size() * sizeof(Uv) +
          f.mesh.indices.size() * sizeof(std::uint32_t) + f.image.pixels.size() * sizeof(Rgba8);
   return b;
+}
+
+std::shared_ptr<const Chunk> far_piece_chunk(const DecodedFarPiece& piece, const Chunk& stored) {
+  if (piece.chunk) return piece.chunk;
+  try {
+    auto chunk = std::make_shared<Chunk>(chunk_subset(stored, piece.triangles));
+    chunk->id = piece.cache_id;
+    return chunk;
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error("far geometry of chunk " + std::to_string(piece.chunk_id) + ": " + e.what() +
+                             " (the cell does not belong to this geometry store?)");
+  }
 }
 
 namespace {
@@ -62,7 +79,7 @@ void split_into_tiles(DecodedFace& d) {
 
 }  // namespace
 
-DecodedCell decode_cell(const CellRow& row) {
+DecodedCell decode_cell(const CellRow& row, const ChunkSource* source) {
   const std::string where = "cell " + std::to_string(row.id);
   if (row.status != "done") throw std::runtime_error(where + " is not baked (status " + row.status + ")");
   DecodedCell cell;
@@ -78,16 +95,30 @@ DecodedCell decode_cell(const CellRow& row) {
       cell.far_whole_ids.push_back(g.chunk_id);
       continue;
     }
-    auto chunk = std::make_shared<Chunk>();
+    DecodedFarPiece piece;
+    piece.cache_id = -(row.id * (std::int64_t{1} << 20)) - std::int64_t(k) - 1;
+    piece.chunk_id = g.chunk_id;
+    piece.bounds = g.bounds;
     try {
-      decode_chunk_blob(g.geometry.data(), g.geometry.size(), *chunk);
+      if (is_triangle_list_blob(g.geometry)) {
+        piece.triangles = decode_triangle_list(g.geometry);
+        if (piece.triangles.size() != g.triangles) throw std::runtime_error("triangle count differs from the row's");
+      } else {  // a chunk blob of its own (far_choice version 2)
+        auto chunk = std::make_shared<Chunk>();
+        decode_chunk_blob(g.geometry.data(), g.geometry.size(), *chunk);
+        chunk->id = piece.cache_id;
+        chunk->origin = g.origin;
+        chunk->bounds = g.bounds;
+        piece.chunk = std::move(chunk);
+      }
+      if (source && !piece.chunk) {
+        piece.chunk = far_piece_chunk(piece, *source->load(piece.chunk_id));
+        piece.triangles = {};
+      }
     } catch (const std::exception& e) {
       throw std::runtime_error(where + " far geometry of chunk " + std::to_string(g.chunk_id) + ": " + e.what());
     }
-    chunk->id = -(row.id * (std::int64_t{1} << 20)) - std::int64_t(k) - 1;
-    chunk->origin = g.origin;
-    chunk->bounds = g.bounds;
-    cell.far_pieces.push_back(std::move(chunk));
+    cell.far_pieces.push_back(std::move(piece));
   }
   std::sort(cell.far_whole_ids.begin(), cell.far_whole_ids.end());
   for (const SampleRow& s : row.samples) {

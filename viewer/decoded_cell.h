@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "stages/chunk_source.h"
 #include "stages/cube_map.h"
 #include "stages/encode.h"
 #include "stages/geometry.h"
@@ -33,6 +34,22 @@ struct DecodedFace {
 
 constexpr int kFaceTiles = kFarTiles;  // the far-choice grid (stages/cube_map.h)
 
+// A piece of a cell's exact far geometry (issue #13): some triangles of a
+// chunk of the geometry store, drawn under a cache id of its own.
+struct DecodedFarPiece {
+  std::int64_t cache_id = 0;  // negative and unique per cell and piece, so GPU caches keep it apart from the store's chunks
+  std::int64_t chunk_id = 0;  // the store's chunk
+  Box3d bounds;               // world bounds of the piece's triangles
+  std::vector<std::uint32_t> triangles;  // ascending numbers into the stored chunk (empty when `chunk` is set)
+  std::shared_ptr<const Chunk> chunk;    // the piece itself, for cells that stored it as a chunk blob
+};
+
+// The chunk a far piece draws: `piece.chunk`, or the piece's triangles cut
+// out of `stored` (the store's chunk `piece.chunk_id`), with id = cache_id.
+// Throws std::runtime_error naming the chunk when a triangle number is out of
+// range for `stored`.
+std::shared_ptr<const Chunk> far_piece_chunk(const DecodedFarPiece& piece, const Chunk& stored);
+
 struct DecodedCell {
   std::int64_t id = 0;
   Box3d bounds;
@@ -41,10 +58,9 @@ struct DecodedCell {
   std::uint64_t near_triangles = 0;    // triangles of those chunks inside the cull box
   std::uint64_t far_triangles = 0;     // sum over the decoded faces
   std::vector<DecodedFace> faces;
-  // Exact far geometry (issue #13): the seen triangles of far chunks as
-  // chunks of their own (ids negative and unique per cell and piece, so GPU
-  // caches keep them apart from the store's), and whole chunks of the store.
-  std::vector<std::shared_ptr<const Chunk>> far_pieces;
+  // Exact far geometry (issue #13): the seen triangles of far chunks, and
+  // whole chunks of the store.
+  std::vector<DecodedFarPiece> far_pieces;
   std::vector<std::int64_t> far_whole_ids;  // ascending
   std::uint64_t far_geometry_triangles = 0;
   std::vector<SampleNode> samples;  // eye, dependency-tree parent and triangles of every sample
@@ -54,6 +70,10 @@ struct DecodedCell {
 // Decodes `row` (loaded with blobs). Throws std::runtime_error naming the cell,
 // sample and face when the cell is not "done", a face index is out of range,
 // or a blob is corrupt or truncated (the validated decoders of stages/encode.h).
-DecodedCell decode_cell(const CellRow& row);
+// With `source` (the cell's geometry store), the far pieces are also cut out
+// of their stored chunks here (far_piece_chunk), off the drawing thread, and a
+// triangle number out of range is an error naming the cell; without it they
+// are cut when first drawn.
+DecodedCell decode_cell(const CellRow& row, const ChunkSource* source = nullptr);
 
 }  // namespace cellbake

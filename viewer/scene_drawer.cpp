@@ -121,10 +121,16 @@ SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width
     if (options.far_field && (!cell.far_pieces.empty() || !cell.far_whole_ids.empty())) {
       // Exact far geometry, frustum-culled like the truth.
       const std::uint64_t drawn_before = chunks_.stats().triangles_drawn;
-      std::vector<std::shared_ptr<const Chunk>> pieces;
-      for (const auto& c : cell.far_pieces)
-        if (box_in_view(camera, c->bounds)) pieces.push_back(c);
-      chunks_.draw(camera, Box3d{}, pieces);
+      std::vector<std::int64_t> pieces;
+      for (const DecodedFarPiece& p : cell.far_pieces)
+        if (box_in_view(camera, p.bounds)) pieces.push_back(p.cache_id);
+      const ChunkLoader load_piece = [&](std::int64_t cache_id) {
+        const auto it = std::find_if(cell.far_pieces.begin(), cell.far_pieces.end(),
+                                     [cache_id](const DecodedFarPiece& p) { return p.cache_id == cache_id; });
+        if (it->chunk) return it->chunk;
+        return far_piece_chunk(*it, *source_.load(it->chunk_id));
+      };
+      chunks_.draw(camera, Box3d{}, pieces, load_piece);
       if (!cell.far_whole_ids.empty()) chunks_.draw(camera, Box3d{}, visible(cell.far_whole_ids), load);
       stats.far_geometry_triangles = chunks_.stats().triangles_drawn - drawn_before;
     }

@@ -73,7 +73,7 @@ const DecodedCell* ViewSession::load_cell(std::int64_t id, std::string& reason, 
   try {
     const auto row = db_->get_cell(id, true);
     if (!row) throw std::runtime_error("cell " + std::to_string(id) + " is not in the database");
-    auto cell = std::make_shared<const DecodedCell>(decode_cell(*row));
+    auto cell = std::make_shared<const DecodedCell>(decode_cell(*row, store_.get()));
     if (decoded_.size() >= kDecodedCellsKept) decoded_.clear();  // a path walks on; the next cells reload
     return (decoded_[id] = std::move(cell)).get();
   } catch (const std::exception& e) {

@@ -191,7 +191,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
       result.near_triangles = row->near_triangles;
       result.far_triangles = row->far_triangles;
       result.far_geometry_triangles = row->far_geometry_triangles;
-      const DecodedCell cell = decode_cell(*row);
+      const DecodedCell cell = decode_cell(*row, &store);  // far pieces cut here, not timed as drawing
       const bool flat = row->region >= 0 && row->region < int(regions.size()) &&
                         region_is_flat(regions[row->region], up, cell_size);
       auto plans = plan_verify_views(row->bounds, flat, up, options.views_per_cell,

@@ -123,6 +123,7 @@ int run(const Options& opt) {
   GeometryStore store(store_path);
   CellCacheParams cache_params;
   cache_params.max_bytes = static_cast<std::size_t>(opt.cache_mb * 1048576.0);
+  cache_params.source = &store;  // far pieces cut from their stored chunks on the loader thread
   CellCache cache(opt.database, cache_params);
   const auto [width, height] = parse_image_size(opt.size);
 
