@@ -224,6 +224,7 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
       if (progress && (report.triangles_read & 0xFFFF) == 0)
         progress("read " + model.filename().string(), report.triangles_read, 0);
     }, ReadOptions{params.allow_outside_paths});
+    if (progress) progress("read " + model.filename().string(), report.triangles_read, 0);  // the file's last count
     for (std::uint32_t m = 0; m < info.materials.size(); ++m) {
       Material material = info.materials[m];
       if (!material.texture.empty())
@@ -266,6 +267,7 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   const auto t_chunk = Clock::now();
   if (progress) progress("chunk", 0, 0);
   const std::vector<ChunkRange> ranges = split_into_chunks(keys, params.max_chunk_triangles);
+  if (progress) progress("chunk", keys.size(), keys.size());
   report.chunk_seconds = seconds_since(t_chunk);
 
   const auto t_write = Clock::now();

@@ -32,7 +32,7 @@ void add_bake_options(CLI::App& cmd, BakeCommandOptions& opt) {
   cmd.add_option("--cells", opt.run.cells, "Only these cell ids, e.g. 1-10,15,20-");
   cmd.add_flag("--force", opt.run.force, "Recompute cells even when their stored hash matches");
   cmd.add_option("--shard", opt.shard, "Bake only shard I of N (I/N, 0-based)");
-  cmd.add_flag("--quiet", opt.run.quiet, "No progress output");
+  cmd.add_flag("--json", opt.json, "Print the summary as JSON (progress still goes to stderr; -q hides it)");
 }
 
 BakeConfig bake_config_from_options(BakeCommandOptions& opt) {

@@ -22,6 +22,7 @@ struct BakeCommandOptions {
   double cell_size = 0;
   long long near_budget = -1;
   int face_size = 0;
+  bool json = false;  // the summary as JSON
   BakeOptions run;
 };
 
@@ -32,7 +33,8 @@ void add_bake_options(CLI::App& cmd, BakeCommandOptions& opt);
 // overrides, then validation. Throws with a message naming the bad option.
 BakeConfig bake_config_from_options(BakeCommandOptions& opt);
 
-// Prints the one-line bake summary.
-void print_bake_summary(const BakeSummary& s, const BakeConfig& config);
+// Prints the one-line bake summary, or (json) one JSON object: database,
+// cells_selected, cells_up_to_date, cells_baked, cells_failed, cull_reused, seconds.
+void print_bake_summary(const BakeSummary& s, const BakeConfig& config, bool json = false);
 
 }  // namespace cellbake

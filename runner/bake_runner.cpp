@@ -7,7 +7,9 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <memory>
 #include <thread>
 
@@ -21,6 +23,36 @@
 #include "storage/geometry_store.h"
 
 namespace cellbake {
+namespace {
+
+// "cell 12 done in 3.42 s (cull_box 0.10, sample 2.90, ..., encode 0.05 s, of which void 0.40, redundancy
+// 0.02): 3 samples, 1200 near + 5400 far triangles, 45.6 KB": the stages in order, then the timings
+// measured inside them (sample's void search, depth_mesh's redundancy removal).
+std::string describe_cell_row(const CellRow& row) {
+  std::string stages, within;
+  double total = 0;
+  std::map<std::string, double> left = row.stage_seconds;
+  const auto add = [](std::string& list, const std::string& name, double s) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "%s%s %.2f", list.empty() ? "" : ", ", name.c_str(), s);
+    list += buf;
+  };
+  for (const char* name : kStageNames)
+    if (const auto it = left.find(name); it != left.end()) {
+      add(stages, it->first, it->second);
+      total += it->second;
+      left.erase(it);
+    }
+  for (const auto& [name, s] : left) add(within, name, s);
+  char buf[640];
+  std::snprintf(buf, sizeof buf, "cell %lld %s in %.2f s (%s s%s%s): %zu samples, %llu near + %llu far triangles, %.1f KB",
+                (long long)row.id, row.status.c_str(), total, stages.c_str(), within.empty() ? "" : ", of which ",
+                within.c_str(), row.samples.size(), (unsigned long long)row.near_triangles,
+                (unsigned long long)(row.far_triangles + row.far_geometry_triangles), row.bytes / 1e3);
+  return buf;
+}
+
+}  // namespace
 
 BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
   BakeConfig config = given;
@@ -144,8 +176,9 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
         ++summary.cells_baked;
       } else {
         ++summary.cells_failed;
-        std::fprintf(stderr, "\n%s\n", row.error.c_str());
+        progress.line(row.error);
       }
+      if (options.verbose) progress.line(describe_cell_row(row));
       *w = CellWork{};  // free memory now; the pointer may linger in the graph
       if (!options.quiet) progress.update(++done);
       return tbb::flow::continue_msg{};

@@ -17,6 +17,7 @@ struct BakeOptions {
   bool force = false;           // recompute even cells whose stored hash matches
   int shard_index = 0, shard_count = 1;  // bake only this shard's cells
   bool quiet = false;           // no progress output
+  bool verbose = false;         // a line per written cell: status, stage seconds, samples, triangles, bytes
 };
 
 struct BakeSummary {

@@ -11,6 +11,7 @@
 #include "runner/bake_command_options.h"
 #include "runner/bake_runner.h"
 #include "runner/commands.h"
+#include "runner/console.h"
 #include "runner/ingest_summary.h"
 #include "runner/parallel.h"
 #include "runner/verify/verify_runner.h"
@@ -66,6 +67,8 @@ void add_demo_command(CLI::App& app) {
     validate_bake_config(config);
     BakeOptions bo;
     bo.threads = opt->threads;
+    bo.quiet = quiet_output();
+    bo.verbose = verbose_output();
     std::printf("[demo] baking %s\n", config.database.c_str());
     const BakeSummary s = run_bake(config, bo);
     print_bake_summary(s, config);
@@ -77,6 +80,8 @@ void add_demo_command(CLI::App& app) {
     vo.width = 256;
     vo.height = 192;
     vo.threads = opt->threads;
+    vo.quiet = quiet_output();
+    vo.verbose = verbose_output();
     const std::filesystem::path report = out / "report";
     std::printf("[demo] verifying %s -> %s\n", config.database.c_str(), report.c_str());
     const VerifySummary v = run_verify(config.database, report, vo);

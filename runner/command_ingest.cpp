@@ -18,6 +18,7 @@ void add_ingest_command(CLI::App& app) {
     int max_texture_size = 2048;
     bool allow_outside_paths = false;
     std::string up;
+    bool json = false;
   };
   auto opt = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
@@ -40,6 +41,7 @@ void add_ingest_command(CLI::App& app) {
                   "The model's up axis, recorded in the store for bake: z or y (default: what the format says: "
                   "glTF, IFC and COLLADA y, FBX its UpAxis; OBJ/PLY/OFF/STL record none and bake assumes z)")
       ->check(CLI::IsMember({"z", "y"}));
+  cmd->add_flag("--json", opt->json, "Print the summary as JSON (progress still goes to stderr; -q hides it)");
   cmd->callback([opt] {
     std::vector<std::filesystem::path> models(opt->models.begin(), opt->models.end());
     IngestParams params;
@@ -50,7 +52,7 @@ void add_ingest_command(CLI::App& app) {
     params.up = opt->up;
     if (opt->translate.size() == 3) params.translate = {opt->translate[0], opt->translate[1], opt->translate[2]};
     const IngestReport r = ingest_models(models, opt->store, params, tbb_parallel_for(), ingest_progress());
-    print_ingest_summary(r, opt->store);
+    print_ingest_summary(r, opt->store, opt->json);
   });
 }
 

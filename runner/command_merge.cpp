@@ -4,6 +4,8 @@
 
 #include <cstdio>
 
+#include <nlohmann/json.hpp>
+
 #include "runner/commands.h"
 #include "runner/merge_shards.h"
 
@@ -13,16 +15,29 @@ void add_merge_command(CLI::App& app) {
   struct Options {
     std::string out;
     std::vector<std::string> shards;
+    bool json = false;
   };
   auto opt = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
       "merge", "Merge shard databases of a distributed bake into one (idempotent; a missing shard is skipped with a warning)");
   cmd->add_option("out", opt->out, "Merged cell database (created, or added to)")->required();
   cmd->add_option("shards", opt->shards, "Shard cell databases")->required();
+  cmd->add_flag("--json", opt->json, "Print the summary as JSON");
   cmd->callback([opt] {
     std::vector<std::filesystem::path> shards(opt->shards.begin(), opt->shards.end());
     const MergeSummary s =
         merge_shards(opt->out, shards, [](const std::string& w) { std::fprintf(stderr, "warning: %s\n", w.c_str()); });
+    if (opt->json) {
+      nlohmann::json missing = nlohmann::json::array();
+      for (const auto& m : s.missing_shards) missing.push_back(m);
+      const nlohmann::json j{{"database", opt->out},          {"shards_merged", s.shards_merged},
+                             {"missing_shards", missing},      {"cells_copied", s.cells_copied},
+                             {"cells_unchanged", s.cells_unchanged}, {"cells_kept_done", s.cells_kept_done},
+                             {"cells_done", s.cells_done},     {"cells_failed", s.cells_failed},
+                             {"cells_total", s.cells_total}};
+      std::printf("%s\n", j.dump(2).c_str());
+      return;
+    }
     std::printf("merge %s: %llu shard(s) merged, %zu missing; %llu cells copied, %llu unchanged, %llu failed cells "
                 "not copied over done ones; now %llu done, %llu failed of %llu\n",
                 opt->out.c_str(), (unsigned long long)s.shards_merged, s.missing_shards.size(),

@@ -1,16 +1,25 @@
 // `cellbake status DB... [--json] [--check | --repair]`: what is done, failed
-// and pending of the configuration's cells, totals, time per stage and a
-// content hash over every finished cell. --check recomputes each cell's
+// (with each failed cell's error) and pending of the configuration's cells, the
+// bake's parameters (the main ones; every one with -v or --json), totals, time
+// per stage and a content hash over every finished cell. --check recomputes each cell's
 // content hash from its rows and decodes every blob; --repair marks the
 // damaged cells pending so the next bake redoes them. A geometry store given
 // instead prints what it holds (runner/store_status.h).
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <charconv>
 #include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <sstream>
 #include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "runner/commands.h"
+#include "runner/console.h"
 #include "runner/store_status.h"
 #include "stages/hashing.h"
 #include "storage/cell_check.h"
@@ -33,6 +42,77 @@ struct Damaged {
   std::string database;
   std::int64_t id;
   std::string reason;
+};
+
+// One configuration's parameters: the database's meta `store` and the
+// "key=value" lines of its meta `config` (describe_bake_config), regions apart.
+struct BakeParameters {
+  std::string store;
+  std::vector<std::pair<std::string, std::string>> values;
+  std::vector<std::string> regions;  // "x0,y0,z0,x1,y1,z1"
+};
+
+// "0.40000000000000002,1" -> "0.4,1": the config text keeps 17 digits (for hashing); people read the
+// shortest form that reads back the same. Words that are not numbers stay as they are.
+std::string tidy_numbers(const std::string& value) {
+  std::string out, item;
+  std::istringstream in(value);
+  while (std::getline(in, item, ',')) {
+    char* end = nullptr;
+    const double d = std::strtod(item.c_str(), &end);
+    if (!item.empty() && end == item.c_str() + item.size()) {
+      char buf[64];
+      const auto r = std::to_chars(buf, buf + sizeof buf, d);
+      item.assign(buf, r.ptr);
+    }
+    out += (out.empty() ? "" : ",") + item;
+  }
+  return out;
+}
+
+BakeParameters parse_parameters(const std::string& store, const std::string& config_text) {
+  BakeParameters p;
+  p.store = store;
+  std::istringstream in(config_text);
+  for (std::string line; std::getline(in, line);) {
+    const std::size_t eq = line.find('=');
+    if (eq == std::string::npos) continue;
+    if (line.compare(0, eq, "region") == 0) p.regions.push_back(tidy_numbers(line.substr(eq + 1)));
+    else p.values.emplace_back(line.substr(0, eq), tidy_numbers(line.substr(eq + 1)));
+  }
+  return p;
+}
+
+// "bake: store S, up z, cells.size 2, ..., 1 region: x0,y0,z0,x1,y1,z1": the
+// parameters a reader checks first; with `all`, every one on its own line.
+void print_parameters(const BakeParameters& p, bool all) {
+  std::string line = "bake: store " + (p.store.empty() ? std::string("(unknown)") : p.store);
+  if (all) {
+    std::printf("%s\n", line.c_str());
+    for (const auto& [k, v] : p.values) std::printf("  %s = %s\n", k.c_str(), v.c_str());
+    for (const auto& r : p.regions) std::printf("  region = %s\n", r.c_str());
+    return;
+  }
+  for (const char* key : {"up", "cells.size", "near.budget", "sample.face_size", "sample.backend", "samples.max",
+                          "far.choice", "encode.image_format", "encode.quality", "encode.mesh_codec"})
+    for (const auto& [k, v] : p.values)
+      if (k == key) line += ", " + k + " " + v;
+  line += ", " + std::to_string(p.regions.size()) + (p.regions.size() == 1 ? " region" : " regions");
+  for (std::size_t i = 0; i < p.regions.size() && i < 3; ++i) line += (i ? "; " : ": ") + p.regions[i];
+  if (p.regions.size() > 3) line += "; ...";
+  std::printf("%s\n", line.c_str());
+}
+
+nlohmann::json parameters_json(const BakeParameters& p) {
+  nlohmann::json values = nlohmann::json::object();
+  for (const auto& [k, v] : p.values) values[k] = v;
+  return {{"store", p.store}, {"parameters", values}, {"regions", p.regions}};
+}
+
+struct FailedCell {
+  std::string database;
+  std::int64_t id;
+  std::string error;
 };
 
 // A cell seen in several databases keeps its best state: done over failed over damaged.
@@ -83,6 +163,8 @@ void add_status_command(CLI::App& app) {
     std::map<std::string, double> stage_seconds;
     std::map<std::string, ConfigCells> configs;
     std::vector<Damaged> damaged;
+    std::vector<FailedCell> failed_cells;
+    std::map<std::string, BakeParameters> parameters;  // by config text
     // Per-cell content hashes from every database, combined in id order, so a
     // merged database and its shards hash alike.
     std::map<std::int64_t, std::string> cell_hashes;
@@ -91,7 +173,10 @@ void add_status_command(CLI::App& app) {
     for (const auto& path : opt->dbs) {
       CellDb db(path, CellDb::Mode::read_only);
       const CellDbTotals t = db.totals();
-      ConfigCells& cells = configs[db.meta("config").value_or("")];
+      const std::string config_text = db.meta("config").value_or("");
+      ConfigCells& cells = configs[config_text];
+      if (!parameters.count(config_text))
+        parameters[config_text] = parse_parameters(db.meta("store").value_or(""), config_text);
       cells.total = std::max(cells.total, meta_u64(db, "cells_total", 0));
       bytes += t.bytes;
       far += t.far_triangles;
@@ -112,6 +197,16 @@ void add_status_command(CLI::App& app) {
         const bool bad = reasons.count(id) > 0;
         note_state(cells.state[id], bad ? "damaged" : stamp.status);
         if (stamp.status == "done" && !bad) cell_hashes[id] = stamp.content_hash;
+        if (stamp.status == "failed" && !bad) {
+          std::string error;
+          try {
+            const auto row = db.get_cell(id, false);
+            error = row ? row->error : "";
+          } catch (const std::exception& e) {
+            error = e.what();
+          }
+          failed_cells.push_back({path, id, error.empty() ? "cell " + std::to_string(id) + ": (no message recorded)" : error});
+        }
       }
       for (const auto& [id, reason] : reasons) {
         damaged.push_back({path, id, reason});
@@ -139,6 +234,12 @@ void add_status_command(CLI::App& app) {
         bad += state == "damaged";
       }
     }
+    // A cell another database has done is not failed (a shard rerun, a merge).
+    std::erase_if(failed_cells, [&](const FailedCell& f) {
+      for (const auto& [config, cells] : configs)
+        if (const auto it = cells.state.find(f.id); it != cells.state.end() && it->second == "failed") return false;
+      return true;
+    });
     // Repaired cells are pending now; unrepaired damaged ones are neither done nor pending.
     if (opt->repair) bad = 0;
     Hasher h;
@@ -168,12 +269,30 @@ void add_status_command(CLI::App& app) {
       nlohmann::json list = nlohmann::json::array();
       for (const auto& d : damaged) list.push_back({{"database", d.database}, {"cell", d.id}, {"reason", d.reason}});
       j["damaged"] = list;
+      nlohmann::json failed_list = nlohmann::json::array();
+      for (const auto& f : failed_cells)
+        failed_list.push_back({{"database", f.database}, {"cell", f.id}, {"error", f.error}});
+      j["failed"] = failed_list;
+      nlohmann::json bakes = nlohmann::json::array();
+      for (const auto& [config, p] : parameters) bakes.push_back(parameters_json(p));
+      j["bakes"] = bakes;
       std::printf("%s\n", j.dump(2).c_str());
     } else {
       std::printf("cells: %llu total, %llu done, %llu failed, %llu pending", (unsigned long long)total,
                   (unsigned long long)done, (unsigned long long)failed, (unsigned long long)pending);
       if (bad) std::printf(", %llu damaged", (unsigned long long)bad);
       std::printf("\n");
+      for (const auto& [config, p] : parameters) print_parameters(p, verbose_output());
+      if (!failed_cells.empty()) {
+        constexpr std::size_t kShown = 20;
+        std::printf("failed cells (%zu):\n", failed_cells.size());
+        for (std::size_t i = 0; i < failed_cells.size() && i < kShown; ++i)
+          std::printf("  %s%s%s\n", opt->dbs.size() > 1 ? failed_cells[i].database.c_str() : "",
+                      opt->dbs.size() > 1 ? ": " : "", failed_cells[i].error.c_str());  // the error names cell and stage
+        if (failed_cells.size() > kShown)
+          std::printf("  ... and %zu more (`cellbake status --json` lists them all)\n", failed_cells.size() - kShown);
+        std::printf("  rerun the bake to retry them (done cells are skipped)\n");
+      }
       std::printf("stored: %.1f MB, far field: %llu depth-mesh triangles, %llu exact geometry triangles\n",
                   bytes / 1e6, (unsigned long long)far, (unsigned long long)far_geometry);
       if (face_tiles > 0)

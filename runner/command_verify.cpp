@@ -13,7 +13,10 @@
 #include <sstream>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "runner/commands.h"
+#include "runner/console.h"
 #include "runner/verify/svg_plot.h"
 #include "runner/verify/verify_report.h"
 #include "runner/verify/verify_runner.h"
@@ -24,6 +27,7 @@ namespace cellbake {
 void add_verify_command(CLI::App& app) {
   struct Options {
     std::string database, report, size = "320x240";
+    bool json = false;
     VerifyOptions verify;
   };
   auto opt = std::make_shared<Options>();
@@ -43,7 +47,7 @@ void add_verify_command(CLI::App& app) {
   cmd->add_option("--threads", opt->verify.threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
   cmd->add_option("--worst", opt->verify.worst_views, "Worst views shown as triptychs")->capture_default_str();
   cmd->add_option("--store", opt->verify.store, "Geometry store (default: the one the database names)");
-  cmd->add_flag("--quiet", opt->verify.quiet, "No progress output");
+  cmd->add_flag("--json", opt->json, "Print the summary as JSON (progress still goes to stderr; -q hides it)");
   cmd->add_option("--far-budget", opt->verify.far_budget,
                   "Far-field triangles per view: the nearest sample with its ancestors, then more while under this "
                   "(default: the bake's view.far_budget)");
@@ -53,7 +57,28 @@ void add_verify_command(CLI::App& app) {
       ->capture_default_str();
   cmd->callback([opt] {
     std::tie(opt->verify.width, opt->verify.height) = parse_image_size(opt->size);
+    opt->verify.quiet = quiet_output();
+    opt->verify.verbose = verbose_output();
     const VerifySummary s = run_verify(opt->database, opt->report, opt->verify);
+    if (opt->json) {
+      const auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+      const nlohmann::json j{{"database", opt->database},
+                             {"cells_selected", s.cells_selected},
+                             {"cells_rendered", s.cells_rendered},
+                             {"cells_reused", s.cells_reused},
+                             {"cells_failed", s.cells_failed},
+                             {"views", s.views},
+                             {"views_rendered", s.views_rendered},
+                             {"truth_blank_views", s.truth_blank_views},
+                             {"psnr_median_db", number(s.psnr_median_db)},
+                             {"psnr_median_infinite", std::isinf(s.psnr_median_db)},
+                             {"seconds", s.seconds},
+                             {"report_html", s.report_html.string()},
+                             {"report_json", s.report_json.string()}};
+      std::printf("%s\n", j.dump(2).c_str());
+      if (s.cells_failed > 0) throw std::runtime_error(std::to_string(s.cells_failed) + " cell(s) could not be verified");
+      return;
+    }
     const std::string blank =
         s.truth_blank_views == 0 ? std::string()
                                  : " (" + std::to_string(s.truth_blank_views) + " of " + std::to_string(s.views) +

@@ -3,11 +3,15 @@
 #include <cstdio>
 #include <memory>
 
+#include <nlohmann/json.hpp>
+
+#include "runner/console.h"
 #include "runner/progress.h"
 
 namespace cellbake {
 
 ProgressCallback ingest_progress() {
+  if (quiet_output()) return {};
   auto last_phase = std::make_shared<std::string>();
   auto bar = std::make_shared<std::unique_ptr<ProgressBar>>();
   return [last_phase, bar](const std::string& phase, std::uint64_t done, std::uint64_t total) {
@@ -22,8 +26,34 @@ ProgressCallback ingest_progress() {
   };
 }
 
-void print_ingest_summary(const IngestReport& r, const std::string& store) {
+void print_ingest_summary(const IngestReport& r, const std::string& store, bool json) {
   const double total = r.read_seconds + r.chunk_seconds + r.write_seconds;
+  if (json) {
+    nlohmann::json warnings = nlohmann::json::array();
+    for (const std::string& w : r.texture_warnings) warnings.push_back(w);
+    for (const std::string& w : r.input_warnings) warnings.push_back(w);
+    const nlohmann::json j{
+        {"store", store},
+        {"triangles_read", r.triangles_read},
+        {"triangles_stored", r.triangles_stored},
+        {"polygons_triangulated", r.polygons_triangulated},
+        {"skipped_degenerate", r.skipped_degenerate},
+        {"skipped_duplicate", r.skipped_duplicate},
+        {"chunks", r.chunks},
+        {"vertices", r.vertices},
+        {"bounds",
+         {{"min", {r.bounds.lo.x, r.bounds.lo.y, r.bounds.lo.z}}, {"max", {r.bounds.hi.x, r.bounds.hi.y, r.bounds.hi.z}}}},
+        {"seconds", {{"read", r.read_seconds}, {"chunk", r.chunk_seconds}, {"write", r.write_seconds}, {"total", total}}},
+        {"up", r.up.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.up)},
+        {"up_source", r.up_source},
+        {"textures", r.textures},
+        {"texture_bytes", r.texture_bytes},
+        {"warnings", warnings},
+        {"vertex_colour_notes", r.vertex_colour_notes},
+        {"content_hash", r.content_hash}};
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
   std::printf("ingested %llu triangles into %s\n", (unsigned long long)r.triangles_stored, store.c_str());
   std::printf("  read %llu triangles (%llu polygons triangulated)\n", (unsigned long long)r.triangles_read,
               (unsigned long long)r.polygons_triangulated);

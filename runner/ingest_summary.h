@@ -7,10 +7,16 @@
 
 namespace cellbake {
 
-// A ProgressCallback that prints phase changes and write progress to stderr.
+// A ProgressCallback that prints phase changes and write progress to stderr
+// (an empty one under -q: runner/console.h).
 ProgressCallback ingest_progress();
 
-// Prints the ingest summary (counts, skips, chunks, bounds, timings, throughput).
-void print_ingest_summary(const IngestReport& r, const std::string& store);
+// Prints the ingest summary (counts, skips, chunks, bounds, timings,
+// throughput), or (json) one JSON object with the same figures: store,
+// triangles_read, triangles_stored, polygons_triangulated, skipped_degenerate,
+// skipped_duplicate, chunks, vertices, bounds {min, max}, seconds {read,
+// chunk, write, total}, up, up_source, textures, texture_bytes, warnings
+// (texture and input warnings, one string each), vertex_colour_notes, content_hash.
+void print_ingest_summary(const IngestReport& r, const std::string& store, bool json = false);
 
 }  // namespace cellbake

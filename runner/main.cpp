@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "runner/commands.h"
+#include "runner/console.h"
 
 namespace {
 
@@ -34,6 +35,14 @@ int main(int argc, char** argv) {
   CLI::App app{"cellbake: bake huge 3D models into a view-cell database (near field + textured depth meshes)"};
   app.set_version_flag("-V,--version", std::string("cellbake ") + CELLBAKE_VERSION);
   app.require_subcommand(1);
+  // Output level for every command, before or after its name (`cellbake -q bake ...` or `cellbake bake ... -q`).
+  CLI::Option* quiet = app.add_flag_callback(
+      "-q,--quiet", [] { cellbake::set_verbosity(cellbake::Verbosity::quiet); },
+      "Print only errors, warnings and the final summary (no progress)");
+  CLI::Option* verbose = app.add_flag_callback(
+      "-v,--verbose", [] { cellbake::set_verbosity(cellbake::Verbosity::verbose); },
+      "Print more: each cell's stage timings (bake), each cell's result (verify), every bake parameter (status)");
+  quiet->excludes(verbose);
   cellbake::add_generate_command(app);
   cellbake::add_ingest_command(app);
   cellbake::add_bake_command(app);
@@ -44,6 +53,12 @@ int main(int argc, char** argv) {
   cellbake::add_render_command(app);
   cellbake::add_view_command(app);
   cellbake::add_verify_command(app);
+  // The global options are taken after a command's own too; `view` passes everything to cellbake-view.
+  for (CLI::App* sub : commands(app))
+    if (sub->get_name() != "view") sub->fallthrough();
+  // Line-buffered even into a file or pipe, so summaries (stdout) and progress
+  // and warnings (stderr) keep their order in a shared log (a Slurm task's).
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
   // An unknown first word is a mistyped command: say so and list the commands
   // (CLI11 would answer "A subcommand is required", exit 106). Exit 2, like a usage error.
   if (argc > 1 && argv[1][0] != '-' && !is_command(app, argv[1])) {

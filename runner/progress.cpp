@@ -29,7 +29,15 @@ void ProgressBar::finish(const std::string& note) {
   draw(true, note);
 }
 
+void ProgressBar::line(const std::string& text) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::fprintf(stderr, "%s%s\n", tty_ ? "\r\033[K" : "", text.c_str());
+  if (tty_ && drawn_) draw(false, "");
+  std::fflush(stderr);
+}
+
 void ProgressBar::draw(bool final, const std::string& note) {
+  drawn_ = !final;
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   const double rate = elapsed > 0 ? done_ / elapsed : 0;
   char eta[32] = "";

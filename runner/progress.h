@@ -17,12 +17,16 @@ class ProgressBar {
   void update(std::uint64_t done, const std::string& note = "");
   // Prints the final line.
   void finish(const std::string& note = "");
+  // Prints `text` as a line of its own (stderr) without breaking the bar: on a
+  // TTY the bar is cleared first and redrawn after it.
+  void line(const std::string& text);
 
  private:
   void draw(bool final, const std::string& note);
   std::string label_, unit_;
   std::uint64_t total_, done_ = 0;
   bool tty_;
+  bool drawn_ = false;  // a bar is on the TTY's current line
   double interval_s_;
   std::chrono::steady_clock::time_point start_, last_draw_;
   std::mutex mutex_;

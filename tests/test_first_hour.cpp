@@ -273,8 +273,10 @@ TEST(Cli, CtrlCDuringBakeSaysHowToResume) {
                            " --region 1,1,1.6,11,11,1.6 --cell-size 1 --face-size 64 --near-budget 300 "
                            "--set near.budget_fraction=0 --threads 1 --out " +
                            q(dir / "c.db");
-  // Background jobs of a non-interactive shell start with SIGINT ignored; bake installs its handler anyway.
-  const std::string script = bake + " > " + q(dir / "log") + " 2>&1 & pid=$!; sleep 1.5; kill -INT $pid; wait $pid; echo rc=$?";
+  // Background jobs of a non-interactive shell start with SIGINT ignored; bake installs its handler anyway,
+  // before it prints anything: the signal goes once the log has its first line (a fixed delay raced a slow start).
+  const std::string script = bake + " > " + q(dir / "log") + " 2>&1 & pid=$!; for i in $(seq 300); do [ -s " +
+                             q(dir / "log") + " ] && break; sleep 0.1; done; sleep 0.5; kill -INT $pid; wait $pid; echo rc=$?";
   std::string output;
   if (FILE* pipe = popen(script.c_str(), "r")) {
     char buf[256];

@@ -289,7 +289,15 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
     std::lock_guard lock(mutex);
     if (!result.error.empty()) {
       ++summary.cells_failed;
-      std::fprintf(stderr, "\nwarning: %s\n", result.error.c_str());
+      progress.line("warning: " + result.error);
+    } else if (options.verbose) {
+      std::vector<double> psnr;
+      for (const VerifyViewResult& v : result.views) psnr.push_back(v.psnr_db);
+      char line[160];
+      std::snprintf(line, sizeof line, "cell %lld: %zu views, median PSNR %.2f dB, worst %.2f dB (view %d)",
+                    (long long)result.id, result.views.size(), median_of(psnr),
+                    result.worst_view >= 0 ? result.views[result.worst_view].psnr_db : 0.0, result.worst_view);
+      progress.line(line);
     }
     summary.views_rendered += result.views.size();
     results[task.id] = std::move(result);

@@ -25,6 +25,7 @@ struct VerifyOptions {
   int worst_views = 8;             // triptychs shown in the report
   std::filesystem::path store;     // geometry store override ("" = the database's meta `store`)
   bool quiet = false;              // no progress output
+  bool verbose = false;            // a line per verified cell: views, median and worst PSNR
   // Far field drawn per view (viewer/sample_selection.h); every view is also
   // drawn with the root sample alone for the 1-sample columns.
   std::optional<std::uint64_t> far_budget;  // unset: the database's view.far_budget

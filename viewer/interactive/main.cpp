@@ -196,6 +196,10 @@ int run(const Options& opt) {
       ImGuiIO& io = ImGui::GetIO();
       if (!io.WantCaptureKeyboard) {
         const auto key = [&](int k) { return glfwGetKey(window, k) == GLFW_PRESS ? 1.0 : 0.0; };
+        // Esc or Ctrl+Q quits (Q alone moves down).
+        if (key(GLFW_KEY_ESCAPE) ||
+            ((key(GLFW_KEY_LEFT_CONTROL) || key(GLFW_KEY_RIGHT_CONTROL)) && key(GLFW_KEY_Q)))
+          glfwSetWindowShouldClose(window, GLFW_TRUE);
         const double boost = key(GLFW_KEY_LEFT_SHIFT) ? 4.0 : 1.0;
         fly.move((key(GLFW_KEY_W) - key(GLFW_KEY_S)) * boost, (key(GLFW_KEY_D) - key(GLFW_KEY_A)) * boost,
                  (key(GLFW_KEY_E) - key(GLFW_KEY_Q)) * boost, dt);
@@ -278,7 +282,8 @@ int run(const Options& opt) {
       ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(display)),
                                                ImVec2(0, 0), io.DisplaySize);
       ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
-      ImGui::Begin("cellbake");
+      // Sized to its contents every frame: no stats line is clipped.
+      ImGui::Begin("cellbake", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
       ImGui::Text("cell %lld   cull box half-size %.2f", (long long)info.cell_id, info.cull_half_size);
       if (!info.flag.empty()) ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "ground truth: %s", info.flag.c_str());
       ImGui::Text("near %llu tris   far %llu tris   chunks %llu (%llu tris)", (unsigned long long)info.near_triangles,
@@ -331,7 +336,7 @@ int run(const Options& opt) {
           fly.eye_height = dot(fly.position, up) - fly.floor;
         }
       }
-      ImGui::TextUnformatted("WASD move, Q/E down/up, shift faster, right mouse look");
+      ImGui::TextUnformatted("WASD move, Q/E down/up, shift faster, right mouse look, Esc or Ctrl+Q quit");
       ImGui::End();
       ImGui::Render();
       ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
