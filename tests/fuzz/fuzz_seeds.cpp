@@ -12,6 +12,7 @@
 
 #include "stages/cube_map.h"
 #include "stages/encode.h"
+#include "stages/encode_triangle_list.h"
 #include "storage/cell_db.h"
 #include "storage/chunk_codec.h"
 
@@ -101,6 +102,9 @@ int main(int argc, char** argv) {
 
   write(root / "fuzz_near_chunks", "empty", pack_near_chunks({}));
   write(root / "fuzz_near_chunks", "rows", pack_near_chunks({{1, 10, true}, {7, 3, false}, {1000000, 4096, true}}));
+
+  write(root / "fuzz_triangle_list", "empty", encode_triangle_list(std::vector<std::uint32_t>{}));
+  write(root / "fuzz_triangle_list", "runs", encode_triangle_list(std::vector<std::uint32_t>{0, 1, 2, 7, 9, 10, 4095}));
 
   const fs::path obj = root / "fuzz_obj_reader";
   write(obj, "triangle.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
