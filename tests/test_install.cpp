@@ -16,16 +16,7 @@ namespace {
 
 const std::filesystem::path kSource = std::filesystem::path(__FILE__).parent_path().parent_path();
 
-test::CommandResult shell(const std::string& command) {
-  test::CommandResult r;
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) return r;
-  char buf[4096];
-  for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, pipe)) > 0;) r.output.append(buf, n);
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+test::CommandResult shell(const std::string& command) { return test::run_shell(command); }
 
 std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 

@@ -13,12 +13,7 @@ namespace {
 // Runs `script` with bash under the given environment assignments; stdout.
 std::string run_script(const test::TempDir& dir, const std::string& script, const std::string& env) {
   test::write_text(dir / "job.sh", script);
-  FILE* pipe = popen(("env " + env + " bash " + (dir / "job.sh").string() + " 2>&1").c_str(), "r");
-  std::string out;
-  char buf[4096];
-  for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, pipe)) > 0;) out.append(buf, n);
-  pclose(pipe);
-  return out;
+  return test::run_shell("env " + env + " bash " + (dir / "job.sh").string()).output;
 }
 
 // A job whose "binary" prints its arguments one per line, with awkward paths.

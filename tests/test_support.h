@@ -49,11 +49,11 @@ struct CommandResult {
   std::string output;  // stdout and stderr together
 };
 
-// Runs the built cellbake binary with `args` (a shell-quoted string).
-inline CommandResult run_cellbake(const std::string& args) {
-  std::string cmd = std::string(CELLBAKE_BINARY) + " " + args + " 2>&1";
+// Runs `command` with /bin/sh; its exit code (-1 when it did not exit
+// normally or could not start) and its stdout and stderr together.
+inline CommandResult run_shell(const std::string& command) {
   CommandResult result;
-  FILE* pipe = popen(cmd.c_str(), "r");
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
   if (!pipe) return result;
   std::array<char, 4096> buf{};
   size_t n;
@@ -62,5 +62,8 @@ inline CommandResult run_cellbake(const std::string& args) {
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return result;
 }
+
+// Runs the built cellbake binary with `args` (a shell-quoted string).
+inline CommandResult run_cellbake(const std::string& args) { return run_shell(std::string(CELLBAKE_BINARY) + " " + args); }
 
 }  // namespace cellbake::test
