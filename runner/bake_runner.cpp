@@ -54,21 +54,36 @@ std::string describe_cell_row(const CellRow& row) {
 
 }  // namespace
 
-BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
-  BakeConfig config = given;
-  const auto t0 = std::chrono::steady_clock::now();
+BakePlan plan_bake(const BakeConfig& given, const BakeOptions& options, const GeometryStore& store) {
+  BakePlan plan;
+  plan.config = given;
+  BakeConfig& config = plan.config;
   validate_bake_config(config);
+  plan.up_note = resolve_up_axis(config, store.summary().up, store.summary().up_source);
+  check_regions_meet_model(config.regions, store.model_bounds(), config.cell_size);
+  plan.model_triangles = store.summary().triangles;
+  config.near_budget = effective_near_budget(config, plan.model_triangles);
+  const std::vector<CellSpec> all_cells = enumerate_cells(config.regions, config.cell_size);
+  plan.cells_total = all_cells.size();
+  plan.cells = select_cells(all_cells, options.cells);
+  if (options.shard_count > 1) plan.cells = shard_cells(plan.cells, options.shard_index, options.shard_count, store);
+  return plan;
+}
+
+BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  validate_bake_config(given);
   const int threads = options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
   // Several single-threaded llvmpipe contexts use the cores better than one
   // multi-threaded one (measured, MISSION.md); respect a user's own setting.
   if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", threads > 1 ? "1" : "2", 1);
 
-  GeometryStore store(config.store);
-  const std::string up_note = resolve_up_axis(config, store.summary().up, store.summary().up_source);
+  GeometryStore store(given.store);
+  BakePlan plan = plan_bake(given, options, store);
+  const BakeConfig& config = plan.config;
+  const std::string& up_note = plan.up_note;
   if (!up_note.empty()) std::fprintf(stderr, "%s\n", up_note.c_str());  // even with --quiet: it changes the bake
-  check_regions_meet_model(config.regions, store.model_bounds(), config.cell_size);
-  const std::uint64_t model_triangles = store.summary().triangles;
-  config.near_budget = effective_near_budget(config, model_triangles);
+  const std::uint64_t model_triangles = plan.model_triangles;
   if (model_triangles <= config.near_budget && !options.quiet)
     std::fprintf(stderr,
                  "note: the whole model (%llu triangles) fits the near-field budget (%llu): cells draw it as "
@@ -87,12 +102,10 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
   db.set_meta("up", config.up);
   db.set_meta("cell_size", std::to_string(config.cell_size));
 
-  const std::vector<CellSpec> all_cells = enumerate_cells(config.regions, config.cell_size);
-  std::vector<CellSpec> cells = select_cells(all_cells, options.cells);
-  if (options.shard_count > 1) cells = shard_cells(cells, options.shard_index, options.shard_count, store);
+  const std::vector<CellSpec>& cells = plan.cells;
   // The configuration's cell count, not this run's selection: `status` counts
   // what --cells or the other shards left out as pending.
-  db.set_meta("cells_total", std::to_string(all_cells.size()));
+  db.set_meta("cells_total", std::to_string(plan.cells_total));
   db.set_meta("cells_selected", std::to_string(cells.size()));  // this run's (shard's) cells, for merge
 
   BakeSummary summary;

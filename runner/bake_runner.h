@@ -7,9 +7,14 @@
 #include <cstdint>
 #include <string>
 
+#include <vector>
+
 #include "pipeline/bake_config.h"
+#include "pipeline/cell_grid.h"
 
 namespace cellbake {
+
+class GeometryStore;
 
 struct BakeOptions {
   int threads = 0;              // 0 = all cores
@@ -28,6 +33,21 @@ struct BakeSummary {
   std::uint64_t cull_reused = 0;       // cull-box results reused from the database
   double seconds = 0;
 };
+
+// What a bake would do, before it writes anything (run_bake's first step and
+// `bake --dry-run`): the config validated, its up axis resolved against the
+// store's (`up_note`: the note or warning to print, else ""), regions checked
+// against the model's bounds, the effective near budget (near.budget_fraction
+// of a small model), and the selected cells (--cells, shard). Throws on the
+// errors run_bake would throw for.
+struct BakePlan {
+  BakeConfig config;                // with `up` and `near_budget` as the bake will use them
+  std::string up_note;
+  std::uint64_t model_triangles = 0;
+  std::uint64_t cells_total = 0;    // the configuration's cells
+  std::vector<CellSpec> cells;      // this run's selection
+};
+BakePlan plan_bake(const BakeConfig& config, const BakeOptions& options, const GeometryStore& store);
 
 // Bakes the configured cells into config.database. Failed cells are recorded
 // (status + message) and do not stop the others. Deterministic cell rows

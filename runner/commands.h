@@ -13,6 +13,7 @@ void add_generate_command(CLI::App& app);
 void add_ingest_command(CLI::App& app);
 void add_bake_command(CLI::App& app);
 void add_status_command(CLI::App& app);
+void add_info_command(CLI::App& app);
 void add_demo_command(CLI::App& app);
 void add_submit_command(CLI::App& app);
 void add_merge_command(CLI::App& app);

@@ -44,6 +44,7 @@ int main(int argc, char** argv) {
       "Print more: each cell's stage timings (bake), each cell's result (verify), every bake parameter (status)");
   quiet->excludes(verbose);
   cellbake::add_generate_command(app);
+  cellbake::add_info_command(app);
   cellbake::add_ingest_command(app);
   cellbake::add_bake_command(app);
   cellbake::add_status_command(app);

@@ -1,0 +1,224 @@
+// `cellbake info` (issue #15, "What to build" 1): floors found by casting rays
+// down, a suggested bake at eye height over the main floor in the store's up
+// axis, that suggestion baked (a non-empty far field), `--json`, what info says
+// about a model file and a cell database; `bake --dry-run` writes nothing.
+// Runs the `cellbake` binary; the floor finder itself on an in-memory source.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "stages/floor_finder.h"
+#include "tests/fixture_memory_chunk_source.h"
+#include "tests/fixture_room_obj.h"
+#include "tests/test_support.h"
+
+namespace cellbake {
+namespace {
+
+using test::run_cellbake;
+using test::TempDir;
+
+std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+
+nlohmann::json json_of(const test::CommandResult& r) {
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  const auto brace = r.output.find('{');
+  EXPECT_NE(brace, std::string::npos) << r.output;
+  return nlohmann::json::parse(r.output.substr(brace == std::string::npos ? 0 : brace));
+}
+
+// A generated Z-up house (ground floor at 0, upper floor at 3, roof) as a store.
+std::filesystem::path house_store(const TempDir& dir) {
+  const auto store = dir / "house.store.db";
+  const auto r = run_cellbake("generate house --triangles 100000 --seed 1 --out " + q(dir / "house.ply") +
+                              " --store " + q(store));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return store;
+}
+
+// "--region X0,Y0,Z0,X1,Y1,Z1 --cell-size C --near-budget N" from info's JSON suggestion.
+std::string suggested_options(const nlohmann::json& s) {
+  std::ostringstream o;
+  o << "--region ";
+  for (int i = 0; i < 6; ++i) o << (i ? "," : "") << s["region"][i].get<double>();
+  o << " --cell-size " << s["cell_size"].get<double>() << " --near-budget " << s["near_budget"].get<std::uint64_t>();
+  return o.str();
+}
+
+TEST(Info, FindsTheFloorsOfAZUpHouseAndSuggestsARegionAtEyeHeight) {
+  TempDir dir;
+  const auto store = house_store(dir);
+  const auto text = run_cellbake("info " + q(store));
+  ASSERT_EQ(text.exit_code, 0) << text.output;
+  EXPECT_NE(text.output.find("triangles:"), std::string::npos) << text.output;  // the store facts, as status prints
+  EXPECT_NE(text.output.find("floors"), std::string::npos) << text.output;
+  EXPECT_NE(text.output.find("suggested bake"), std::string::npos) << text.output;
+  EXPECT_NE(text.output.find("metres"), std::string::npos) << text.output;
+  EXPECT_NE(text.output.find("cellbake bake --store"), std::string::npos) << text.output;
+
+  const auto doc = json_of(run_cellbake("info --json " + q(store)));
+  EXPECT_EQ(doc["kind"], "geometry_store");
+  EXPECT_EQ(doc["up_used"], "z");
+  bool ground = false, upper = false;
+  for (const auto& f : doc["floors"]) {
+    ground = ground || std::abs(f["height"].get<double>()) < 0.1;
+    upper = upper || std::abs(f["height"].get<double>() - 3.0) < 0.1;
+  }
+  EXPECT_TRUE(ground && upper) << doc["floors"].dump();
+  const auto& s = doc["suggested"];
+  ASSERT_TRUE(s.is_object()) << doc.dump();
+  EXPECT_NEAR(s["eye_height"].get<double>(), s["floor"].get<double>() + 1.7, 1e-9);
+  EXPECT_NEAR(s["floor"].get<double>(), 0.0, 0.1);
+  EXPECT_DOUBLE_EQ(s["region"][2].get<double>(), s["eye_height"].get<double>());
+  EXPECT_DOUBLE_EQ(s["region"][5].get<double>(), s["eye_height"].get<double>());
+  EXPECT_LT(s["region"][0].get<double>(), s["region"][3].get<double>());
+  EXPECT_LT(s["region"][1].get<double>(), s["region"][4].get<double>());
+  EXPECT_GE(s["cell_size"].get<double>(), 2.0);
+  EXPECT_LE(s["cell_size"].get<double>(), 4.0);
+  EXPECT_GT(s["cells"].get<std::uint64_t>(), 4u);
+  EXPECT_LT(s["near_budget"].get<std::uint64_t>(), doc["triangles"].get<std::uint64_t>());  // leaves a far field
+  EXPECT_GT(s["estimated_seconds"].get<double>(), 0.0);
+  EXPECT_NE(s["command"].get<std::string>().find("--up z"), std::string::npos);
+}
+
+TEST(Info, BakingTheSuggestionGivesAFarField) {
+  TempDir dir;
+  const auto store = house_store(dir);
+  const auto s = json_of(run_cellbake("info --json " + q(store)))["suggested"];
+  ASSERT_TRUE(s.is_object());
+  const auto db = dir / "house.cells.db";
+  const auto bake = run_cellbake("bake --store " + q(store) + " --up z " + suggested_options(s) + " --out " + q(db) +
+                                 " --set sample.face_size=64 --cells 10-11");
+  ASSERT_EQ(bake.exit_code, 0) << bake.output;
+  const auto status = json_of(run_cellbake("status --json " + q(db)));
+  EXPECT_EQ(status["cells_done"].get<std::uint64_t>(), 2u) << status.dump();
+  EXPECT_GT(status["far_triangles"].get<std::uint64_t>() + status["far_geometry_triangles"].get<std::uint64_t>(), 0u)
+      << status.dump();
+
+  // On a cell database info points to status.
+  const auto on_cells = run_cellbake("info " + q(db));
+  EXPECT_EQ(on_cells.exit_code, 0) << on_cells.output;
+  EXPECT_NE(on_cells.output.find("cellbake status"), std::string::npos) << on_cells.output;
+}
+
+// The pillar room turned Y-up: (x, y, z) -> (x, z, -y), ingested with --up y.
+TEST(Info, UsesTheRecordedYUpAxis) {
+  TempDir dir;
+  std::istringstream in(test::room_obj());
+  std::ostringstream out;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("v ", 0) == 0) {
+      std::istringstream v(line.substr(2));
+      double x, y, z;
+      v >> x >> y >> z;
+      std::string rest;
+      std::getline(v, rest);
+      out << "v " << x << " " << z << " " << -y << rest << "\n";
+    } else {
+      out << line << "\n";
+    }
+  }
+  const auto obj = dir / "room_yup.obj", store = dir / "room_yup.store.db";
+  std::ofstream(obj, std::ios::binary) << out.str();
+  const auto ingest = run_cellbake("ingest " + q(obj) + " --store " + q(store) + " --chunk-triangles 128 --up y");
+  ASSERT_EQ(ingest.exit_code, 0) << ingest.output;
+
+  const auto doc = json_of(run_cellbake("info --json " + q(store)));
+  EXPECT_EQ(doc["up"], "y");
+  EXPECT_EQ(doc["up_used"], "y");
+  const auto& s = doc["suggested"];
+  ASSERT_TRUE(s.is_object()) << doc.dump();
+  EXPECT_NEAR(s["floor"].get<double>(), 0.0, 0.1);
+  EXPECT_DOUBLE_EQ(s["region"][1].get<double>(), s["eye_height"].get<double>());  // y is the height
+  EXPECT_DOUBLE_EQ(s["region"][4].get<double>(), s["eye_height"].get<double>());
+  EXPECT_LT(s["region"][2].get<double>(), s["region"][5].get<double>());          // z spans the floor
+  EXPECT_NE(s["command"].get<std::string>().find("--up y"), std::string::npos);
+
+  // The suggestion is a valid bake: a dry run accepts it and writes nothing.
+  const auto db = dir / "room.cells.db";
+  const auto dry = run_cellbake("bake --store " + q(store) + " --up y " + suggested_options(s) + " --out " + q(db) +
+                                " --dry-run");
+  EXPECT_EQ(dry.exit_code, 0) << dry.output;
+  EXPECT_FALSE(std::filesystem::exists(db));
+}
+
+TEST(Info, OnAModelFileSaysToIngestFirst) {
+  TempDir dir;
+  const auto obj = dir / "room.obj";
+  std::ofstream(obj, std::ios::binary) << test::room_obj();
+  const auto r = run_cellbake("info " + q(obj));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("cellbake ingest"), std::string::npos) << r.output;
+  EXPECT_EQ(json_of(run_cellbake("info --json " + q(obj)))["kind"], "model_file");
+}
+
+TEST(BakeDryRun, PrintsCellsBudgetAndEstimateAndCreatesNoFile) {
+  TempDir dir;
+  const auto store = house_store(dir);
+  const auto db = dir / "dry.cells.db";
+  const std::string bake = "bake --store " + q(store) + " --region 1,1,1.7,9,7,1.7 --cell-size 2 --out " + q(db) +
+                           " --dry-run --cells 2-5";
+  const auto text = run_cellbake(bake);
+  ASSERT_EQ(text.exit_code, 0) << text.output;
+  EXPECT_NE(text.output.find("dry run: nothing written"), std::string::npos) << text.output;
+  EXPECT_NE(text.output.find("cells: 4 selected of 12"), std::string::npos) << text.output;
+  EXPECT_NE(text.output.find("near budget: 10007"), std::string::npos) << text.output;  // 10 % of 100070
+  EXPECT_NE(text.output.find("estimate:"), std::string::npos) << text.output;
+  const auto doc = json_of(run_cellbake(bake + " --json"));
+  EXPECT_EQ(doc["cells_selected"].get<std::uint64_t>(), 4u);
+  EXPECT_EQ(doc["cell_ids"], nlohmann::json({2, 3, 4, 5}));
+  EXPECT_GT(doc["estimated_seconds"].get<double>(), 0.0);
+  EXPECT_GT(doc["estimated_bytes_per_cell"].get<double>(), 0.0);
+  EXPECT_FALSE(std::filesystem::exists(db));
+  EXPECT_FALSE(std::filesystem::exists(dir / "dry.cells.db.lock"));
+
+  // Errors a bake would stop on stop a dry run too.
+  const auto nothing = run_cellbake(bake + " --cells 99");
+  EXPECT_NE(nothing.exit_code, 0) << nothing.output;
+  EXPECT_FALSE(std::filesystem::exists(db));
+}
+
+// The floor finder on a hand-built scene: a 10 x 10 floor at 0, a 10 x 10
+// slab at 2.9-3 (its underside the floor's ceiling, its top the upper floor),
+// a 1 x 1 table top at 0.8 (too few rays to be a floor; the floor under it has
+// no headroom) and nothing above the slab (a roof terrace).
+TEST(FloorFinder, FindsFloorsWithHeadroomAsHistogramPeaks) {
+  std::vector<std::array<Vec3d, 3>> tris;
+  const auto quad = [&](double z, double x0, double y0, double x1, double y1, bool up) {
+    const Vec3d a{x0, y0, z}, b{x1, y0, z}, c{x1, y1, z}, d{x0, y1, z};
+    if (up) tris.push_back({a, b, c}), tris.push_back({a, c, d});
+    else tris.push_back({a, c, b}), tris.push_back({a, d, c});
+  };
+  quad(0, 0, 0, 10, 10, true);
+  quad(2.9, 0, 0, 10, 10, false);
+  quad(3.0, 0, 0, 10, 10, true);
+  quad(0.8, 4, 4, 5, 5, true);
+  test::MemoryChunkSource source;
+  source.add(test::make_memory_chunk(1, tris));
+  FloorFinderParams p;
+  p.grid = 40;
+  const FloorFinderResult r = find_floors(source, p);
+  EXPECT_EQ(r.rays, 1600u);
+  EXPECT_EQ(r.rays_hit, 1600u);
+  ASSERT_EQ(r.floors.size(), 2u);
+  EXPECT_NEAR(r.floors[0].height, 0.0, 1e-9);
+  EXPECT_NEAR(r.floors[1].height, 3.0, 1e-9);
+  EXPECT_EQ(r.floors[0].covered_rays, r.floors[0].rays);  // under the slab
+  EXPECT_EQ(r.floors[1].covered_rays, 0u);                 // open sky
+  EXPECT_EQ(r.floors[0].rays, 1600u - 16u);                // all but the 4 x 4 rays under the table
+  EXPECT_NEAR(r.floors[0].covered_extent.lo.x, 0.125, 1e-9);
+  EXPECT_NEAR(r.floors[0].covered_extent.hi.x, 9.875, 1e-9);
+
+  p.up_axis = 1;  // seen as Y-up the quads are walls: no floors
+  EXPECT_TRUE(find_floors(source, p).floors.empty());
+}
+
+}  // namespace
+}  // namespace cellbake
