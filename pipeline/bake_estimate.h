@@ -17,7 +17,7 @@ inline constexpr double kMeasuredBytesPerCell = 150e3;       // at 512² faces
 
 struct BakeEstimate {
   double core_seconds_per_cell = 0;
-  double seconds = 0;         // wall seconds for all cells on `threads` threads
+  double seconds = 0;  // wall seconds for all cells on `threads` threads
   double bytes_per_cell = 0;
   double bytes = 0;
 };

@@ -5,16 +5,14 @@
 // cell size, the near budget the bake would use and an estimated time.
 // Model units are taken as metres (eye height 1.7, cells of 2-4).
 #include <CLI/CLI.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
-
-#include <nlohmann/json.hpp>
 
 #include "pipeline/bake_config.h"
 #include "pipeline/bake_estimate.h"
@@ -28,7 +26,7 @@
 namespace cellbake {
 namespace {
 
-constexpr double kEyeHeight = 1.7;   // above the floor, model units taken as metres
+constexpr double kEyeHeight = 1.7;  // above the floor, model units taken as metres
 constexpr int kTargetCellsPerFloor = 64;
 
 struct Suggestion {
@@ -89,7 +87,8 @@ Suggestion suggest_bake(const std::string& path, const GeometryStore& store, con
   s.cells = enumerate_cells({s.region}, s.cell_size).size();
   const std::uint64_t triangles = store.summary().triangles;
   s.near_budget = effective_near_budget(BakeConfig{}, triangles);
-  if (s.near_budget >= triangles) s.near_budget = std::max<std::uint64_t>(1, triangles / 4);  // leave a far field
+  if (s.near_budget >= triangles)
+    s.near_budget = std::max<std::uint64_t>(1, triangles / 4);  // leave a far field
   s.threads = int(std::max(1u, std::thread::hardware_concurrency()));
   s.estimate = estimate_bake(s.cells, BakeConfig{}.face_size, s.threads);
   std::string out = std::filesystem::path(path).filename().string();
@@ -99,9 +98,9 @@ Suggestion suggest_bake(const std::string& path, const GeometryStore& store, con
       break;
     }
   const Box3d& r = s.region;
-  s.command = "cellbake bake --store " + shell_word(path) + " --up " + up + " --region " + number(r.lo.x) + "," +
-              number(r.lo.y) + "," + number(r.lo.z) + "," + number(r.hi.x) + "," + number(r.hi.y) + "," +
-              number(r.hi.z) + " --cell-size " + number(s.cell_size) + " --near-budget " +
+  s.command = "cellbake bake --store " + shell_word(path) + " --up " + up + " --region " + number(r.lo.x) +
+              "," + number(r.lo.y) + "," + number(r.lo.z) + "," + number(r.hi.x) + "," + number(r.hi.y) +
+              "," + number(r.hi.z) + " --cell-size " + number(s.cell_size) + " --near-budget " +
               std::to_string(s.near_budget) + " --out " + shell_word(out + ".cells.db");
   return s;
 }
@@ -117,14 +116,16 @@ void info_store(const std::string& path, bool json) {
   if (json) {
     nlohmann::json j = store_status_json(store);
     j["up_used"] = up;
-    j["floor_search"] = {{"rays", found.rays}, {"rays_hit", found.rays_hit}, {"ray_spacing", found.ray_spacing}};
+    j["floor_search"] = {
+        {"rays", found.rays}, {"rays_hit", found.rays_hit}, {"ray_spacing", found.ray_spacing}};
     nlohmann::json floors = nlohmann::json::array();
     for (const Floor& f : found.floors)
       floors.push_back({{"height", f.height},
                         {"rays", f.rays},
                         {"covered_rays", f.covered_rays},
-                        {"extent", {{"min", {f.extent.lo.x, f.extent.lo.y, f.extent.lo.z}},
-                                    {"max", {f.extent.hi.x, f.extent.hi.y, f.extent.hi.z}}}}});
+                        {"extent",
+                         {{"min", {f.extent.lo.x, f.extent.lo.y, f.extent.lo.z}},
+                          {"max", {f.extent.hi.x, f.extent.hi.y, f.extent.hi.z}}}}});
     j["floors"] = floors;
     if (s.found) {
       const Box3d& r = s.region;
@@ -146,32 +147,36 @@ void info_store(const std::string& path, bool json) {
   }
   print_store_status(store, stdout);
   std::printf("floors (rays cast down on a grid %.3g apart; %llu of %llu rays hit the model; up %s):\n",
-              found.ray_spacing, (unsigned long long)found.rays_hit, (unsigned long long)found.rays, up.c_str());
+              found.ray_spacing, (unsigned long long)found.rays_hit, (unsigned long long)found.rays,
+              up.c_str());
   if (found.floors.empty()) std::printf("  none found (no wide upward-facing surface with headroom)\n");
   for (std::size_t f = 0; f < found.floors.size(); ++f) {
     const Floor& fl = found.floors[f];
-    std::printf("  %s = %s: %llu rays (%.0f %% of them covered above)%s\n", up.c_str(), number(fl.height).c_str(),
-                (unsigned long long)fl.rays, fl.rays ? 100.0 * double(fl.covered_rays) / double(fl.rays) : 0.0,
+    std::printf("  %s = %s: %llu rays (%.0f %% of them covered above)%s\n", up.c_str(),
+                number(fl.height).c_str(), (unsigned long long)fl.rays,
+                fl.rays ? 100.0 * double(fl.covered_rays) / double(fl.rays) : 0.0,
                 s.found && f == s.floor ? "  <- main floor" : "");
   }
   if (!s.found) {
-    std::printf("no suggested bake: choose a region with `cellbake render %s` (a look at the model)\n", path.c_str());
+    std::printf("no suggested bake: choose a region with `cellbake render %s` (a look at the model)\n",
+                path.c_str());
     return;
   }
   const Box3d& r = s.region;
   std::printf("suggested bake (model units taken as metres):\n");
-  std::printf("  eye height: %s = %s (floor %s + %.1f)\n", up.c_str(), number(s.eye).c_str(), number(found.floors[s.floor].height).c_str(),
-              kEyeHeight);
-  std::printf("  region: (%s, %s, %s) .. (%s, %s, %s), the floor's extent (under a roof if any)\n", number(r.lo.x).c_str(),
-              number(r.lo.y).c_str(), number(r.lo.z).c_str(), number(r.hi.x).c_str(), number(r.hi.y).c_str(),
-              number(r.hi.z).c_str());
+  std::printf("  eye height: %s = %s (floor %s + %.1f)\n", up.c_str(), number(s.eye).c_str(),
+              number(found.floors[s.floor].height).c_str(), kEyeHeight);
+  std::printf("  region: (%s, %s, %s) .. (%s, %s, %s), the floor's extent (under a roof if any)\n",
+              number(r.lo.x).c_str(), number(r.lo.y).c_str(), number(r.lo.z).c_str(), number(r.hi.x).c_str(),
+              number(r.hi.y).c_str(), number(r.hi.z).c_str());
   std::printf("  cell size: %s -> %llu cells\n", number(s.cell_size).c_str(), (unsigned long long)s.cells);
   std::printf("  near budget: %llu triangles per cell (of %llu: the rest is far field)\n",
               (unsigned long long)s.near_budget, (unsigned long long)summary.triangles);
-  std::printf("  estimated bake: ~%s on %d threads (%.1f core-seconds per cell measured on the demo plant at 512^2 "
-              "faces), ~%.1f MB\n",
-              duration_text(s.estimate.seconds).c_str(), s.threads, s.estimate.core_seconds_per_cell,
-              s.estimate.bytes / 1e6);
+  std::printf(
+      "  estimated bake: ~%s on %d threads (%.1f core-seconds per cell measured on the demo plant at 512^2 "
+      "faces), ~%.1f MB\n",
+      duration_text(s.estimate.seconds).c_str(), s.threads, s.estimate.core_seconds_per_cell,
+      s.estimate.bytes / 1e6);
   std::printf("  %s\n", s.command.c_str());
   std::printf("  (`bake ... --dry-run` checks it; `--cells 1-4` bakes a few cells first)\n");
 }
@@ -189,13 +194,15 @@ void add_info_command(CLI::App& app) {
   auto path = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
   CLI::App* cmd = app.add_subcommand(
-      "info", "Look at a model before baking: a geometry store's facts, its floors and a suggested bake command");
+      "info",
+      "Look at a model before baking: a geometry store's facts, its floors and a suggested bake command");
   cmd->add_option("path", *path, "Geometry store (ingest's output), model file or cell database")
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_flag("--json", *json, "Print the same as one JSON object");
-  cmd->footer("Example:\n  cellbake info house.store.db          # floors, a suggested region, cell size and budget\n"
-              "  cellbake info house.store.db --json");
+  cmd->footer(
+      "Example:\n  cellbake info house.store.db          # floors, a suggested region, cell size and budget\n"
+      "  cellbake info house.store.db --json");
   cmd->callback([path, json] {
     if (database_kind(*path) == DatabaseKind::geometry_store) return info_store(*path, *json);
     if (is_sqlite_file(*path)) {
@@ -224,9 +231,10 @@ void add_info_command(CLI::App& app) {
                               .c_str());
       return;
     }
-    std::printf("%s: a model file (not a geometry store); ingest it first, then ask again:\n  %s   # add --up y "
-                "for a Y-up OBJ/PLY (glTF is Y-up by specification)\n  cellbake info %s\n",
-                path->c_str(), ingest.c_str(), shell_word(store).c_str());
+    std::printf(
+        "%s: a model file (not a geometry store); ingest it first, then ask again:\n  %s   # add --up y "
+        "for a Y-up OBJ/PLY (glTF is Y-up by specification)\n  cellbake info %s\n",
+        path->c_str(), ingest.c_str(), shell_word(store).c_str());
   });
 }
 

@@ -153,8 +153,10 @@ std::vector<Floor> floors_of(const std::vector<std::vector<Hit>>& hits, const Ra
 }  // namespace
 
 FloorFinderResult find_floors(const ChunkSource& source, const FloorFinderParams& p) {
-  if (p.up_axis != 1 && p.up_axis != 2) throw std::invalid_argument("find_floors: up_axis must be 1 (y) or 2 (z)");
-  if (!(p.bin_size > 0) || p.grid < 2) throw std::invalid_argument("find_floors: bin_size must be > 0 and grid >= 2");
+  if (p.up_axis != 1 && p.up_axis != 2)
+    throw std::invalid_argument("find_floors: up_axis must be 1 (y) or 2 (z)");
+  if (!(p.bin_size > 0) || p.grid < 2)
+    throw std::invalid_argument("find_floors: bin_size must be > 0 and grid >= 2");
   FloorFinderResult result;
   const Box3d bounds = source.model_bounds();
   if (bounds.empty()) return result;
@@ -175,7 +177,8 @@ FloorFinderResult find_floors(const ChunkSource& source, const FloorFinderParams
   }
   result.floors = floors_of(hits, g, bounds.lo[p.up_axis], 1.0, result.rays_hit, p);
   // A model whose floors are wound facing down (no upward floors at all): take the other winding.
-  if (result.floors.empty()) result.floors = floors_of(hits, g, bounds.lo[p.up_axis], -1.0, result.rays_hit, p);
+  if (result.floors.empty())
+    result.floors = floors_of(hits, g, bounds.lo[p.up_axis], -1.0, result.rays_hit, p);
   return result;
 }
 

@@ -20,8 +20,8 @@
 namespace cellbake {
 
 struct FloorFinderParams {
-  int up_axis = 2;              // 2: z up, 1: y up (the other two axes are horizontal)
-  int grid = 96;                // rays along the longer horizontal side; the shorter gets proportionally fewer (≥ 2)
+  int up_axis = 2;  // 2: z up, 1: y up (the other two axes are horizontal)
+  int grid = 96;    // rays along the longer horizontal side; the shorter gets proportionally fewer (≥ 2)
   double bin_size = 0.05;       // histogram bin height, model units
   double min_up_cos = 0.7;      // a surface faces up when its unit normal · up ≥ this
   double min_headroom = 1.9;    // model units of free space a floor needs above it (eye height 1.7 + margin)
@@ -30,18 +30,18 @@ struct FloorFinderParams {
 };
 
 struct Floor {
-  double height = 0;              // along the up axis, model units (the peak bin's mean hit height)
-  std::uint64_t rays = 0;         // grid rays that hit this floor (within ± min_separation / 2)
-  std::uint64_t covered_rays = 0; // of those, rays with some surface above the floor (indoors)
-  Box3d extent;                   // the hit points' box (the up axis' range is the floor's height)
-  Box3d covered_extent;           // the covered hit points' box (empty when none is covered)
+  double height = 0;               // along the up axis, model units (the peak bin's mean hit height)
+  std::uint64_t rays = 0;          // grid rays that hit this floor (within ± min_separation / 2)
+  std::uint64_t covered_rays = 0;  // of those, rays with some surface above the floor (indoors)
+  Box3d extent;                    // the hit points' box (the up axis' range is the floor's height)
+  Box3d covered_extent;            // the covered hit points' box (empty when none is covered)
 };
 
 struct FloorFinderResult {
-  std::vector<Floor> floors;       // ascending height; empty when no ray hit an upward-facing surface
-  std::uint64_t rays = 0;          // grid rays cast
-  std::uint64_t rays_hit = 0;      // rays that hit any surface
-  double ray_spacing = 0;          // grid step, model units
+  std::vector<Floor> floors;   // ascending height; empty when no ray hit an upward-facing surface
+  std::uint64_t rays = 0;      // grid rays cast
+  std::uint64_t rays_hit = 0;  // rays that hit any surface
+  double ray_spacing = 0;      // grid step, model units
 };
 
 // Finds the floors of everything `source` holds. Reads every chunk once (an

@@ -4,12 +4,12 @@
 // about a model file and a cell database; `bake --dry-run` writes nothing.
 // Runs the `cellbake` binary; the floor finder itself on an in-memory source.
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 
 #include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 
@@ -47,7 +47,8 @@ std::string suggested_options(const nlohmann::json& s) {
   std::ostringstream o;
   o << "--region ";
   for (int i = 0; i < 6; ++i) o << (i ? "," : "") << s["region"][i].get<double>();
-  o << " --cell-size " << s["cell_size"].get<double>() << " --near-budget " << s["near_budget"].get<std::uint64_t>();
+  o << " --cell-size " << s["cell_size"].get<double>() << " --near-budget "
+    << s["near_budget"].get<std::uint64_t>();
   return o.str();
 }
 
@@ -56,7 +57,8 @@ TEST(Info, FindsTheFloorsOfAZUpHouseAndSuggestsARegionAtEyeHeight) {
   const auto store = house_store(dir);
   const auto text = run_cellbake("info " + q(store));
   ASSERT_EQ(text.exit_code, 0) << text.output;
-  EXPECT_NE(text.output.find("triangles:"), std::string::npos) << text.output;  // the store facts, as status prints
+  EXPECT_NE(text.output.find("triangles:"), std::string::npos)
+      << text.output;  // the store facts, as status prints
   EXPECT_NE(text.output.find("floors"), std::string::npos) << text.output;
   EXPECT_NE(text.output.find("suggested bake"), std::string::npos) << text.output;
   EXPECT_NE(text.output.find("metres"), std::string::npos) << text.output;
@@ -82,7 +84,8 @@ TEST(Info, FindsTheFloorsOfAZUpHouseAndSuggestsARegionAtEyeHeight) {
   EXPECT_GE(s["cell_size"].get<double>(), 2.0);
   EXPECT_LE(s["cell_size"].get<double>(), 4.0);
   EXPECT_GT(s["cells"].get<std::uint64_t>(), 4u);
-  EXPECT_LT(s["near_budget"].get<std::uint64_t>(), doc["triangles"].get<std::uint64_t>());  // leaves a far field
+  EXPECT_LT(s["near_budget"].get<std::uint64_t>(),
+            doc["triangles"].get<std::uint64_t>());  // leaves a far field
   EXPECT_GT(s["estimated_seconds"].get<double>(), 0.0);
   EXPECT_NE(s["command"].get<std::string>().find("--up z"), std::string::npos);
 }
@@ -93,12 +96,14 @@ TEST(Info, BakingTheSuggestionGivesAFarField) {
   const auto s = json_of(run_cellbake("info --json " + q(store)))["suggested"];
   ASSERT_TRUE(s.is_object());
   const auto db = dir / "house.cells.db";
-  const auto bake = run_cellbake("bake --store " + q(store) + " --up z " + suggested_options(s) + " --out " + q(db) +
-                                 " --set sample.face_size=64 --cells 10-11");
+  const auto bake = run_cellbake("bake --store " + q(store) + " --up z " + suggested_options(s) + " --out " +
+                                 q(db) + " --set sample.face_size=64 --cells 10-11");
   ASSERT_EQ(bake.exit_code, 0) << bake.output;
   const auto status = json_of(run_cellbake("status --json " + q(db)));
   EXPECT_EQ(status["cells_done"].get<std::uint64_t>(), 2u) << status.dump();
-  EXPECT_GT(status["far_triangles"].get<std::uint64_t>() + status["far_geometry_triangles"].get<std::uint64_t>(), 0u)
+  EXPECT_GT(
+      status["far_triangles"].get<std::uint64_t>() + status["far_geometry_triangles"].get<std::uint64_t>(),
+      0u)
       << status.dump();
 
   // On a cell database info points to status.
@@ -127,7 +132,8 @@ TEST(Info, UsesTheRecordedYUpAxis) {
   }
   const auto obj = dir / "room_yup.obj", store = dir / "room_yup.store.db";
   std::ofstream(obj, std::ios::binary) << out.str();
-  const auto ingest = run_cellbake("ingest " + q(obj) + " --store " + q(store) + " --chunk-triangles 128 --up y");
+  const auto ingest =
+      run_cellbake("ingest " + q(obj) + " --store " + q(store) + " --chunk-triangles 128 --up y");
   ASSERT_EQ(ingest.exit_code, 0) << ingest.output;
 
   const auto doc = json_of(run_cellbake("info --json " + q(store)));
@@ -138,13 +144,13 @@ TEST(Info, UsesTheRecordedYUpAxis) {
   EXPECT_NEAR(s["floor"].get<double>(), 0.0, 0.1);
   EXPECT_DOUBLE_EQ(s["region"][1].get<double>(), s["eye_height"].get<double>());  // y is the height
   EXPECT_DOUBLE_EQ(s["region"][4].get<double>(), s["eye_height"].get<double>());
-  EXPECT_LT(s["region"][2].get<double>(), s["region"][5].get<double>());          // z spans the floor
+  EXPECT_LT(s["region"][2].get<double>(), s["region"][5].get<double>());  // z spans the floor
   EXPECT_NE(s["command"].get<std::string>().find("--up y"), std::string::npos);
 
   // The suggestion is a valid bake: a dry run accepts it and writes nothing.
   const auto db = dir / "room.cells.db";
-  const auto dry = run_cellbake("bake --store " + q(store) + " --up y " + suggested_options(s) + " --out " + q(db) +
-                                " --dry-run");
+  const auto dry = run_cellbake("bake --store " + q(store) + " --up y " + suggested_options(s) + " --out " +
+                                q(db) + " --dry-run");
   EXPECT_EQ(dry.exit_code, 0) << dry.output;
   EXPECT_FALSE(std::filesystem::exists(db));
 }
@@ -163,8 +169,8 @@ TEST(BakeDryRun, PrintsCellsBudgetAndEstimateAndCreatesNoFile) {
   TempDir dir;
   const auto store = house_store(dir);
   const auto db = dir / "dry.cells.db";
-  const std::string bake = "bake --store " + q(store) + " --region 1,1,1.7,9,7,1.7 --cell-size 2 --out " + q(db) +
-                           " --dry-run --cells 2-5";
+  const std::string bake = "bake --store " + q(store) + " --region 1,1,1.7,9,7,1.7 --cell-size 2 --out " +
+                           q(db) + " --dry-run --cells 2-5";
   const auto text = run_cellbake(bake);
   ASSERT_EQ(text.exit_code, 0) << text.output;
   EXPECT_NE(text.output.find("dry run: nothing written"), std::string::npos) << text.output;
@@ -193,8 +199,10 @@ TEST(FloorFinder, FindsFloorsWithHeadroomAsHistogramPeaks) {
   std::vector<std::array<Vec3d, 3>> tris;
   const auto quad = [&](double z, double x0, double y0, double x1, double y1, bool up) {
     const Vec3d a{x0, y0, z}, b{x1, y0, z}, c{x1, y1, z}, d{x0, y1, z};
-    if (up) tris.push_back({a, b, c}), tris.push_back({a, c, d});
-    else tris.push_back({a, c, b}), tris.push_back({a, d, c});
+    if (up)
+      tris.push_back({a, b, c}), tris.push_back({a, c, d});
+    else
+      tris.push_back({a, c, b}), tris.push_back({a, d, c});
   };
   quad(0, 0, 0, 10, 10, true);
   quad(2.9, 0, 0, 10, 10, false);
@@ -211,8 +219,8 @@ TEST(FloorFinder, FindsFloorsWithHeadroomAsHistogramPeaks) {
   EXPECT_NEAR(r.floors[0].height, 0.0, 1e-9);
   EXPECT_NEAR(r.floors[1].height, 3.0, 1e-9);
   EXPECT_EQ(r.floors[0].covered_rays, r.floors[0].rays);  // under the slab
-  EXPECT_EQ(r.floors[1].covered_rays, 0u);                 // open sky
-  EXPECT_EQ(r.floors[0].rays, 1600u - 16u);                // all but the 4 x 4 rays under the table
+  EXPECT_EQ(r.floors[1].covered_rays, 0u);                // open sky
+  EXPECT_EQ(r.floors[0].rays, 1600u - 16u);               // all but the 4 x 4 rays under the table
   EXPECT_NEAR(r.floors[0].covered_extent.lo.x, 0.125, 1e-9);
   EXPECT_NEAR(r.floors[0].covered_extent.hi.x, 9.875, 1e-9);
 
