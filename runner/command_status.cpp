@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <map>
@@ -62,7 +63,10 @@ std::string tidy_numbers(const std::string& value) {
     const double d = std::strtod(item.c_str(), &end);
     if (!item.empty() && end == item.c_str() + item.size()) {
       char buf[64];
-      const auto r = std::to_chars(buf, buf + sizeof buf, d);
+      // Whole numbers in full ("100000", not the shorter "1e+05").
+      const auto r = std::abs(d) < 1e15 && d == std::floor(d)
+                         ? std::to_chars(buf, buf + sizeof buf, static_cast<long long>(d))
+                         : std::to_chars(buf, buf + sizeof buf, d);
       item.assign(buf, r.ptr);
     }
     out += (out.empty() ? "" : ",") + item;
