@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "bench/bench_program.h"
+#include "runner/verify/verify_report.h"
 #include "storage/cell_db.h"
 #include "storage/geometry_store.h"
 #include "viewer/decoded_cell.h"
@@ -26,11 +27,6 @@ namespace cellbake {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 int run(int argc, char** argv) {
   CLI::App app("Viewer-side decode time of whole cells on one core");
@@ -72,7 +68,7 @@ int run(int argc, char** argv) {
   const double n = double(per_cell.size());
   std::printf("%zu cells: decode ms per cell median %.2f, worst %.2f (first, cold: median %.2f, worst %.2f); "
               "per cell %.1f KB colour, %.1f KB mesh, %.1f KB far geometry (%.2f B per far triangle)\n",
-              per_cell.size(), median(per_cell), *std::max_element(per_cell.begin(), per_cell.end()), median(cold),
+              per_cell.size(), median_of(per_cell), *std::max_element(per_cell.begin(), per_cell.end()), median_of(cold),
               *std::max_element(cold.begin(), cold.end()), colour / 1024.0 / n, mesh / 1024.0 / n, far / 1024.0 / n,
               far_triangles ? double(far) / double(far_triangles) : 0.0);
   return 0;
