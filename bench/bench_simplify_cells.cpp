@@ -20,6 +20,7 @@
 #include <meshoptimizer.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -32,6 +33,7 @@
 #include "pipeline/cell_grid.h"
 #include "pipeline/cell_job.h"
 #include "pipeline/sample_backend.h"
+#include "stages/depth_mesh.h"
 #include "stages/simplify.h"
 #include "storage/geometry_store.h"
 
@@ -112,8 +114,12 @@ int run(int argc, char** argv) {
     run_cull_box(work, config, store);
     run_sample(work, config, store, *sampler);
     run_depth_mesh(work, config);
+    DepthMeshParams mesh_params;
+    mesh_params.skin_angle_degrees = config.skin_angle_deg;
+    mesh_params.max_relative_depth_jump = config.depth_jump;
+    const std::array<FaceMesh, kCubeFaces> dense_faces = build_depth_meshes(work.samples.at(0).cube, mesh_params);
     for (int f = 0; f < kCubeFaces; ++f) {
-      const FaceMesh& dense = work.samples.at(0).dense[f];
+      const FaceMesh& dense = dense_faces[std::size_t(f)];
       if (dense.indices.empty()) continue;
       std::vector<double> ours_s, mopt_s;
       SimplifyResult r;

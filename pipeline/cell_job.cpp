@@ -36,6 +36,13 @@ class StageTimer {
   Clock::time_point start_;
 };
 
+DepthMeshParams depth_mesh_params(const BakeConfig& config) {
+  DepthMeshParams p;
+  p.skin_angle_degrees = config.skin_angle_deg;
+  p.max_relative_depth_jump = config.depth_jump;
+  return p;
+}
+
 void hash_vec(Hasher& h, const Vec3d& v) { h.f64(v.x).f64(v.y).f64(v.z); }
 
 void hash_box(Hasher& h, const Box3d& b) {
@@ -229,39 +236,62 @@ void run_depth_mesh(CellWork& work, const BakeConfig& config) {
       work.samples[i].seconds += std::chrono::duration<double>(Clock::now() - t0).count();
     }
   }
-  DepthMeshParams p;
-  p.skin_angle_degrees = config.skin_angle_deg;
-  p.max_relative_depth_jump = config.depth_jump;
-  for (SampleWork& s : work.samples) {
-    const auto t0 = Clock::now();
-    s.dense = build_depth_meshes(s.cube, p);
-    s.seconds += std::chrono::duration<double>(Clock::now() - t0).count();
-  }
 }
 
-void run_simplify(CellWork& work, const BakeConfig& config) {
-  StageTimer timer(work, "simplify");
-  SimplifyParams p;
-  p.depth_error_relative = config.depth_error_relative;
-  p.boundary_error_px = config.boundary_error_px;
-  p.max_triangles = static_cast<std::size_t>(config.max_face_triangles);
-  SimplifyParams delta = p;
-  delta.boundary_error_px = config.delta_boundary_error_px;
-  for (SampleWork& s : work.samples) {
+const FaceMesh& face_mesh(CellWork& work, const BakeConfig& config, std::size_t sample, int face) {
+  SampleWork& s = work.samples.at(sample);
+  const std::size_t f = std::size_t(face);
+  if (s.meshed.at(f)) return s.simplified[f];
+  const std::string where = "sample " + std::to_string(sample) + " face " + std::to_string(face) + ": ";
+  FaceMesh dense;
+  {
     const auto t0 = Clock::now();
-    for (int f = 0; f < kCubeFaces; ++f) {
-      SimplifyResult r = simplify_face_mesh(s.dense[f], config.face_size, s.parent < 0 ? p : delta);
-      s.simplified[f] = std::move(r.mesh);
-      s.boundary_error_px[f] = r.achieved.max_boundary_error_px;
-      s.depth_error[f] = r.achieved.max_depth_error_relative;
-      s.dense[f] = FaceMesh{};  // release the dense mesh early
+    StageTimer timer(work, "depth_mesh");
+    try {
+      dense = build_depth_mesh_face(s.cube, depth_mesh_params(config), face);
+    } catch (const std::exception& e) {
+      throw StageError("depth_mesh", where + e.what());
     }
     s.seconds += std::chrono::duration<double>(Clock::now() - t0).count();
   }
+  const auto t0 = Clock::now();
+  StageTimer timer(work, "simplify");
+  SimplifyParams p;
+  p.depth_error_relative = config.depth_error_relative;
+  p.boundary_error_px = s.parent < 0 ? config.boundary_error_px : config.delta_boundary_error_px;
+  p.max_triangles = static_cast<std::size_t>(config.max_face_triangles);
+  try {
+    SimplifyResult r = simplify_face_mesh(dense, config.face_size, p);
+    s.simplified[f] = std::move(r.mesh);
+    s.boundary_error_px[f] = r.achieved.max_boundary_error_px;
+    s.depth_error[f] = r.achieved.max_depth_error_relative;
+  } catch (const std::exception& e) {
+    throw StageError("simplify", where + e.what());
+  }
+  s.meshed[f] = 1;
+  s.seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+  return s.simplified[f];
+}
+
+void run_simplify(CellWork& work, const BakeConfig& config) {
+  for (std::size_t i = 0; i < work.samples.size(); ++i)
+    for (int f = 0; f < kCubeFaces; ++f) face_mesh(work, config, i, f);
 }
 
 void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource& source) {
-  StageTimer timer(work, "far_choice");
+  // This stage's own time: what it spends meshing faces on demand counts as
+  // depth_mesh and simplify.
+  const auto t0 = Clock::now();
+  const double nested0 = work.seconds["depth_mesh"] + work.seconds["simplify"];
+  struct OwnTime {
+    CellWork& work;
+    Clock::time_point t0;
+    double nested0;
+    ~OwnTime() {
+      const double nested = work.seconds["depth_mesh"] + work.seconds["simplify"] - nested0;
+      work.seconds["far_choice"] += std::chrono::duration<double>(Clock::now() - t0).count() - nested;
+    }
+  } own_time{work, t0, nested0};
   // Every eye the viewer may draw the cell from: the cell, and the samples in it.
   Box3d eyes = work.cell.bounds;
   // What the samples saw, grown by far.seen_rings rings of neighbouring
@@ -282,18 +312,23 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
           grow_seen_triangles(seen, *it->second.first, it->second.second, config.far_seen_rings, scratch);
         }
   }
+  const DepthMeshParams mesh_params = depth_mesh_params(config);
   std::vector<FarChoiceSample> samples;
   for (const SampleWork& s : work.samples) {
     eyes.expand(s.cube.eye);
     FarChoiceSample c;
     for (int f = 0; f < kCubeFaces; ++f) {
-      c.meshes[std::size_t(f)] = &s.simplified[std::size_t(f)];
+      c.meshes[std::size_t(f)] = s.meshed[std::size_t(f)] ? &s.simplified[std::size_t(f)] : nullptr;
       c.seen[std::size_t(f)] = &s.cube.faces[std::size_t(f)].seen;
+      if (!c.meshes[std::size_t(f)]) c.mesh_guess[std::size_t(f)] = outline_edge_guess(s.cube.faces[std::size_t(f)], mesh_params);
     }
     samples.push_back(c);
   }
   work.far = choose_far_field(eyes, work.far_chunks, samples, parse_far_choice_mode(config.far_choice),
-                              config.far_geometry_factor);
+                              config.far_geometry_factor,
+                              [&](std::size_t sample, int face) -> const FaceMesh& {
+                                return face_mesh(work, config, sample, face);
+                              });
   for (SampleWork& s : work.samples)
     for (int f = 0; f < kCubeFaces; ++f)
       drop_geometry_tiles(s.simplified[std::size_t(f)], work.far->faces[std::size_t(f)].geometry_tiles);

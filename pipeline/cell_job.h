@@ -2,7 +2,8 @@
 // parameter/input hashes that make reruns resumable, and the assembly of a
 // cell database row. Stages run in the order
 //   cull_box -> sample -> depth_mesh -> simplify -> far_choice -> encode
-// and the runner schedules them (sample needs a CubeSampler, one per thread;
+// (the far choice meshes and simplifies, on demand, only the faces its
+// decision depends on) and the runner schedules them (sample needs a CubeSampler, one per thread;
 // the others are plain CPU work). A stage that throws turns the cell into a failed row whose
 // message names the cell and the stage.
 #pragma once
@@ -11,6 +12,7 @@
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <stdexcept>
 #include <string>
 
 #include "pipeline/bake_config.h"
@@ -33,7 +35,7 @@ struct StageVersions {
   static constexpr int depth_mesh = 2;  // 2: delta scans lose the pixels their ancestors hold
   static constexpr int simplify = 3;
   static constexpr int encode = 3;      // 2: background texels filled from their covered neighbours; 3: grid mesh codec, avif
-  static constexpr int far_choice = 3;  // 1: exact far geometry per face tile where it is cheaper (issue #13); 2: depth-mesh triangles spanning geometry tiles dropped too; 3: seen triangles stored as numbers into the store's chunk
+  static constexpr int far_choice = 4;  // 1: exact far geometry per face tile where it is cheaper (issue #13); 2: depth-mesh triangles spanning geometry tiles dropped too; 3: seen triangles stored as numbers into the store's chunk; 4: faces drawn wholly as geometry are not meshed (their stored errors are 0, replaced_triangles counts meshed faces only)
 };
 
 // The stage names, in order, as used in stage_seconds and error messages.
@@ -55,7 +57,7 @@ struct SampleWork {
   double void_after = -1;                 // worst candidate's void fraction once this sample was taken (-1: not measured)
   std::uint64_t covered = 0, removed = 0; // pixels with a surface, and of those removed as redundant
   double seconds = 0;                     // this sample's share of the bake (render + redundancy + mesh + simplify + encode)
-  std::array<FaceMesh, kCubeFaces> dense;
+  std::array<char, kCubeFaces> meshed{};  // face meshed and simplified (face_mesh), else `simplified` is empty
   std::array<FaceMesh, kCubeFaces> simplified;
   std::array<double, kCubeFaces> boundary_error_px{};
   std::array<double, kCubeFaces> depth_error{};
@@ -80,23 +82,43 @@ struct CellWork {
 void run_cull_box(CellWork& work, const BakeConfig& config, const ChunkSource& source);
 // Takes the cell's samples with `sampler` (whichever backend it is).
 void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& source, CubeSampler& sampler);
+// Links the samples into their dependency tree and reduces each delta scan to
+// what its ancestors do not hold. The faces' depth meshes are built later, on
+// demand (face_mesh).
 void run_depth_mesh(CellWork& work, const BakeConfig& config);
+// Face `face` of sample `sample`: its dense depth mesh built and simplified
+// on first use (timed as the depth_mesh and simplify stages; a failure
+// throws StageError naming the stage), then kept in SampleWork::simplified.
+const FaceMesh& face_mesh(CellWork& work, const BakeConfig& config, std::size_t sample, int face);
+// Meshes and simplifies every face of every sample (what run_far_choice does
+// only where the choice needs it).
 void run_simplify(CellWork& work, const BakeConfig& config);
 // Chooses exact far geometry or depth meshes per face tile and drops the
-// depth-mesh triangles that geometry replaces (stages/far_choice.h).
-// Fills the row's far geometry and per-face choice (loads the chunks it keeps
-// triangles of from `source`).
+// depth-mesh triangles that geometry replaces (stages/far_choice.h); meshes
+// and simplifies only the faces the choice depends on (a face drawn wholly as
+// geometry is usually never meshed). Fills the row's far geometry and
+// per-face choice (loads the chunks it keeps triangles of from `source`).
 void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource& source);
 void run_encode(CellWork& work, const BakeConfig& config);
 
+// A failure of a stage run inside another (a face meshed on demand by the far choice).
+struct StageError : std::runtime_error {
+  StageError(std::string stage_name, const std::string& message)
+      : std::runtime_error(message), stage(std::move(stage_name)) {}
+  std::string stage;
+};
+
 // Runs `step` for `stage` unless the cell already failed; a throw is recorded
-// as "cell ID (gx,gy,gz): stage STAGE: message" and later stages are skipped.
+// as "cell ID (gx,gy,gz): stage STAGE: message" (the StageError's stage when
+// it names one) and later stages are skipped.
 template <typename Step>
-void run_stage(CellWork& work, const char* stage, Step&& step) {
+void run_stage(CellWork& work, const char* stage_name, Step&& step) {
   if (!work.failed_stage.empty()) return;
   try {
     step();
   } catch (const std::exception& e) {
+    const auto* inner = dynamic_cast<const StageError*>(&e);
+    const std::string stage = inner ? inner->stage : std::string(stage_name);
     work.failed_stage = stage;
     work.error = "cell " + std::to_string(work.cell.id) + " (" + std::to_string(work.cell.gx) + "," +
                  std::to_string(work.cell.gy) + "," + std::to_string(work.cell.gz) + "): stage " + stage + ": " +

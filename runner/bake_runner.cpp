@@ -177,7 +177,6 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
     });
     tbb::flow::function_node<WorkPtr, WorkPtr> mesh(g, tbb::flow::unlimited, [&](WorkPtr w) {
       run_stage(*w, "depth_mesh", [&] { run_depth_mesh(*w, config); });
-      run_stage(*w, "simplify", [&] { run_simplify(*w, config); });
       run_stage(*w, "far_choice", [&] { run_far_choice(*w, config, store); });
       run_stage(*w, "encode", [&] { run_encode(*w, config); });
       return w;

@@ -650,4 +650,35 @@ std::array<FaceMesh, kCubeFaces> build_depth_meshes(const CubeSample& sample, co
   return meshes;
 }
 
+std::uint64_t outline_edge_guess(const CubeFace& face, const DepthMeshParams& params) {
+  const int n = face.size;
+  if (n <= 0 || face.depth.size() != std::size_t(n) * std::size_t(n)) return 0;
+  const float jump = float(params.max_relative_depth_jump);
+  const auto cut = [jump](float a, float b) {
+    const bool fa = std::isfinite(a), fb = std::isfinite(b);
+    if (fa != fb) return true;
+    if (!fa) return false;
+    return std::abs(a - b) > jump * std::min(a, b);
+  };
+  std::uint64_t edges = 0;
+  for (int j = 0; j < n; ++j) {
+    const float* row = face.depth.data() + std::size_t(j) * std::size_t(n);
+    const float* below = j + 1 < n ? row + n : nullptr;
+    for (int i = 0; i < n; ++i) {
+      if (i + 1 < n) edges += cut(row[i], row[i + 1]);
+      if (below) edges += cut(row[i], below[i]);
+    }
+  }
+  return edges;
+}
+
+FaceMesh build_depth_mesh_face(const CubeSample& sample, const DepthMeshParams& params, int face) {
+  if (face < 0 || face >= kCubeFaces)
+    throw std::invalid_argument("build_depth_mesh_face: no cube face " + std::to_string(face));
+  validate(sample);
+  CubeLattice lat(sample, params);
+  lat.cache_face(face);
+  return build_face(lat, interior_corner_labels(), face);
+}
+
 }  // namespace cellbake

@@ -52,4 +52,16 @@ struct DepthMeshStats {
 std::array<FaceMesh, kCubeFaces> build_depth_meshes(const CubeSample& sample, const DepthMeshParams& params,
                                                     DepthMeshStats* stats = nullptr);
 
+// A cheap guess of how many triangles a face's simplified depth mesh needs,
+// without meshing it: the pixel edges across a depth discontinuity (relative
+// jump above params.max_relative_depth_jump) or between surface and
+// background, where outlines (and so most simplified triangles) lie. Only
+// its order matters (which face to mesh first). O(pixels).
+std::uint64_t outline_edge_guess(const CubeFace& face, const DepthMeshParams& params);
+
+// Face `face` alone of build_depth_meshes(sample, params), bit for bit (a
+// face's border corners read its neighbours' pixels, not their meshes), for
+// callers that mesh only the faces they need. Throws as build_depth_meshes.
+FaceMesh build_depth_mesh_face(const CubeSample& sample, const DepthMeshParams& params, int face);
+
 }  // namespace cellbake

@@ -104,24 +104,59 @@ std::uint32_t triangle_tile_mask(const FaceMesh& mesh, std::size_t triangle) {
 
 FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
                            std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor) {
+  return choose_far_field(eyes, far_chunks, samples, mode, geometry_factor, FarChoiceMeshSource{});
+}
+
+FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
+                           std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor,
+                           const FarChoiceMeshSource& mesh_source) {
   FarChoice out;
-  // What each tile would drop: its depth-mesh triangles. Triangles spanning
-  // tiles are dropped only when all the tiles they reach take geometry (not
-  // counted as any tile's gain).
+  // What each tile would drop: its depth-mesh triangles, counted from the
+  // meshes known so far. Triangles spanning tiles are dropped only when all
+  // the tiles they reach take geometry (not counted as any tile's gain).
   std::vector<std::uint64_t> removable(kAllTiles, 0);
   std::array<std::vector<std::uint32_t>, kCubeFaces> spanning;  // per face: the tiles of each spanning triangle
-  for (const FarChoiceSample& sample : samples)
-    for (int f = 0; f < kCubeFaces; ++f) {
-      if (!sample.meshes[std::size_t(f)]) continue;
-      const FaceMesh& m = *sample.meshes[std::size_t(f)];
-      for (std::size_t t = 0; t < m.triangle_count(); ++t) {
-        const int tile = triangle_tile(m, t);
-        if (tile < 0)
-          spanning[std::size_t(f)].push_back(triangle_tile_mask(m, t));
-        else
-          ++removable[std::size_t(f * kFarTilesPerFace + tile)];
-      }
+  std::vector<std::array<char, kCubeFaces>> known(samples.size());
+  std::array<int, kCubeFaces> missing{};  // per face: samples whose mesh is not known yet
+  const auto count_mesh = [&](int f, const FaceMesh& m) {
+    for (std::size_t t = 0; t < m.triangle_count(); ++t) {
+      const int tile = triangle_tile(m, t);
+      if (tile < 0)
+        spanning[std::size_t(f)].push_back(triangle_tile_mask(m, t));
+      else
+        ++removable[std::size_t(f * kFarTilesPerFace + tile)];
     }
+  };
+  for (std::size_t i = 0; i < samples.size(); ++i)
+    for (int f = 0; f < kCubeFaces; ++f) {
+      known[i][std::size_t(f)] = samples[i].meshes[std::size_t(f)] != nullptr || !mesh_source;
+      if (samples[i].meshes[std::size_t(f)]) count_mesh(f, *samples[i].meshes[std::size_t(f)]);
+      missing[std::size_t(f)] += !known[i][std::size_t(f)];
+    }
+  std::vector<char> geometry(kAllTiles, 0);
+  // Asks for the missing mesh with the largest guess (then the first in
+  // sample and face order) of a face with a tile in first..first+count-1 not
+  // taken yet; false when none is missing.
+  const auto learn_one = [&](int first, int count) {
+    const auto open = [&](int f) {
+      for (int k = std::max(first, f * kFarTilesPerFace); k < std::min(first + count, (f + 1) * kFarTilesPerFace); ++k)
+        if (!geometry[std::size_t(k)]) return true;
+      return false;
+    };
+    std::size_t best_sample = 0;
+    int best_face = -1;
+    for (std::size_t i = 0; i < samples.size(); ++i)
+      for (int f = first / kFarTilesPerFace; f <= (first + count - 1) / kFarTilesPerFace; ++f)
+        if (!known[i][std::size_t(f)] && open(f) &&
+            (best_face < 0 ||
+             samples[i].mesh_guess[std::size_t(f)] > samples[best_sample].mesh_guess[std::size_t(best_face)]))
+          best_sample = i, best_face = f;
+    if (best_face < 0) return false;
+    known[best_sample][std::size_t(best_face)] = 1;
+    --missing[std::size_t(best_face)];
+    count_mesh(best_face, mesh_source(best_sample, best_face));
+    return true;
+  };
 
   // What each tile would need: elements (a whole chunk, or one triangle of a
   // chunk) with their triangle counts.
@@ -199,26 +234,40 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
     }
   }
 
-  std::vector<char> geometry(kAllTiles, 0), chosen(elements.size(), 0);
+  std::vector<char> chosen(elements.size(), 0);
   std::vector<std::uint32_t> stamp_of(elements.size(), 0);
   std::uint32_t stamp = 0;
-  // Takes geometry for the group's tiles not taken yet when it pays.
+  // Takes geometry for the group's tiles not taken yet when it pays. The
+  // gain known so far is a lower bound: it decides "yes" at once, while a
+  // "no" first learns the group's missing meshes one by one.
   const auto try_group = [&](int first, int count, bool force) {
     ++stamp;
-    std::uint64_t extra = 0, gain = 0;
+    std::uint64_t extra = 0;
     bool any = false;
     for (int k = first; k < first + count; ++k) {
       if (geometry[std::size_t(k)]) continue;
       any = true;
-      gain += removable[std::size_t(k)];
       for (std::uint32_t e : tile_elements[std::size_t(k)])
         if (!chosen[e] && stamp_of[e] != stamp) stamp_of[e] = stamp, extra += elements[e].weight;
     }
-    if (!any || extra + gain == 0) return false;
-    if (!force && double(extra) > geometry_factor * double(gain)) return false;
+    if (!any) return false;
+    const auto gain = [&] {
+      std::uint64_t g = 0;
+      for (int k = first; k < first + count; ++k)
+        if (!geometry[std::size_t(k)]) g += removable[std::size_t(k)];
+      return g;
+    };
+    const auto pays = [&](std::uint64_t g) {
+      return extra + g > 0 && (force || double(extra) <= geometry_factor * double(g));
+    };
+    if (!(force && extra > 0))
+      while (!pays(gain()))
+        if (!learn_one(first, count)) return false;
     for (int k = first; k < first + count; ++k) {
       if (geometry[std::size_t(k)]) continue;
-      if (tile_elements[std::size_t(k)].empty() && removable[std::size_t(k)] == 0) continue;
+      if (tile_elements[std::size_t(k)].empty() && removable[std::size_t(k)] == 0 &&
+          missing[std::size_t(k / kFarTilesPerFace)] == 0)
+        continue;
       geometry[std::size_t(k)] = 1;
       for (std::uint32_t e : tile_elements[std::size_t(k)]) chosen[e] = 1;
     }
@@ -233,6 +282,14 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
       for (int k = 0; k < kAllTiles; ++k) changed = try_group(k, 1, false) || changed;
     }
   }
+
+  // A face keeping depth meshes anywhere needs all its meshes (tdm mode, or
+  // tiles no geometry pays for).
+  for (int f = 0; f < kCubeFaces; ++f)
+    for (int k = 0; k < kFarTilesPerFace && missing[std::size_t(f)] > 0; ++k)
+      if (!geometry[std::size_t(f * kFarTilesPerFace + k)])
+        while (learn_one(f * kFarTilesPerFace, kFarTilesPerFace)) {
+        }
 
   for (int f = 0; f < kCubeFaces; ++f) {
     FaceFarChoice& face = out.faces[std::size_t(f)];

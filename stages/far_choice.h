@@ -18,6 +18,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -71,6 +72,9 @@ struct FarChoice {
 struct FarChoiceSample {
   std::array<const FaceMesh*, kCubeFaces> meshes{};
   std::array<const std::vector<SeenChunk>*, kCubeFaces> seen{};
+  // With a mesh source: a guess of each missing face's depth-mesh triangles
+  // (any scale); missing meshes are asked for largest guess first.
+  std::array<std::uint64_t, kCubeFaces> mesh_guess{};
 };
 
 // Chooses each face tile's representation. `far_chunks` are the chunks
@@ -89,6 +93,30 @@ struct FarChoiceSample {
 FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
                            std::span<const FarChoiceSample> samples, FarChoiceMode mode,
                            double geometry_factor = 1.0);
+
+// Supplies the depth mesh of face `face` of sample `sample` when the choice
+// needs it (e.g. built and simplified on demand); the reference must stay
+// valid until choose_far_field returns.
+using FarChoiceMeshSource = std::function<const FaceMesh&(std::size_t sample, int face)>;
+
+// The same choice when building the depth meshes is the expensive part: a
+// sample's mesh pointer may be null, and `mesh_source` is then asked for it
+// only when the choice depends on it. A group of tiles takes geometry as soon
+// as the depth-mesh triangles known so far pay for it (more meshes can only
+// add to what it drops), so a face whose tiles all end as geometry is often
+// never meshed; a group that would decline asks for its missing meshes first
+// (largest FarChoiceSample::mesh_guess first, then in sample and face
+// order), so every decision is the one the full counts give and the geometry
+// drawn is the same as with every mesh given. Faces never asked for have all
+// their tiles marked geometry (also tiles with nothing to draw, so a
+// depth-mesh triangle spanning into such a tile may be dropped where the
+// full counts keep it: drawn the same, since no pixel centre there saw a far
+// surface); their depth-mesh triangles are not counted in
+// FaceFarChoice::replaced_triangles (a lower bound then). Calls
+// `mesh_source` at most once per face, deterministically.
+FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
+                           std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor,
+                           const FarChoiceMeshSource& mesh_source);
 
 // Which triangles use each vertex of a chunk (compressed rows: the triangles
 // of vertex v are triangles[offsets[v] .. offsets[v + 1])).

@@ -158,6 +158,29 @@ TEST(DepthMesh, IsDeterministic) {
   }
 }
 
+TEST(DepthMesh, OneFaceAloneIsBitIdenticalToThatFaceOfTheWholeCube) {
+  // Faces meshed one at a time, in any order (a far choice meshes only the
+  // faces it needs), give the same bits, border corners included.
+  AnalyticScene scene;
+  scene.boxes.push_back(Box3d::cube({0, 0, 0}, 5.0));
+  scene.boxes.push_back({{1, 1, -1}, {2, 3, 1}});
+  scene.boxes.push_back({{-3, -2, 2}, {-1, 4, 4.5}});  // across an upper cube edge
+  scene.cylinders.push_back({-1.5, 0.5, 0.3, -4, 2});
+  const CubeSample sample = raycast_analytic_scene(scene, {0.2, 0.1, 0.3}, 40);
+  const auto all = build_depth_meshes(sample, DepthMeshParams{});
+  for (int f : {5, 2, 0, 4, 1, 3}) {
+    const FaceMesh one = build_depth_mesh_face(sample, DepthMeshParams{}, f);
+    EXPECT_GT(one.triangle_count(), 0u) << f;
+    EXPECT_EQ(one.positions, all[f].positions) << f;
+    EXPECT_EQ(one.uvs, all[f].uvs) << f;
+    EXPECT_EQ(one.indices, all[f].indices) << f;
+  }
+  EXPECT_THROW(build_depth_mesh_face(sample, DepthMeshParams{}, 6), std::invalid_argument);
+  CubeSample bad_depth = sample;
+  bad_depth.faces[2].depth[5] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(build_depth_mesh_face(bad_depth, DepthMeshParams{}, 0), std::invalid_argument);
+}
+
 TEST(DepthMesh, RejectsInconsistentInput) {
   AnalyticScene scene;
   scene.boxes.push_back(Box3d::cube({0, 0, 0}, 1.0));

@@ -618,16 +618,23 @@ TEST(FarChoiceChoose, ASampleThatSawAChunkWholeMakesItWhole) {
   EXPECT_EQ(c.faces[0].replaced_triangles, 132u);
 }
 
-TEST(FarChoiceChoose, SampleOrderDoesNotChangeTheChoice) {
-  // Five samples with random depth meshes and seen lists over 12 far chunks
-  // (and two near-field ones); every permutation chooses the same.
-  std::mt19937 rng(2026);
+// Random depth meshes (`max_per_tile` triangles per tile at most, a few
+// spanning tiles) and seen lists over 12 far chunks (and two near-field
+// ones), for `count` samples.
+struct RandomScenario {
   std::vector<ChunkRef> far;
+  std::vector<SampleInput> samples;
+};
+RandomScenario random_scenario(unsigned seed, int count, int max_per_tile = 12) {
+  std::mt19937 rng(seed);
+  RandomScenario out;
+  std::vector<ChunkRef>& far = out.far;
   for (std::int64_t id = 1; id <= 12; ++id) far.push_back(ref(id * 3, 5 + std::uint32_t(rng() % 60)));
-  std::vector<SampleInput> samples(5);
-  for (SampleInput& s : samples)
+  out.samples.resize(std::size_t(count));
+  for (SampleInput& s : out.samples)
     for (int f = 0; f < kCubeFaces; ++f) {
-      for (int tile = 0; tile < kFarTilesPerFace; ++tile) add_tile_triangles(s.meshes[std::size_t(f)], tile, int(rng() % 12));
+      for (int tile = 0; tile < kFarTilesPerFace; ++tile)
+        add_tile_triangles(s.meshes[std::size_t(f)], tile, int(rng() % unsigned(max_per_tile)));
       for (int k = 0; k < int(rng() % 4); ++k) add_uv_triangle(s.meshes[std::size_t(f)], {0, 0}, {0.6f, 0}, {0, 0.6f});
       for (std::int64_t id = 1; id <= 14; ++id) {
         if (rng() % 3 == 0) continue;
@@ -651,6 +658,14 @@ TEST(FarChoiceChoose, SampleOrderDoesNotChangeTheChoice) {
         s.seen[std::size_t(f)].push_back(std::move(c));
       }
     }
+  return out;
+}
+
+TEST(FarChoiceChoose, SampleOrderDoesNotChangeTheChoice) {
+  // Five random samples; every permutation chooses the same.
+  const RandomScenario scenario = random_scenario(2026, 5);
+  const std::vector<ChunkRef>& far = scenario.far;
+  const std::vector<SampleInput>& samples = scenario.samples;
   std::vector<const SampleInput*> order;
   for (const SampleInput& s : samples) order.push_back(&s);
   const FarChoice first = choose(far, order);
@@ -671,6 +686,112 @@ TEST(FarChoiceChoose, SampleOrderDoesNotChangeTheChoice) {
     for (const SampleInput& s : samples) all += s.meshes[std::size_t(f)].triangle_count();
     EXPECT_EQ(first.faces[std::size_t(f)].tdm_triangles + first.faces[std::size_t(f)].replaced_triangles, all) << f;
   }
+}
+
+// The tiles of face `f` with nothing to draw: no depth-mesh triangle wholly
+// inside and no seen far triangle or chunk on them, in any sample.
+std::uint32_t empty_tiles(const RandomScenario& sc, int f) {
+  std::uint32_t used = 0;
+  for (const SampleInput& s : sc.samples) {
+    const FaceMesh& m = s.meshes[std::size_t(f)];
+    for (std::size_t t = 0; t < m.triangle_count(); ++t)
+      if (const int tile = triangle_tile(m, t); tile >= 0) used |= 1u << tile;
+    for (const SeenChunk& c : s.seen[std::size_t(f)]) {
+      const bool is_far = std::any_of(sc.far.begin(), sc.far.end(), [&](const ChunkRef& r) { return r.id == c.id; });
+      if (!is_far) continue;
+      used |= c.tiles;
+      for (std::uint16_t t : c.triangle_tiles) used |= t;
+    }
+  }
+  return ~used & kAllFaceTiles;
+}
+
+TEST(FarChoiceLazy, MeshesOnDemandChooseTheSameGeometryAndKeepTheSameTiles) {
+  // Random cells, every mode and several factors: the lazy choice (no mesh
+  // given, each asked for on demand) draws the same far geometry, asks for
+  // each face at most once, and differs from the full-count choice only on
+  // tiles with nothing to draw (which it may mark as geometry).
+  int asked_total = 0, possible_total = 0;
+  for (unsigned seed = 1; seed <= 12; ++seed)
+    for (const FarChoiceMode mode : {FarChoiceMode::cheapest, FarChoiceMode::tdm, FarChoiceMode::geometry})
+      for (const double factor : {0.25, 1.0, 2.0, 8.0}) {
+        SCOPED_TRACE(testing::Message() << "seed " << seed << " mode " << int(mode) << " factor " << factor);
+        const RandomScenario sc = random_scenario(seed, 1 + int(seed % 4), seed % 2 ? 12 : 3);
+        std::vector<FarChoiceSample> full, none;
+        for (const SampleInput& s : sc.samples) {
+          full.push_back(s.view());
+          FarChoiceSample n = s.view();
+          n.meshes.fill(nullptr);
+          none.push_back(n);
+        }
+        const Box3d eyes = Box3d::cube({0, 0, 0}, 1);
+        const FarChoice eager = choose_far_field(eyes, sc.far, full, mode, factor);
+        std::set<std::pair<std::size_t, int>> asked;
+        const FarChoice lazy = choose_far_field(eyes, sc.far, none, mode, factor,
+                                                [&](std::size_t sample, int face) -> const FaceMesh& {
+                                                  EXPECT_TRUE(asked.insert({sample, face}).second) << "asked twice";
+                                                  return sc.samples.at(sample).meshes[std::size_t(face)];
+                                                });
+        asked_total += int(asked.size());
+        possible_total += int(sc.samples.size()) * kCubeFaces;
+        ASSERT_EQ(eager.pieces.size(), lazy.pieces.size());
+        for (std::size_t k = 0; k < eager.pieces.size(); ++k) {
+          EXPECT_EQ(eager.pieces[k].chunk.id, lazy.pieces[k].chunk.id);
+          EXPECT_EQ(eager.pieces[k].triangles, lazy.pieces[k].triangles);
+        }
+        EXPECT_EQ(eager.geometry_triangles, lazy.geometry_triangles);
+        if (mode == FarChoiceMode::tdm) EXPECT_EQ(asked.size(), sc.samples.size() * kCubeFaces);
+        for (int f = 0; f < kCubeFaces; ++f) {
+          const FaceFarChoice &e = eager.faces[std::size_t(f)], &l = lazy.faces[std::size_t(f)];
+          const std::uint32_t nothing = empty_tiles(sc, f);
+          EXPECT_EQ(e.geometry_tiles & ~l.geometry_tiles, 0u) << "face " << f;
+          EXPECT_EQ(l.geometry_tiles & ~e.geometry_tiles & ~nothing, 0u) << "face " << f;
+          EXPECT_LE(l.tdm_triangles, e.tdm_triangles) << "face " << f;
+          EXPECT_EQ(l.geometry_triangles, e.geometry_triangles) << "face " << f;
+          bool all_asked = true;
+          for (std::size_t i = 0; i < sc.samples.size(); ++i) all_asked = all_asked && asked.count({i, f});
+          if (!all_asked) EXPECT_EQ(l.geometry_tiles, kAllFaceTiles) << "face " << f << " not meshed but kept";
+          if (l.geometry_tiles == e.geometry_tiles && all_asked) {
+            EXPECT_EQ(l.tdm_triangles, e.tdm_triangles) << "face " << f;
+            EXPECT_EQ(l.replaced_triangles, e.replaced_triangles) << "face " << f;
+          }
+        }
+      }
+  EXPECT_LT(asked_total, possible_total);  // some faces were never meshed
+}
+
+TEST(FarChoiceLazy, ACellWhoseGeometryIsCheapMeshesOneFace) {
+  // Three samples whose every tile holds 40 depth-mesh triangles, and one far
+  // chunk of 30 triangles seen on every tile: the first face meshed (sample
+  // 0, face 0: 640 triangles) already pays for geometry everywhere.
+  SampleInput s;
+  for (int f = 0; f < kCubeFaces; ++f) {
+    for (int tile = 0; tile < kFarTilesPerFace; ++tile) add_tile_triangles(s.meshes[std::size_t(f)], tile, 40);
+    s.seen[std::size_t(f)].push_back(seen_triangles(7, 0, 30, std::uint16_t(kAllFaceTiles)));
+  }
+  const std::vector<SampleInput> inputs(3, s);
+  std::vector<FarChoiceSample> none;
+  for (const SampleInput& in : inputs) {
+    FarChoiceSample n = in.view();
+    n.meshes.fill(nullptr);
+    none.push_back(n);
+  }
+  std::vector<std::pair<std::size_t, int>> asked;
+  const std::vector<ChunkRef> far = {ref(7, 30)};
+  const FarChoice lazy = choose_far_field(Box3d::cube({0, 0, 0}, 1), far, none, FarChoiceMode::cheapest, 2.0,
+                                          [&](std::size_t sample, int face) -> const FaceMesh& {
+                                            asked.push_back({sample, face});
+                                            return inputs.at(sample).meshes[std::size_t(face)];
+                                          });
+  ASSERT_EQ(asked.size(), 1u);
+  EXPECT_EQ(asked[0], std::make_pair(std::size_t(0), 0));
+  for (const FaceFarChoice& f : lazy.faces) {
+    EXPECT_EQ(f.geometry_tiles, kAllFaceTiles);
+    EXPECT_EQ(f.tdm_triangles, 0u);
+  }
+  EXPECT_EQ(lazy.faces[0].replaced_triangles, 640u);  // only the meshed face is counted
+  EXPECT_EQ(lazy.faces[1].replaced_triangles, 0u);
+  EXPECT_EQ(lazy.geometry_triangles, 30u);
 }
 
 TEST(FarChoiceChoose, ParsesTheModeNames) {

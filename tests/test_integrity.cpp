@@ -195,8 +195,9 @@ TEST_F(Integrity, CutOrWrongSizedFaceImagesAreDamagedThoughTheHashIsRestamped) {
 }
 
 TEST_F(Integrity, StatusCheckListsACellWithAHalvedJpegAndRepairRedoesIt) {
-  ASSERT_EQ(bake("ref.db", "--set encode.image_format=jpeg").exit_code, 0);
-  ASSERT_EQ(bake("cells.db", "--set encode.image_format=jpeg").exit_code, 0);
+  // Depth meshes everywhere, so that faces have images to cut.
+  ASSERT_EQ(bake("ref.db", "--set encode.image_format=jpeg --set far.choice=tdm").exit_code, 0);
+  ASSERT_EQ(bake("cells.db", "--set encode.image_format=jpeg --set far.choice=tdm").exit_code, 0);
   std::int64_t victim = 0;
   int face = -1;
   {
@@ -218,7 +219,7 @@ TEST_F(Integrity, StatusCheckListsACellWithAHalvedJpegAndRepairRedoesIt) {
   EXPECT_EQ(repair.exit_code, 0) << repair.output;
   EXPECT_EQ(json_field(repair.output, "cells_pending"), "1") << repair.output;
   EXPECT_FALSE(CellDb(db("cells.db"), CellDb::Mode::read_only).get_cell(victim, false).has_value());
-  ASSERT_EQ(bake("cells.db", "--set encode.image_format=jpeg").exit_code, 0);
+  ASSERT_EQ(bake("cells.db", "--set encode.image_format=jpeg --set far.choice=tdm").exit_code, 0);
   EXPECT_EQ(CellDb(db("cells.db"), CellDb::Mode::read_only).totals().content_hash,
             CellDb(db("ref.db"), CellDb::Mode::read_only).totals().content_hash);
   EXPECT_EQ(test::run_cellbake("status --check " + db("cells.db")).exit_code, 0);
