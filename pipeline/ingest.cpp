@@ -167,6 +167,42 @@ void attach_texture(Material& material, std::uint32_t index, const ModelInfo& in
   material.alpha_test = has_alpha && input.alpha_allowed;
 }
 
+// Sets report.up, up_source, up_from_geometry and up_warning: --up first,
+// then the files' convention, then a sure answer from the geometry; a given or
+// conventional axis the geometry contradicts is kept, with a warning.
+void choose_up_axis(const std::string& given, const std::string& from_files, bool files_disagree,
+                    const std::vector<std::string>& claims, const UpAxisGuess& geometry, IngestReport& report) {
+  report.up_from_geometry = geometry;
+  std::string disagreement;
+  if (files_disagree) {
+    disagreement = "the files disagree (";
+    for (std::size_t i = 0; i < claims.size(); ++i) disagreement += (i ? "; " : "") + claims[i];
+    disagreement += ")";
+  }
+  if (!given.empty()) {
+    report.up = given, report.up_source = "--up";
+  } else if (!from_files.empty() && !files_disagree) {
+    report.up = from_files;  // up_source: the file's reason, set while reading
+  } else if (!geometry.axis.empty()) {
+    report.up = geometry.axis;
+    report.up_source = (files_disagree ? disagreement + "; " : "") + "detected from the geometry: " + geometry.evidence;
+    return;
+  } else {
+    report.up_source = (files_disagree ? disagreement : "the file format does not record one") +
+                       " and the geometry is not conclusive: " + geometry.evidence;
+    return;
+  }
+  if (geometry.axis.empty()) return;
+  if (geometry.axis == report.up) {
+    report.up_source += "; the geometry agrees";
+    return;
+  }
+  report.up_warning = "warning: the up axis recorded is " + report.up + " (" + report.up_source +
+                      ") but the geometry looks " + geometry.axis + "-up: " + geometry.evidence +
+                      (given.empty() ? "; `ingest --up " + geometry.axis + "` records " + geometry.axis
+                                     : "");
+}
+
 }  // namespace
 
 IngestReport ingest_models(const std::vector<std::filesystem::path>& models, const std::filesystem::path& store,
@@ -196,6 +232,9 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   std::vector<std::string> up_claims;  // "FILE: y (reason)" for files that say
   std::string up_from_files;
   bool up_disagree = false;
+  if (!params.up.empty() && params.up != "z" && params.up != "y")
+    throw std::invalid_argument("ingest: up must be \"z\" or \"y\"");
+  Box3d read_bounds;  // of the kept triangles: fixes the bins of the up-axis evidence
   for (const auto& model : models) {
     SourceFileRecord src;
     src.path = model.string();
@@ -218,6 +257,7 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
       if (spill.count() >= std::numeric_limits<std::uint32_t>::max())
         throw InputError(model.string(), "", "more than 4294967295 triangles are not supported");
       t.material += material_offset;
+      for (const auto& p : t.p) read_bounds.expand(p);
       keys.push_back(make_triangle_key(t, static_cast<std::uint32_t>(spill.count())));
       spill.add(t);
       ++file_triangles;
@@ -246,18 +286,6 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
     src.triangles = file_triangles;
     sources.push_back(src);
   }
-  if (!params.up.empty()) {
-    if (params.up != "z" && params.up != "y") throw std::invalid_argument("ingest: up must be \"z\" or \"y\"");
-    report.up = params.up, report.up_source = "--up";
-  } else if (up_disagree) {
-    report.up_source = "the files disagree (";
-    for (std::size_t i = 0; i < up_claims.size(); ++i) report.up_source += (i ? "; " : "") + up_claims[i];
-    report.up_source += ")";
-  } else if (up_from_files.empty()) {
-    report.up_source = "the file format does not record one";
-  } else {
-    report.up = up_from_files;
-  }
   spill.finish();
   if (spill.count() == 0)
     throw InputError(models.front().string(), "",
@@ -271,6 +299,7 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   report.chunk_seconds = seconds_since(t_chunk);
 
   const auto t_write = Clock::now();
+  UpAxisEvidence up_evidence(read_bounds);  // fed the chunks as they are written, in order
   for (std::size_t i = 0; i < materials.size(); ++i) writer.add_material(static_cast<std::uint32_t>(i), materials[i]);
   for (const auto& s : sources) writer.add_source(s);
   // Build chunks in parallel batches, write them in order (deterministic ids).
@@ -309,12 +338,15 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
       report.vertices += c.positions.size();
       report.bounds.expand(c.bounds);
       writer.add_chunk(c);
+      up_evidence.add_chunk(c);
       ++report.chunks;
     }
     if (progress) progress("write", first + n, ranges.size());
   }
   report.skipped_duplicate = spill.count() - report.triangles_stored;
   report.content_hash = writer.content_hash();
+
+  choose_up_axis(params.up, up_from_files, up_disagree, up_claims, up_evidence.guess(), report);
 
   StoreSummary summary;
   summary.bounds = report.bounds;

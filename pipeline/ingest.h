@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "stages/geometry.h"
+#include "stages/up_axis_from_geometry.h"
 
 namespace cellbake {
 
@@ -38,7 +39,8 @@ struct IngestParams {
   // model cannot load without it (pipeline/readers/contained_paths.h).
   bool allow_outside_paths = false;
   // The up axis to record in the store: "z" or "y"; "" = what the files say
-  // (ModelInfo::up; not recorded when none says or they disagree).
+  // (ModelInfo::up), else what the geometry says when it is sure
+  // (stages/up_axis_from_geometry.h), else none.
   std::string up;
 };
 
@@ -65,9 +67,16 @@ struct IngestReport {
   // What the readers skipped, one line each: "FILE:line N: mtllib 'a.mtl': missing or unreadable; ...".
   std::vector<std::string> input_warnings;
   // The up axis recorded in the store ("z", "y", "" = not recorded) and why:
-  // "--up", or "FILE: reason" (e.g. "a.glb: glTF is Y-up by specification"),
-  // or why none was recorded (no file says; files disagree).
+  // "--up", or "FILE: reason" (e.g. "a.glb: glTF is Y-up by specification",
+  // "; the geometry agrees" appended when it does), or "detected from the
+  // geometry: EVIDENCE" when no file says (or they disagree), or why none was
+  // recorded (no file says and the geometry is not conclusive).
   std::string up, up_source;
+  // What the geometry says, over every stored triangle.
+  UpAxisGuess up_from_geometry;
+  // Non-empty when --up or the files' axis disagrees with a sure answer from
+  // the geometry: "warning: ..." naming both (the given or file axis is kept).
+  std::string up_warning;
 };
 
 // Ingests `models` into a new store at `store` (replacing an existing one only

@@ -1,185 +1,29 @@
-// `cellbake info PATH [--json]`: what a file is and, for a geometry store, a
-// suggested bake — the store's facts (as `status` prints them), the floors
-// found by casting rays down over a grid (stages/floor_finder.h), and a
-// `cellbake bake` command line: a region at eye height over the main floor, a
-// cell size, the near budget the bake would use and an estimated time.
-// Model units are taken as metres (eye height 1.7, cells of 2-4).
+// `cellbake info PATH [--up z|y] [--json]`: what a file is and, for a geometry
+// store or a model file, a suggested bake (runner/info_report.h). A model file
+// is ingested as `cellbake ingest` would (quietly, once) into a temporary
+// store under $TMPDIR that is removed again, also on error; the report then
+// prints the ingest line that keeps a store before the bake line.
+#include <stdlib.h>
+
 #include <CLI/CLI.hpp>
-#include <algorithm>
-#include <cmath>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 #include <string>
-#include <thread>
 
-#include "pipeline/bake_config.h"
-#include "pipeline/bake_estimate.h"
-#include "pipeline/cell_grid.h"
+#include "pipeline/ingest.h"
 #include "runner/commands.h"
-#include "runner/store_status.h"
-#include "stages/floor_finder.h"
+#include "runner/console.h"
+#include "runner/info_report.h"
+#include "runner/parallel.h"
 #include "storage/database_kind.h"
 #include "storage/geometry_store.h"
 
 namespace cellbake {
 namespace {
-
-constexpr double kEyeHeight = 1.7;  // above the floor, model units taken as metres
-constexpr int kTargetCellsPerFloor = 64;
-
-struct Suggestion {
-  bool found = false;
-  std::size_t floor = 0;  // index into the floors
-  double eye = 0;
-  Box3d region;
-  double cell_size = 0;
-  std::uint64_t cells = 0;
-  std::uint64_t near_budget = 0;
-  BakeEstimate estimate;
-  int threads = 1;
-  std::string command;
-};
-
-// 2-4 units for a building-sized floor (about kTargetCellsPerFloor cells),
-// a quarter of the floor's longer side for a small model; rounded to 0.5
-// (or two significant digits under 2).
-double suggest_cell_size(double side_a, double side_b) {
-  const double longer = std::max(side_a, side_b);
-  if (longer < 8) {
-    const double c = std::max(longer, 1e-3) / 4;
-    const double scale = std::pow(10.0, std::floor(std::log10(c)) - 1);
-    return std::round(c / scale) * scale;
-  }
-  const double c = std::clamp(std::sqrt(side_a * side_b / kTargetCellsPerFloor), 2.0, 4.0);
-  return std::round(c * 2) / 2;
-}
-
-std::string number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", std::round(v * 100) / 100 + 0.0);  // + 0.0: no "-0"
-  return buf;
-}
-
-std::string shell_word(const std::string& path) {
-  return path.find_first_of(" '\"$\\") == std::string::npos ? path : "'" + path + "'";
-}
-
-Suggestion suggest_bake(const std::string& path, const GeometryStore& store, const std::string& up,
-                        const FloorFinderResult& found) {
-  Suggestion s;
-  if (found.floors.empty()) return s;
-  // The main floor: the one most rays reach with something above it (indoors), else the widest.
-  std::size_t best = 0;
-  for (std::size_t f = 1; f < found.floors.size(); ++f) {
-    const Floor &a = found.floors[f], &b = found.floors[best];
-    if (a.covered_rays > b.covered_rays || (a.covered_rays == b.covered_rays && a.rays > b.rays)) best = f;
-  }
-  const int u = up == "y" ? 1 : 2, ha = 0, hb = up == "y" ? 2 : 1;
-  const Floor& floor = found.floors[best];
-  s.found = true;
-  s.floor = best;
-  s.eye = floor.height + kEyeHeight;
-  s.region = floor.covered_extent.empty() ? floor.extent : floor.covered_extent;  // indoors, else all of it
-  s.region.lo[u] = s.region.hi[u] = s.eye;
-  s.cell_size = suggest_cell_size(s.region.hi[ha] - s.region.lo[ha], s.region.hi[hb] - s.region.lo[hb]);
-  s.cells = enumerate_cells({s.region}, s.cell_size).size();
-  const std::uint64_t triangles = store.summary().triangles;
-  s.near_budget = effective_near_budget(BakeConfig{}, triangles);
-  if (s.near_budget >= triangles)
-    s.near_budget = std::max<std::uint64_t>(1, triangles / 4);  // leave a far field
-  s.threads = int(std::max(1u, std::thread::hardware_concurrency()));
-  s.estimate = estimate_bake(s.cells, BakeConfig{}.face_size, s.threads);
-  std::string out = std::filesystem::path(path).filename().string();
-  for (const char* suffix : {".store.db", ".db"})
-    if (out.size() > std::string(suffix).size() && out.ends_with(suffix)) {
-      out.resize(out.size() - std::string(suffix).size());
-      break;
-    }
-  const Box3d& r = s.region;
-  s.command = "cellbake bake --store " + shell_word(path) + " --up " + up + " --region " + number(r.lo.x) +
-              "," + number(r.lo.y) + "," + number(r.lo.z) + "," + number(r.hi.x) + "," + number(r.hi.y) +
-              "," + number(r.hi.z) + " --cell-size " + number(s.cell_size) + " --near-budget " +
-              std::to_string(s.near_budget) + " --out " + shell_word(out + ".cells.db");
-  return s;
-}
-
-void info_store(const std::string& path, bool json) {
-  const GeometryStore store(path);
-  const StoreSummary& summary = store.summary();
-  const std::string up = summary.up.empty() ? "z" : summary.up;
-  FloorFinderParams params;
-  params.up_axis = up == "y" ? 1 : 2;
-  const FloorFinderResult found = find_floors(store, params);
-  const Suggestion s = suggest_bake(path, store, up, found);
-  if (json) {
-    nlohmann::json j = store_status_json(store);
-    j["up_used"] = up;
-    j["floor_search"] = {
-        {"rays", found.rays}, {"rays_hit", found.rays_hit}, {"ray_spacing", found.ray_spacing}};
-    nlohmann::json floors = nlohmann::json::array();
-    for (const Floor& f : found.floors)
-      floors.push_back({{"height", f.height},
-                        {"rays", f.rays},
-                        {"covered_rays", f.covered_rays},
-                        {"extent",
-                         {{"min", {f.extent.lo.x, f.extent.lo.y, f.extent.lo.z}},
-                          {"max", {f.extent.hi.x, f.extent.hi.y, f.extent.hi.z}}}}});
-    j["floors"] = floors;
-    if (s.found) {
-      const Box3d& r = s.region;
-      j["suggested"] = {{"floor", found.floors[s.floor].height},
-                        {"eye_height", s.eye},
-                        {"region", {r.lo.x, r.lo.y, r.lo.z, r.hi.x, r.hi.y, r.hi.z}},
-                        {"cell_size", s.cell_size},
-                        {"cells", s.cells},
-                        {"near_budget", s.near_budget},
-                        {"threads", s.threads},
-                        {"estimated_seconds", s.estimate.seconds},
-                        {"estimated_bytes", s.estimate.bytes},
-                        {"command", s.command}};
-    } else {
-      j["suggested"] = nullptr;
-    }
-    std::printf("%s\n", j.dump(2).c_str());
-    return;
-  }
-  print_store_status(store, stdout);
-  std::printf("floors (rays cast down on a grid %.3g apart; %llu of %llu rays hit the model; up %s):\n",
-              found.ray_spacing, (unsigned long long)found.rays_hit, (unsigned long long)found.rays,
-              up.c_str());
-  if (found.floors.empty()) std::printf("  none found (no wide upward-facing surface with headroom)\n");
-  for (std::size_t f = 0; f < found.floors.size(); ++f) {
-    const Floor& fl = found.floors[f];
-    std::printf("  %s = %s: %llu rays (%.0f %% of them covered above)%s\n", up.c_str(),
-                number(fl.height).c_str(), (unsigned long long)fl.rays,
-                fl.rays ? 100.0 * double(fl.covered_rays) / double(fl.rays) : 0.0,
-                s.found && f == s.floor ? "  <- main floor" : "");
-  }
-  if (!s.found) {
-    std::printf("no suggested bake: choose a region with `cellbake render %s` (a look at the model)\n",
-                path.c_str());
-    return;
-  }
-  const Box3d& r = s.region;
-  std::printf("suggested bake (model units taken as metres):\n");
-  std::printf("  eye height: %s = %s (floor %s + %.1f)\n", up.c_str(), number(s.eye).c_str(),
-              number(found.floors[s.floor].height).c_str(), kEyeHeight);
-  std::printf("  region: (%s, %s, %s) .. (%s, %s, %s), the floor's extent (under a roof if any)\n",
-              number(r.lo.x).c_str(), number(r.lo.y).c_str(), number(r.lo.z).c_str(), number(r.hi.x).c_str(),
-              number(r.hi.y).c_str(), number(r.hi.z).c_str());
-  std::printf("  cell size: %s -> %llu cells\n", number(s.cell_size).c_str(), (unsigned long long)s.cells);
-  std::printf("  near budget: %llu triangles per cell (of %llu: the rest is far field)\n",
-              (unsigned long long)s.near_budget, (unsigned long long)summary.triangles);
-  std::printf(
-      "  estimated bake: ~%s on %d threads (%.1f core-seconds per cell measured on the demo plant at 512^2 "
-      "faces), ~%.1f MB\n",
-      duration_text(s.estimate.seconds).c_str(), s.threads, s.estimate.core_seconds_per_cell,
-      s.estimate.bytes / 1e6);
-  std::printf("  %s\n", s.command.c_str());
-  std::printf("  (`bake ... --dry-run` checks it; `--cells 1-4` bakes a few cells first)\n");
-}
 
 bool is_sqlite_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -188,23 +32,96 @@ bool is_sqlite_file(const std::string& path) {
   return in.gcount() == 16 && std::string(header, 15) == "SQLite format 3";
 }
 
+std::string shell_word(const std::string& path) {
+  return path.find_first_of(" '\"$\\") == std::string::npos ? path : "'" + path + "'";
+}
+
+// A fresh directory $TMPDIR/cellbake-info-XXXXXX, removed with everything in it.
+class TemporaryDirectory {
+ public:
+  TemporaryDirectory() {
+    std::string name = (std::filesystem::temp_directory_path() / "cellbake-info-XXXXXX").string();
+    if (!::mkdtemp(name.data()))
+      throw std::runtime_error("cannot create a temporary directory in " +
+                               std::filesystem::temp_directory_path().string());
+    path_ = name;
+  }
+  ~TemporaryDirectory() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  TemporaryDirectory(const TemporaryDirectory&) = delete;
+  TemporaryDirectory& operator=(const TemporaryDirectory&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// NAME.store.db for MODEL = NAME.ext[.gz], in the current directory.
+std::string store_name_for(const std::string& model) {
+  std::string stem = std::filesystem::path(model).filename().string();
+  if (const auto dot = stem.find('.'); dot != std::string::npos && dot > 0) stem.resize(dot);
+  return stem + ".store.db";
+}
+
+// Ingests the model into a temporary store (the ingest command's defaults,
+// `up` if given, no progress) and reports on that store. A small model that
+// makes fewer than 16 chunks is read again with smaller ones (at most 64 k
+// triangles: quick), so the store the printed ingest line writes is the one
+// looked at and its bake has a far field.
+void info_model_file(const std::string& path, const std::string& up, bool json) {
+  InfoModelFile model;
+  model.model = path;
+  model.store_name = store_name_for(path);
+  if (!quiet_output())
+    std::fprintf(stderr, "info: reading %s into a temporary geometry store...\n", path.c_str());
+  const TemporaryDirectory dir;
+  std::filesystem::path store_path = dir.path() / model.store_name;
+  IngestParams params;
+  params.up = up;
+  const auto start = std::chrono::steady_clock::now();
+  model.ingest = ingest_models({path}, store_path, params, tbb_parallel_for());
+  if (const std::size_t c = suggested_chunk_triangles(GeometryStore(store_path).summary())) {
+    model.chunk_triangles = params.max_chunk_triangles = c;
+    store_path = dir.path() / ("small-chunks." + model.store_name);
+    model.ingest = ingest_models({path}, store_path, params, tbb_parallel_for());
+  }
+  model.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const GeometryStore store(store_path);  // closed before `dir` is removed
+  print_info(store, &model, up, json);
+}
+
 }  // namespace
 
 void add_info_command(CLI::App& app) {
   auto path = std::make_shared<std::string>();
+  auto up = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
-  CLI::App* cmd = app.add_subcommand(
-      "info",
-      "Look at a model before baking: a geometry store's facts, its floors and a suggested bake command");
-  cmd->add_option("path", *path, "Geometry store (ingest's output), model file or cell database")
+  CLI::App* cmd = app.add_subcommand("info",
+                                     "Look at a model before baking: its facts, up axis, floors and a "
+                                     "suggested bake (ingest and bake lines)");
+  cmd->add_option(
+         "path", *path,
+         "Model file (read into a temporary store in $TMPDIR, removed again), geometry store (ingest's "
+         "output) or cell database")
       ->required()
       ->check(CLI::ExistingFile);
+  cmd->add_option("--up", *up,
+                  "Up axis to use: z or y (default: the store's recorded axis; for a model file what ingest "
+                  "records: the format's convention, else what the geometry shows; else z)")
+      ->check(CLI::IsMember({"z", "y"}));
   cmd->add_flag("--json", *json, "Print the same as one JSON object");
   cmd->footer(
-      "Example:\n  cellbake info house.store.db          # floors, a suggested region, cell size and budget\n"
-      "  cellbake info house.store.db --json");
-  cmd->callback([path, json] {
-    if (database_kind(*path) == DatabaseKind::geometry_store) return info_store(*path, *json);
+      "Examples:\n  cellbake info house.obj               # reads it: floors, suggested ingest and bake "
+      "lines\n"
+      "  cellbake info house.store.db          # the same for a store ingest wrote\n"
+      "  cellbake info house.glb --json");
+  cmd->callback([path, up, json] {
+    if (database_kind(*path) == DatabaseKind::geometry_store) {
+      const GeometryStore store(*path);
+      return print_info(store, nullptr, *up, *json);
+    }
     if (is_sqlite_file(*path)) {
       if (*json)
         std::printf("%s\n", nlohmann::json{{"kind", "cell_database"},
@@ -217,24 +134,7 @@ void add_info_command(CLI::App& app) {
                     path->c_str(), shell_word(*path).c_str());
       return;
     }
-    const std::filesystem::path p(*path);
-    std::string stem = p.filename().string();
-    if (const auto dot = stem.find('.'); dot != std::string::npos && dot > 0) stem.resize(dot);
-    const std::string store = stem + ".store.db";
-    const std::string ingest = "cellbake ingest " + shell_word(*path) + " --store " + shell_word(store);
-    if (*json) {
-      std::printf("%s\n", nlohmann::json{{"kind", "model_file"},
-                                         {"path", *path},
-                                         {"ingest", ingest},
-                                         {"then", "cellbake info " + shell_word(store)}}
-                              .dump(2)
-                              .c_str());
-      return;
-    }
-    std::printf(
-        "%s: a model file (not a geometry store); ingest it first, then ask again:\n  %s   # add --up y "
-        "for a Y-up OBJ/PLY (glTF is Y-up by specification)\n  cellbake info %s\n",
-        path->c_str(), ingest.c_str(), shell_word(store).c_str());
+    info_model_file(*path, *up, *json);
   });
 }
 

@@ -39,7 +39,8 @@ void add_ingest_command(CLI::App& app) {
                 "by default such references are skipped with a warning");
   cmd->add_option("--up", opt->up,
                   "The model's up axis, recorded in the store for bake: z or y (default: what the format says: "
-                  "glTF, IFC and COLLADA y, FBX its UpAxis; OBJ/PLY/OFF/STL record none and bake assumes z)")
+                  "glTF, IFC and COLLADA y, FBX its UpAxis; for OBJ/PLY/OFF/STL what the geometry shows (large "
+                  "horizontal planes), else none and bake assumes z; a sure geometry that disagrees is a warning)")
       ->check(CLI::IsMember({"z", "y"}));
   cmd->add_flag("--json", opt->json, "Print the summary as JSON (progress still goes to stderr; -q hides it)");
   cmd->callback([opt] {

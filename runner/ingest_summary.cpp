@@ -32,6 +32,7 @@ void print_ingest_summary(const IngestReport& r, const std::string& store, bool 
     nlohmann::json warnings = nlohmann::json::array();
     for (const std::string& w : r.texture_warnings) warnings.push_back(w);
     for (const std::string& w : r.input_warnings) warnings.push_back(w);
+    if (!r.up_warning.empty()) warnings.push_back(r.up_warning);
     const nlohmann::json j{
         {"store", store},
         {"triangles_read", r.triangles_read},
@@ -46,6 +47,9 @@ void print_ingest_summary(const IngestReport& r, const std::string& store, bool 
         {"seconds", {{"read", r.read_seconds}, {"chunk", r.chunk_seconds}, {"write", r.write_seconds}, {"total", total}}},
         {"up", r.up.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.up)},
         {"up_source", r.up_source},
+        {"up_from_geometry",
+         {{"axis", r.up_from_geometry.axis.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.up_from_geometry.axis)},
+          {"evidence", r.up_from_geometry.evidence}}},
         {"textures", r.textures},
         {"texture_bytes", r.texture_bytes},
         {"warnings", warnings},
@@ -68,6 +72,7 @@ void print_ingest_summary(const IngestReport& r, const std::string& store, bool 
     std::printf("  up axis: %s (%s), recorded in the store\n", r.up.c_str(), r.up_source.c_str());
   else
     std::printf("  up axis: not recorded: %s; bake assumes z (ingest --up y|z records one)\n", r.up_source.c_str());
+  if (!r.up_warning.empty()) std::printf("  %s\n", r.up_warning.c_str());
   for (const std::string& note : r.vertex_colour_notes) std::printf("  %s\n", note.c_str());
   if (r.textures > 0)
     std::printf("  %llu textures stored (%.1f MB decoded)\n", (unsigned long long)r.textures, r.texture_bytes / 1e6);

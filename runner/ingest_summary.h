@@ -15,8 +15,9 @@ ProgressCallback ingest_progress();
 // throughput), or (json) one JSON object with the same figures: store,
 // triangles_read, triangles_stored, polygons_triangulated, skipped_degenerate,
 // skipped_duplicate, chunks, vertices, bounds {min, max}, seconds {read,
-// chunk, write, total}, up, up_source, textures, texture_bytes, warnings
-// (texture and input warnings, one string each), vertex_colour_notes, content_hash.
+// chunk, write, total}, up, up_source, up_from_geometry {axis, evidence},
+// textures, texture_bytes, warnings (texture, input and up-axis warnings, one
+// string each), vertex_colour_notes, content_hash.
 void print_ingest_summary(const IngestReport& r, const std::string& store, bool json = false);
 
 }  // namespace cellbake

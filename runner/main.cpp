@@ -76,6 +76,13 @@ int main(int argc, char** argv) {
       return 2;
     }
     return app.exit(e);
+  } catch (const CLI::ExcludesError& e) {
+    // -q/-v: one line in our words, exit 2 like the other usage errors above.
+    if (quiet->count() > 0 && verbose->count() > 0) {
+      std::fprintf(stderr, "cellbake: -q/--quiet and -v/--verbose contradict each other: give one of them\n");
+      return 2;
+    }
+    return app.exit(e);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const std::exception& e) {

@@ -34,11 +34,15 @@ nlohmann::json store_status_json(const GeometryStore& store) {
 }
 
 void print_store_status(const GeometryStore& store, std::FILE* out) {
+  std::fprintf(out, "%s: geometry store (not baked; `cellbake bake --store %s ...` bakes it)\n",
+               store.path().c_str(), store.path().c_str());
+  print_store_facts(store, out);
+}
+
+void print_store_facts(const GeometryStore& store, std::FILE* out) {
   const StoreSummary& s = store.summary();
   const Box3d& b = s.bounds;
   const nlohmann::json j = store_status_json(store);
-  std::fprintf(out, "%s: geometry store (not baked; `cellbake bake --store %s ...` bakes it)\n",
-               store.path().c_str(), store.path().c_str());
   if (s.triangles > 0) {
     std::fprintf(out, "bounds: (%.6g, %.6g, %.6g) .. (%.6g, %.6g, %.6g) %s\n", b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y,
                  b.hi.z, s.units.c_str());

@@ -17,7 +17,12 @@ namespace cellbake {
 // bytes, triangles}].
 nlohmann::json store_status_json(const GeometryStore& store);
 
-// The same as lines of text on `out`.
+// The same as lines of text on `out`: a first line naming the store, then
+// print_store_facts.
 void print_store_status(const GeometryStore& store, std::FILE* out);
+
+// The facts alone (bounds, size, counts, up axis, content hash, sources), one
+// per line, for reports that name the store their own way (`cellbake info`).
+void print_store_facts(const GeometryStore& store, std::FILE* out);
 
 }  // namespace cellbake

@@ -36,6 +36,19 @@ std::filesystem::path cli_room_store(const TempDir& dir, const std::string& extr
   return store;
 }
 
+// A 12 m cube room without pillars as DIR/cube.obj, ingested through the CLI:
+// no file convention and no axis the geometry prefers, so no up axis is recorded.
+std::filesystem::path cli_cube_room_store(const TempDir& dir) {
+  const auto obj = dir / "cube.obj", store = dir / "cube.store.db";
+  std::ostringstream o;
+  int next = 1;
+  test::obj_box(o, next, {0, 0, 0}, {12, 12, 12}, 8);
+  std::ofstream(obj, std::ios::binary) << o.str();
+  const auto r = run_cellbake("ingest " + q(obj) + " --store " + q(store) + " --chunk-triangles 128");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return store;
+}
+
 // The --set and --out values of a `cellbake bake ...` example line.
 struct BakeCommandOptionsLite {
   std::vector<std::string> sets;
@@ -124,10 +137,24 @@ TEST(UpAxis, IngestRecordsTheFormatsAxisOrTheGivenOne) {
   EXPECT_EQ(up_of(glb_store), "y");
   EXPECT_NE(run_cellbake("status " + q(glb_store)).output.find("up axis: y"), std::string::npos);
 
-  const auto obj_store = cli_room_store(dir);  // OBJ: no convention
-  EXPECT_EQ(up_of(obj_store), "unknown");
-  EXPECT_NE(run_cellbake("status " + q(obj_store)).output.find("up axis: not recorded"), std::string::npos);
-  cli_room_store(dir, "--up y");
+  // OBJ: no convention; the room's floor and ceiling say z (stages/up_axis_from_geometry.h).
+  const auto obj_store = cli_room_store(dir);
+  EXPECT_EQ(up_of(obj_store), "z");
+  EXPECT_NE(run_cellbake("status " + q(obj_store)).output.find("up axis: z (detected from the geometry: large flat "
+                                                               "surfaces face z"),
+            std::string::npos);
+  // A cube room: the geometry cannot tell, nothing is recorded.
+  const auto cube_store = cli_cube_room_store(dir);
+  EXPECT_EQ(up_of(cube_store), "unknown");
+  EXPECT_NE(run_cellbake("status " + q(cube_store)).output.find("up axis: not recorded"), std::string::npos);
+  // --up wins; against the geometry with a warning naming both.
+  cli_room_store(dir, "--up z");
+  EXPECT_EQ(up_of(obj_store), "z");
+  const auto against = run_cellbake("ingest " + q(dir / "room.obj") + " --store " + q(obj_store) + " --up y");
+  ASSERT_EQ(against.exit_code, 0) << against.output;
+  EXPECT_NE(against.output.find("warning: the up axis recorded is y (--up) but the geometry looks z-up"),
+            std::string::npos)
+      << against.output;
   EXPECT_EQ(up_of(obj_store), "y");
   EXPECT_NE(run_cellbake("ingest " + q(dir / "room.obj") + " --store " + q(dir / "x.db") + " --up x").exit_code, 0);
 }
@@ -137,14 +164,14 @@ TEST(UpAxis, BakeUsesTheRecordedAxisUnlessGiven) {
   const std::string quick = " --region 5,5,1.6,7,7,1.6 --cell-size 2 --face-size 16 --set encode.image_format=png "
                             "--set samples.max=1 --set samples.initial=centre --threads 1 --quiet";
   // Not recorded: z, said in one line.
-  const auto store = cli_room_store(dir);
-  auto r = run_cellbake("bake --store " + q(store) + " --out " + q(dir / "z.db") + quick);
+  const auto cube = cli_cube_room_store(dir);
+  auto r = run_cellbake("bake --store " + q(cube) + " --out " + q(dir / "z.db") + quick);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("up axis not recorded in the store; assuming z (--up y to change)"), std::string::npos)
       << r.output;
   EXPECT_EQ(CellDb(dir / "z.db", CellDb::Mode::read_only).meta("up").value_or(""), "z");
   // Recorded y: used without a note; an explicit --up z wins, with a warning.
-  cli_room_store(dir, "--up y");
+  const auto store = cli_room_store(dir, "--up y");
   r = run_cellbake("bake --store " + q(store) + " --out " + q(dir / "y.db") + quick);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(r.output.find("not recorded"), std::string::npos) << r.output;
@@ -263,6 +290,16 @@ TEST(Cli, UnknownCommandAndVersion) {
     const auto v = run_cellbake(flag);
     EXPECT_EQ(v.exit_code, 0) << v.output;
     EXPECT_EQ(v.output.rfind("cellbake ", 0), 0u) << v.output;
+  }
+}
+
+TEST(Cli, QuietAndVerboseTogetherAreAUsageError) {
+  TempDir dir;
+  test::write_text(dir / "x.db", "");
+  for (const std::string args : {"-q -v status X", "status X --quiet --verbose", "-v info X -q"}) {
+    const auto r = run_cellbake(args.substr(0, args.find('X')) + q(dir / "x.db") + args.substr(args.find('X') + 1));
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;  // like an unknown command
+    EXPECT_EQ(r.output, "cellbake: -q/--quiet and -v/--verbose contradict each other: give one of them\n") << args;
   }
 }
 

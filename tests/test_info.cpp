@@ -1,8 +1,11 @@
 // `cellbake info` (issue #15, "What to build" 1): floors found by casting rays
 // down, a suggested bake at eye height over the main floor in the store's up
 // axis, that suggestion baked (a non-empty far field), `--json`, what info says
-// about a model file and a cell database; `bake --dry-run` writes nothing.
-// Runs the `cellbake` binary; the floor finder itself on an in-memory source.
+// about a cell database; `bake --dry-run` writes nothing. The done-when of
+// #15: info on a Y-up glTF and on a Z-up OBJ model file (its axis detected
+// from the geometry), the ingest and bake lines it prints run as printed, a
+// non-empty far field. Runs the `cellbake` binary; the floor finder itself on
+// an in-memory source.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -14,6 +17,7 @@
 #include <string>
 
 #include "stages/floor_finder.h"
+#include "tests/fixture_house_model.h"
 #include "tests/fixture_memory_chunk_source.h"
 #include "tests/fixture_room_obj.h"
 #include "tests/test_support.h"
@@ -155,14 +159,112 @@ TEST(Info, UsesTheRecordedYUpAxis) {
   EXPECT_FALSE(std::filesystem::exists(db));
 }
 
-TEST(Info, OnAModelFileSaysToIngestFirst) {
+// The line info printed after "cellbake " run in `dir` (where its relative
+// store and database names land) with this build's binary, plus `extra`.
+test::CommandResult run_printed(const TempDir& dir, const std::string& line, const std::string& extra = "") {
+  EXPECT_EQ(line.rfind("cellbake ", 0), 0u) << line;
+  return test::run_shell("cd " + q(dir.path()) + " && " + CELLBAKE_BINARY + " " + line.substr(9) + extra);
+}
+
+// Files left in a directory (info's temporary store must be gone).
+std::size_t entries(const std::filesystem::path& dir) {
+  std::size_t n = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) ++n;
+  return n;
+}
+
+// Issue #15's done-when on one model file: `info MODEL --json` on the file
+// itself (its temporary store under DIR/tmp, gone afterwards), the axis it
+// found (`up`, and `up_source` containing `why`), then the printed ingest and
+// bake lines run as printed (two cells, 64^2 faces, two threads to keep it
+// short): both cells done, with a far field.
+void bake_as_info_suggests(const TempDir& dir, const std::filesystem::path& model, const std::string& up,
+                           const std::string& why) {
+  const auto tmp = dir / "tmp";
+  std::filesystem::create_directories(tmp);
+  const auto info = test::run_shell("TMPDIR=" + q(tmp) + " " + CELLBAKE_BINARY + " info --json " + q(model));
+  const auto doc = json_of(info);
+  EXPECT_EQ(entries(tmp), 0u) << "info left its temporary store behind";
+  EXPECT_EQ(doc["kind"], "model_file");
+  EXPECT_EQ(doc["path"], model.string());
+  EXPECT_EQ(doc["up"], up) << doc.dump();
+  EXPECT_EQ(doc["up_used"], up);
+  EXPECT_NE(doc["up_source"].get<std::string>().find(why), std::string::npos) << doc["up_source"];
+  EXPECT_GT(doc["triangles"].get<std::uint64_t>(), 5000u);
+  const auto& s = doc["suggested"];
+  ASSERT_TRUE(s.is_object()) << doc.dump();
+  const int u = up == "y" ? 1 : 2;
+  EXPECT_NEAR(s["floor"].get<double>(), s["floor"].get<double>() < 1.5 ? 0.0 : 3.0, 0.05) << s.dump();
+  EXPECT_DOUBLE_EQ(s["region"][u].get<double>(), s["eye_height"].get<double>());
+  EXPECT_LT(s["near_budget"].get<std::uint64_t>(), doc["triangles"].get<std::uint64_t>());
+  const std::string ingest = doc["ingest"], bake = s["command"];
+  EXPECT_EQ(ingest.find(" --up"), std::string::npos) << ingest;  // ingest records the same axis by itself
+  EXPECT_NE(bake.find(" --up " + up), std::string::npos) << bake;
+
+  const auto ingested = run_printed(dir, ingest);
+  ASSERT_EQ(ingested.exit_code, 0) << ingested.output;
+  const auto store = json_of(run_cellbake("status --json " + q(dir / doc["store"].get<std::string>())));
+  EXPECT_EQ(store["up"], up);
+  EXPECT_EQ(store["content_hash"], doc["content_hash"]);  // the store info looked at
+  const auto baked = run_printed(dir, bake, " --cells 1-2 --threads 2 --face-size 64");
+  ASSERT_EQ(baked.exit_code, 0) << baked.output;
+  const auto cells = json_of(run_cellbake("status --json " + q(dir / (model.stem().string() + ".cells.db"))));
+  EXPECT_EQ(cells["cells_done"].get<std::uint64_t>(), 2u) << cells.dump();
+  EXPECT_GT(cells["far_triangles"].get<std::uint64_t>() + cells["far_geometry_triangles"].get<std::uint64_t>(), 0u)
+      << cells.dump();
+}
+
+TEST(Info, OnAYUpGltfPrintsIngestAndBakeLinesThatBakeAFarField) {
   TempDir dir;
-  const auto obj = dir / "room.obj";
-  std::ofstream(obj, std::ios::binary) << test::room_obj();
-  const auto r = run_cellbake("info " + q(obj));
-  EXPECT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("cellbake ingest"), std::string::npos) << r.output;
-  EXPECT_EQ(json_of(run_cellbake("info --json " + q(obj)))["kind"], "model_file");
+  const auto gltf = test::write_y_up_gltf(dir.path(), "house", test::house_triangles());
+  bake_as_info_suggests(dir, gltf, "y", "glTF is Y-up by specification; the geometry agrees");
+
+  // The text report: the model's facts, then the two lines in order.
+  const auto text = run_cellbake("info " + q(gltf));
+  ASSERT_EQ(text.exit_code, 0) << text.output;
+  EXPECT_NE(text.output.find("a model file, read into a temporary geometry store"), std::string::npos)
+      << text.output;
+  EXPECT_NE(text.output.find("up axis: y (house.gltf: glTF is Y-up"), std::string::npos) << text.output;
+  // A small model: read with chunks small enough for a far field (tests/fixture_house_model.h: 5 520 triangles).
+  const auto ingest =
+      text.output.find("\n  cellbake ingest " + gltf.string() + " --store house.store.db --chunk-triangles 256\n");
+  const auto bake = text.output.find("\n  cellbake bake --store house.store.db --up y ");
+  EXPECT_NE(ingest, std::string::npos) << text.output;
+  EXPECT_NE(bake, std::string::npos) << text.output;
+  EXPECT_LT(ingest, bake);
+}
+
+TEST(Info, OnAZUpObjDetectsTheAxisFromTheGeometryAndBakesAFarField) {
+  TempDir dir;
+  const auto obj = dir / "house.obj";
+  std::ofstream(obj, std::ios::binary) << test::triangles_obj(test::house_triangles());
+  bake_as_info_suggests(dir, obj, "z", "detected from the geometry: large flat surfaces face z");
+}
+
+TEST(Info, OnAModelFileLeavesNoTemporaryStoreEvenOnError) {
+  TempDir dir;
+  const auto tmp = dir / "tmp";
+  std::filesystem::create_directories(tmp);
+  const auto bad = dir / "bad.obj";
+  std::ofstream(bad, std::ios::binary) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 99\n";
+  const auto r = test::run_shell("TMPDIR=" + q(tmp) + " " + CELLBAKE_BINARY + " info " + q(bad));
+  EXPECT_NE(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("bad.obj"), std::string::npos) << r.output;
+  EXPECT_EQ(entries(tmp), 0u);
+}
+
+// A model the geometry cannot place (a cube): z is assumed and the ingest line says so.
+TEST(Info, OnAModelWithoutAClearAxisAssumesZAndPutsItInTheIngestLine) {
+  TempDir dir;
+  const auto obj = dir / "cube.obj";
+  std::vector<test::HouseTriangle> cube;
+  test::add_box(cube, {0, 0, 0}, {8, 8, 8}, 4);
+  std::ofstream(obj, std::ios::binary) << test::triangles_obj(cube);
+  const auto doc = json_of(run_cellbake("info --json " + q(obj)));
+  EXPECT_TRUE(doc["up"].is_null()) << doc.dump();
+  EXPECT_EQ(doc["up_used"], "z");
+  EXPECT_NE(doc["up_used_source"].get<std::string>().find("not conclusive"), std::string::npos) << doc.dump();
+  EXPECT_NE(doc["ingest"].get<std::string>().find(" --up z"), std::string::npos) << doc.dump();
 }
 
 TEST(BakeDryRun, PrintsCellsBudgetAndEstimateAndCreatesNoFile) {
