@@ -260,11 +260,9 @@ const FaceMesh& face_mesh(CellWork& work, const BakeConfig& config, std::size_t 
   p.depth_error_relative = config.depth_error_relative;
   p.boundary_error_px = s.parent < 0 ? config.boundary_error_px : config.delta_boundary_error_px;
   p.max_triangles = static_cast<std::size_t>(config.max_face_triangles);
+  p.measure_error = false;  // measured after the far choice, for the meshes kept (measure_kept_faces)
   try {
-    SimplifyResult r = simplify_face_mesh(dense, config.face_size, p);
-    s.simplified[f] = std::move(r.mesh);
-    s.boundary_error_px[f] = r.achieved.max_boundary_error_px;
-    s.depth_error[f] = r.achieved.max_depth_error_relative;
+    s.simplified[f] = simplify_face_mesh(dense, config.face_size, p).mesh;
   } catch (const std::exception& e) {
     throw StageError("simplify", where + e.what());
   }
@@ -273,10 +271,49 @@ const FaceMesh& face_mesh(CellWork& work, const BakeConfig& config, std::size_t 
   return s.simplified[f];
 }
 
-void run_simplify(CellWork& work, const BakeConfig& config) {
-  for (std::size_t i = 0; i < work.samples.size(); ++i)
-    for (int f = 0; f < kCubeFaces; ++f) face_mesh(work, config, i, f);
+namespace {
+
+// Drops the depth-mesh triangles geometry tiles replace, and measures the
+// simplifier's error (stored with each face) for the faces that keep some:
+// their dense meshes are built again (timed as depth_mesh) and measured
+// (timed as simplify) against the simplified mesh as it was before the drop.
+// Faces drawn wholly as geometry store no mesh and no error.
+void drop_replaced_and_measure_kept(CellWork& work, const BakeConfig& config) {
+  for (std::size_t i = 0; i < work.samples.size(); ++i) {
+    SampleWork& s = work.samples[i];
+    for (int f = 0; f < kCubeFaces; ++f) {
+      const std::size_t k = std::size_t(f);
+      s.boundary_error_px[k] = s.depth_error[k] = 0;
+      FaceMesh kept = s.simplified[k];
+      drop_geometry_tiles(kept, work.far->faces[k].geometry_tiles);
+      if (kept.triangle_count() == 0) {
+        s.simplified[k] = FaceMesh{};
+        continue;
+      }
+      const std::string where = "sample " + std::to_string(i) + " face " + std::to_string(f) + ": ";
+      FaceMesh dense;
+      {
+        StageTimer timer(work, "depth_mesh");
+        try {
+          dense = build_depth_mesh_face(s.cube, depth_mesh_params(config), f);
+        } catch (const std::exception& e) {
+          throw StageError("depth_mesh", where + e.what());
+        }
+      }
+      StageTimer timer(work, "simplify");
+      try {
+        const SimplifyError e = measure_simplification_error(dense, s.simplified[k], config.face_size);
+        s.boundary_error_px[k] = e.max_boundary_error_px;
+        s.depth_error[k] = e.max_depth_error_relative;
+      } catch (const std::exception& e) {
+        throw StageError("simplify", where + e.what());
+      }
+      s.simplified[k] = std::move(kept);
+    }
+  }
 }
+
+}  // namespace
 
 void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource& source) {
   // This stage's own time: what it spends meshing faces on demand counts as
@@ -329,9 +366,7 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
                               [&](std::size_t sample, int face) -> const FaceMesh& {
                                 return face_mesh(work, config, sample, face);
                               });
-  for (SampleWork& s : work.samples)
-    for (int f = 0; f < kCubeFaces; ++f)
-      drop_geometry_tiles(s.simplified[std::size_t(f)], work.far->faces[std::size_t(f)].geometry_tiles);
+  drop_replaced_and_measure_kept(work, config);
   work.far_chunks.clear();
   // The row's far geometry: whole chunks by reference, seen triangles by their
   // numbers in the stored chunk (the viewer cuts them out of the store's chunk).

@@ -89,10 +89,8 @@ void run_depth_mesh(CellWork& work, const BakeConfig& config);
 // Face `face` of sample `sample`: its dense depth mesh built and simplified
 // on first use (timed as the depth_mesh and simplify stages; a failure
 // throws StageError naming the stage), then kept in SampleWork::simplified.
+// Its error is measured later, only if the far choice keeps some of it.
 const FaceMesh& face_mesh(CellWork& work, const BakeConfig& config, std::size_t sample, int face);
-// Meshes and simplifies every face of every sample (what run_far_choice does
-// only where the choice needs it).
-void run_simplify(CellWork& work, const BakeConfig& config);
 // Chooses exact far geometry or depth meshes per face tile and drops the
 // depth-mesh triangles that geometry replaces (stages/far_choice.h); meshes
 // and simplifies only the faces the choice depends on (a face drawn wholly as

@@ -619,8 +619,9 @@ SimplifyResult simplify_face_mesh(const FaceMesh& in, int face_size, const Simpl
   result.triangles_out = result.mesh.triangle_count();
   result.depth_error_bound_used = eps;
   result.cap_forced_larger_error = eps > params.depth_error_relative;
-  result.achieved = face_size < 4 ? measure_simplification_error(in, result.mesh, face_size)
-                                  : measure_simplification_error(in, grid, *regions, *traced, result.mesh);
+  if (params.measure_error)
+    result.achieved = face_size < 4 ? measure_simplification_error(in, result.mesh, face_size)
+                                    : measure_simplification_error(in, grid, *regions, *traced, result.mesh);
   return result;
 }
 

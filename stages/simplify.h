@@ -35,6 +35,10 @@ struct SimplifyParams {
   // depth_error_relative, so neighbouring faces still agree.
   std::size_t max_triangles = 10000;
   double max_depth_error_factor = 8;
+  // Measure SimplifyResult::achieved (about a third of the time). A caller
+  // that keeps only some meshes turns it off and measures those it keeps
+  // with measure_simplification_error (the same figures).
+  bool measure_error = true;
 };
 
 struct SimplifyResult {
@@ -43,7 +47,7 @@ struct SimplifyResult {
   std::size_t triangles_out = 0;
   double depth_error_bound_used = 0;    // interior bound of the final mesh (> params' when the cap stopped refinement)
   bool cap_forced_larger_error = false;  // the cap made us exceed depth_error_relative
-  SimplifyError achieved;                // measured against the input
+  SimplifyError achieved;                // measured against the input (zero unless params.measure_error)
 };
 
 // Simplifies one dense face mesh from build_depth_meshes (a pixel grid with
