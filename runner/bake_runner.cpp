@@ -186,6 +186,7 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
       db.put_cell(row);
       if (row.status == "done") {
         ++summary.cells_baked;
+        summary.cells_without_far_field += row.far_triangles == 0 && row.far_geometry_triangles == 0;
       } else {
         ++summary.cells_failed;
         progress.line(row.error);
@@ -205,6 +206,23 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
     g.wait_for_all();
   });
   if (!options.quiet) progress.finish();
+  // A model larger than the budget with no far field anywhere: its chunks are
+  // too coarse (a cell's near field is every chunk reaching into its cull box).
+  const StoreSummary& facts = store.summary();
+  if (!options.quiet && summary.cells_baked > 0 && summary.cells_without_far_field == summary.cells_baked &&
+      model_triangles > config.near_budget && facts.chunks > 0) {
+    const std::uint64_t per_chunk = (model_triangles + facts.chunks - 1) / facts.chunks;
+    const std::vector<SourceFileRecord> sources = store.sources();
+    const std::string model = sources.size() == 1 ? sources[0].path : std::string("MODEL");
+    const std::uint64_t suggested = std::max<std::uint64_t>(64, std::min(per_chunk / 8, config.near_budget / 16));
+    std::fprintf(stderr,
+                 "note: no baked cell has a far field although the model (%llu triangles) exceeds the near budget "
+                 "(%llu): its %llu chunk(s) of ~%llu triangles each reach into every cull box; ingest it again "
+                 "with smaller chunks, e.g. `cellbake ingest %s --store %s --chunk-triangles %llu`\n",
+                 (unsigned long long)model_triangles, (unsigned long long)config.near_budget,
+                 (unsigned long long)facts.chunks, (unsigned long long)per_chunk, model.c_str(), config.store.c_str(),
+                 (unsigned long long)suggested);
+  }
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return summary;
 }

@@ -31,6 +31,7 @@ struct BakeSummary {
   std::uint64_t cells_baked = 0;
   std::uint64_t cells_failed = 0;
   std::uint64_t cull_reused = 0;       // cull-box results reused from the database
+  std::uint64_t cells_without_far_field = 0;  // baked cells whose far field came out empty
   double seconds = 0;
 };
 

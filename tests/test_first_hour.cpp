@@ -220,6 +220,27 @@ TEST(UselessBake, ARegionAwayFromTheModelIsAnError) {
   EXPECT_EQ(near.exit_code, 0) << near.output;
 }
 
+TEST(UselessBake, ChunksTooCoarseForAnyFarFieldGetANoteWithTheIngestToRerun) {
+  // The room in one default-sized chunk: every cull box reaches into it, so
+  // no cell has a far field although the model exceeds the near budget.
+  TempDir dir;
+  const auto obj = dir / "room.obj", coarse = dir / "coarse.store.db";
+  std::ofstream(obj, std::ios::binary) << test::room_obj();
+  ASSERT_EQ(run_cellbake("ingest " + q(obj) + " --store " + q(coarse) + " --quiet").exit_code, 0);
+  const std::string bake = " --region 5,5,1.6,7,7,1.6 --cell-size 2 --near-budget 200 --face-size 16 "
+                           "--set samples.max=1 --set samples.initial=centre --threads 1";
+  const auto r = run_cellbake("bake --store " + q(coarse) + bake + " --out " + q(dir / "c.db"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("no baked cell has a far field"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--chunk-triangles"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(obj.string()), std::string::npos) << r.output;
+  // Finer chunks give a far field, and no note.
+  const auto fine = cli_room_store(dir);
+  const auto f = run_cellbake("bake --store " + q(fine) + bake + " --out " + q(dir / "f.db"));
+  EXPECT_EQ(f.exit_code, 0) << f.output;
+  EXPECT_EQ(f.output.find("no baked cell has a far field"), std::string::npos) << f.output;
+}
+
 // --------------------------------------------------------------- item 4
 
 TEST(ConfigPaths, CommandLineValuesAreRelativeToTheCurrentDirectory) {
