@@ -2,11 +2,28 @@
 
 #include <tbb/parallel_for.h>
 
+#include "stages/tsan_handoff.h"
+
 namespace cellbake {
+namespace {
+
+// TSan tokens at fixed addresses: a body reads them before it has acquired
+// anything (its own closure is part of what TBB hands over).
+const char fork_token = 0, join_token = 0;
+
+}  // namespace
 
 ParallelFor tbb_parallel_for() {
   return [](std::size_t n, const std::function<void(std::size_t)>& fn) {
-    tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) { fn(i); });
+    // fork: the caller's writes happen before every fn(i); join: every fn(i)
+    // happens before parallel_for returns (stages/tsan_handoff.h).
+    tsan::before(&fork_token);
+    tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
+      tsan::after(&fork_token);
+      fn(i);
+      tsan::before(&join_token);
+    });
+    tsan::after(&join_token);
   };
 }
 

@@ -1,20 +1,38 @@
 #!/usr/bin/env bash
 # The test command: installs what is missing (build and test packages, and the
 # Slurm daemons tests/test_slurm runs a one-node cluster with), builds with the
-# tests, and runs the whole suite with CTest, then the fuzz targets' replay
-# under ASan + UBSan. Idempotent. Exit code: CTest's, or 1 when only the replay failed.
+# tests, and runs the whole suite with CTest; then the fuzz targets' replay
+# under ASan + UBSan (scripts/fuzz.sh replay) and the sanitizer jobs
+# (scripts/sanitize.sh: asan, tsan), each in a build folder of its own
+# (BUILD-fuzz-replay, BUILD-asan, BUILD-tsan); CELLBAKE_QUICK=1 skips those
+# three. Idempotent. Exit code 1 when any step failed; the last line names them.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+start=$(date +%s)
 bash scripts/install-deps.sh build test slurm
 bash scripts/build.sh --no-deps -DCELLBAKE_BUILD_TESTS=ON -DCELLBAKE_BUILD_BENCH=OFF
+echo "[test] packages and build: $(( $(date +%s) - start )) s"
 build_dir="${CELLBAKE_BUILD_DIR:-build}"
-echo "[test] running ctest"
-status=0
-(cd "${build_dir}" && ctest --output-on-failure -j "$(nproc)" --timeout 900) || status=$?
-# The fuzz targets again, built apart with ASan + UBSan (gcc, -O1): their seeds
-# and fixed pseudo-random mutants (scripts/fuzz.sh replay, docs/reliability.md).
-# CELLBAKE_QUICK=1 skips it.
+failed=()
+step() {  # step NAME COMMAND...: runs it, timed; a failure is recorded, not fatal
+  local name="$1" start status=0
+  shift
+  start=$(date +%s)
+  echo "[test] ${name}"
+  "$@" || status=$?
+  echo "[test] ${name}: $([ ${status} = 0 ] && echo ok || echo "FAILED (exit ${status})") in $(( $(date +%s) - start )) s"
+  [ ${status} = 0 ] || failed+=("${name}")
+}
+step "ctest" bash -c "cd '${build_dir}' && ctest --output-on-failure -j '$(nproc)' --timeout 900"
 if [ "${CELLBAKE_QUICK:-0}" != 1 ]; then
-  CELLBAKE_FUZZ_REPLAY_DIR="${CELLBAKE_FUZZ_REPLAY_DIR:-${build_dir}-fuzz-replay}" bash scripts/fuzz.sh replay || status=1
+  # The fuzz targets again, built apart with ASan + UBSan (gcc, -O1): their seeds
+  # and fixed pseudo-random mutants (docs/reliability.md).
+  step "fuzz replay" env CELLBAKE_FUZZ_REPLAY_DIR="${CELLBAKE_FUZZ_REPLAY_DIR:-${build_dir}-fuzz-replay}" bash scripts/fuzz.sh replay
+  step "sanitize asan" env CELLBAKE_ASAN_DIR="${CELLBAKE_ASAN_DIR:-${build_dir}-asan}" bash scripts/sanitize.sh asan
+  step "sanitize tsan" env CELLBAKE_TSAN_DIR="${CELLBAKE_TSAN_DIR:-${build_dir}-tsan}" bash scripts/sanitize.sh tsan
 fi
-exit ${status}
+if [ ${#failed[@]} -gt 0 ]; then
+  echo "[test] FAILED after $(( $(date +%s) - start )) s: $(IFS=,; echo "${failed[*]}" | sed 's/,/, /g')"
+  exit 1
+fi
+echo "[test] all passed in $(( $(date +%s) - start )) s"

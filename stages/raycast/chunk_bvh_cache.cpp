@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "stages/tsan_handoff.h"
+
 namespace cellbake {
 namespace {
 
@@ -83,6 +85,8 @@ bool ChunkBvhCache::monitor(void* self, ssize_t bytes, bool /*post*/) {
   std::int64_t peak = cache->peak_device_bytes_.load(std::memory_order_relaxed);
   while (now > peak && !cache->peak_device_bytes_.compare_exchange_weak(peak, now, std::memory_order_relaxed)) {
   }
+  // Called on Embree's build threads too: see ~ChunkBvhCache.
+  tsan::before(cache);
   return true;  // never refuse an allocation: the cap is enforced by eviction
 }
 
@@ -94,6 +98,9 @@ ChunkBvhCache::ChunkBvhCache(ChunkBvhCacheParams params) : params_(params) {
 }
 
 ChunkBvhCache::~ChunkBvhCache() {
+  // Every monitor() call, some on Embree's TBB build threads (joined inside
+  // rtcCommitScene), happens before the cache is destroyed (stages/tsan_handoff.h).
+  tsan::after(this);
   slots_.clear();  // scenes not held elsewhere are released here
   lru_.clear();
   rtcReleaseDevice(device_);  // Embree keeps it alive while scenes held by others remain
