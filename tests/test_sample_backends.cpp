@@ -419,6 +419,22 @@ TEST(ChunkBvhCache, MalformedChunkIsReportedByIdAndNotCached) {
   EXPECT_EQ(cache->stats().cached_groups, 0u);
 }
 
+TEST(ChunkBvhCache, BvhsHeldPastTheCacheAreReleasedSafely) {
+  // A BVH may outlive its cache (a cube map still holds it): Embree frees its
+  // memory then and must not report that to the destroyed cache (an ASan
+  // use-after-free before the cache unset its memory monitor).
+  const auto owned = room({0, 0, 0}, 3);
+  const InMemoryChunkSource& source = *owned;
+  const std::vector<ChunkRef> refs = source.query(source.model_bounds());
+  auto cache = std::make_shared<ChunkBvhCache>(one_chunk_per_group());
+  auto held = cache->acquire(refs, source);
+  ASSERT_EQ(held.size(), refs.size());
+  EXPECT_GT(cache->stats().peak_device_bytes, 0u);
+  cache.reset();
+  for (const auto& bvh : held) EXPECT_NE(bvh->scene, nullptr);
+  held.clear();  // scenes released after their cache
+}
+
 TEST(ChunkBvhCache, GroupSizeChangesNoPixel) {
   const auto owned = generated_plant();
   const InMemoryChunkSource& source = *owned;

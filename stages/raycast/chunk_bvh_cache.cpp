@@ -103,6 +103,9 @@ ChunkBvhCache::~ChunkBvhCache() {
   tsan::after(this);
   slots_.clear();  // scenes not held elsewhere are released here
   lru_.clear();
+  // Scenes still held elsewhere free their memory later, with this cache gone:
+  // from here on the device must not call monitor() with a dangling pointer.
+  rtcSetDeviceMemoryMonitorFunction(device_, nullptr, nullptr);
   rtcReleaseDevice(device_);  // Embree keeps it alive while scenes held by others remain
 }
 
