@@ -513,6 +513,61 @@ class TexturedSource final : public ChunkSource {
   bool holes_;
 };
 
+// Same pixels and same seen triangles, face by face.
+void expect_same_cube(const CubeSample& a, const CubeSample& b, const std::string& what) {
+  for (int f = 0; f < kCubeFaces; ++f) {
+    const CubeFace &x = a.faces[std::size_t(f)], &y = b.faces[std::size_t(f)];
+    EXPECT_EQ(x.depth, y.depth) << what << " face " << f;
+    EXPECT_EQ(x.color, y.color) << what << " face " << f;
+    ASSERT_EQ(x.seen.size(), y.seen.size()) << what << " face " << f;
+    for (std::size_t c = 0; c < x.seen.size(); ++c) {
+      EXPECT_EQ(x.seen[c].id, y.seen[c].id) << what;
+      EXPECT_EQ(x.seen[c].triangles, y.seen[c].triangles) << what;
+      EXPECT_EQ(x.seen[c].triangle_tiles, y.seen[c].triangle_tiles) << what;
+    }
+  }
+}
+
+TEST(EmbreeBatches, GroupsBeyondHalfTheCapAreTracedInBatchesWithTheSamePixels) {
+  const auto owned = generated_plant();
+  const InMemoryChunkSource& source = *owned;
+  const Box3d model = source.model_bounds();
+  const Vec3d eye{model.center().x, model.center().y, model.lo.z + 1.7};
+  const Box3d cull = Box3d::cube(eye, 3.0);
+  ChunkBvhCacheParams roomy, tight;
+  roomy.group_triangles = tight.group_triangles = 20000;
+  // Half the cap holds about one group's estimate.
+  tight.cache_bytes = 2 * 25000 * kEstimatedBvhBytesPerTriangle;
+  EmbreeCubeSampler whole(std::make_shared<ChunkBvhCache>(roomy)), batched(std::make_shared<ChunkBvhCache>(tight));
+  const CubeSample a = whole.sample(eye, cull, params(64), source);
+  const CubeSample b = batched.sample(eye, cull, params(64), source);
+  EXPECT_EQ(whole.stats().batches, 1u);
+  EXPECT_GT(batched.stats().batches, 2u);
+  EXPECT_EQ(batched.stats().batches, batched.cache().stats().builds);
+  expect_same_cube(a, b, "generated plant");
+  // The tight cache held about one batch at a time.
+  EXPECT_LT(batched.cache().stats().peak_device_bytes, whole.cache().stats().peak_device_bytes / 2);
+  EXPECT_LE(batched.cache().stats().cached_groups, 2u);
+}
+
+TEST(EmbreeBatches, AlphaTestedHitsAndSecondSegmentsAcrossBatches) {
+  const auto owned = room({0, 0, 0}, 9);
+  const TexturedSource source(*owned, true);
+  // Every chunk its own group and batch (a 1-byte cap), against one batch;
+  // one eye inside the cull box, one outside it (second ray segments).
+  for (const Vec3d& eye : {Vec3d{0.1, 0.2, 0.3}, Vec3d{2.5, -1.5, 0.5}}) {
+    EmbreeCubeSampler whole(std::make_shared<ChunkBvhCache>(one_chunk_per_group()));
+    EmbreeCubeSampler batched(std::make_shared<ChunkBvhCache>(one_chunk_per_group(1)));
+    const Box3d cull = Box3d::cube({0, 0, 0}, 1.0);
+    const CubeSample a = whole.sample(eye, cull, params(32), source);
+    const CubeSample b = batched.sample(eye, cull, params(32), source);
+    EXPECT_EQ(batched.stats().batches, source.query(source.model_bounds()).size());
+    EXPECT_GT(batched.stats().alpha_retraces, 0u);
+    EXPECT_EQ(batched.stats().second_rays > 0, eye.x > 1.0);
+    expect_same_cube(a, b, "textured room");
+  }
+}
+
 TEST(SampleBackends, TexturedModelsMatchIncludingAlphaTestedHoles) {
   const auto owned = room({0, 0, 0});
   for (bool holes : {false, true}) {

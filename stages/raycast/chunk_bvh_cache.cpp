@@ -124,10 +124,44 @@ void ChunkBvhCache::partition(const ChunkSource& source) {
     std::unordered_map<std::int64_t, std::size_t> group_of;
     for (std::size_t g = 0; g < groups.size(); ++g)
       for (std::int64_t id : groups[g]) group_of[id] = g;
+    std::vector<std::uint64_t> triangles(groups.size(), 0);
+    for (const ChunkRef& r : refs) triangles[group_of.at(r.id)] += r.triangle_count;
     std::lock_guard lock(mutex_);
     members_ = std::move(groups);
     group_of_ = std::move(group_of);
+    group_triangles_ = std::move(triangles);
   });
+}
+
+std::size_t ChunkBvhCache::group_of(std::int64_t chunk_id) const {
+  auto it = group_of_.find(chunk_id);  // immutable after partition()
+  if (it == group_of_.end())
+    throw std::runtime_error("embree: chunk " + std::to_string(chunk_id) + " is not in the model's chunk list");
+  return it->second;
+}
+
+std::vector<std::vector<ChunkRef>> ChunkBvhCache::batches(std::span<const ChunkRef> refs, const ChunkSource& source) {
+  partition(source);
+  std::vector<std::pair<std::size_t, std::size_t>> by_group;  // (group, index into refs)
+  by_group.reserve(refs.size());
+  for (std::size_t i = 0; i < refs.size(); ++i) by_group.emplace_back(group_of(refs[i].id), i);
+  std::sort(by_group.begin(), by_group.end());
+  const std::size_t budget = params_.cache_bytes / 2;
+  std::vector<std::vector<ChunkRef>> out;
+  std::size_t bytes = 0, last_group = ~std::size_t{0};
+  for (const auto& [group, index] : by_group) {
+    if (group != last_group) {
+      const std::size_t group_bytes = std::size_t(group_triangles_[group]) * kEstimatedBvhBytesPerTriangle;
+      if (out.empty() || bytes + group_bytes > budget) {
+        out.emplace_back();
+        bytes = 0;
+      }
+      bytes += group_bytes;
+      last_group = group;
+    }
+    out.back().push_back(refs[index]);
+  }
+  return out;
 }
 
 std::shared_ptr<const ChunkGroupBvh> ChunkBvhCache::build(std::size_t group, const ChunkSource& source,
@@ -204,12 +238,7 @@ std::vector<std::shared_ptr<const ChunkGroupBvh>> ChunkBvhCache::acquire(std::sp
   trim();
   std::vector<std::size_t> groups;
   groups.reserve(refs.size());
-  for (const ChunkRef& r : refs) {
-    auto it = group_of_.find(r.id);  // immutable after partition()
-    if (it == group_of_.end())
-      throw std::runtime_error("embree: chunk " + std::to_string(r.id) + " is not in the model's chunk list");
-    groups.push_back(it->second);
-  }
+  for (const ChunkRef& r : refs) groups.push_back(group_of(r.id));
   std::sort(groups.begin(), groups.end());
   groups.erase(std::unique(groups.begin(), groups.end()), groups.end());
   std::vector<Result> results(groups.size());

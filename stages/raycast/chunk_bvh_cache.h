@@ -58,7 +58,9 @@ struct ChunkBvhCacheParams {
   // (BVHs, vertex and index buffers, and the top-level scenes of cube maps in
   // flight) plus the chunks' own attribute arrays. Beyond it the least
   // recently used BVHs that no cube map holds are dropped. A cube map whose
-  // chunks alone exceed the cap still works (its BVHs are rebuilt next time).
+  // groups would take more than half the cap is traced in batches of groups
+  // (batches()), so two threads' cube maps fit in it whatever the model size;
+  // groups dropped are rebuilt when needed again.
   std::size_t cache_bytes = std::size_t{4} << 30;
   // Triangles per chunk group at most (a single larger chunk is a group of
   // its own); 1 makes every chunk its own group.
@@ -69,6 +71,12 @@ struct ChunkBvhCacheParams {
   // and changed no parity figure of tests/test_sample_backends.cpp, so it is off.
   int scene_flags = RTC_SCENE_FLAG_NONE;
 };
+
+// What batches() assumes a group's BVH and chunks take per triangle before it
+// is built: Embree's device memory (84 B per triangle at medium quality) plus
+// the chunk attributes the cache keeps (23 B on the 2 M plant), rounded up
+// (docs/benchmarks.md "Sampling backends (issue #12)").
+constexpr std::size_t kEstimatedBvhBytesPerTriangle = 112;
 
 struct ChunkBvhCacheStats {
   std::uint64_t builds = 0;           // group BVHs built
@@ -108,6 +116,15 @@ class ChunkBvhCache {
   std::vector<std::shared_ptr<const ChunkGroupBvh>> acquire(std::span<const ChunkRef> refs,
                                                             const ChunkSource& source);
 
+  // `refs` split into batches to acquire one after the other, each holding
+  // the refs of whole groups (in ascending group order) whose estimated bytes
+  // (kEstimatedBvhBytesPerTriangle times their groups' triangles) fit in half
+  // the cap, or a single group larger than that. One batch when everything
+  // fits. Depends only on the model, `refs` and the cap: never on what is
+  // cached or on other threads. Partitions the model like acquire(); throws
+  // std::runtime_error for a chunk not in the model.
+  std::vector<std::vector<ChunkRef>> batches(std::span<const ChunkRef> refs, const ChunkSource& source);
+
   // Drops least recently used BVHs that nobody else holds until the cache is
   // under its cap (acquire() does this first too). Call when a cube map has
   // released its BVHs.
@@ -127,7 +144,8 @@ class ChunkBvhCache {
     std::list<std::size_t>::iterator recency;  // front = most recent
   };
 
-  void partition(const ChunkSource& source);  // fills group_of_ and members_ once
+  void partition(const ChunkSource& source);  // fills group_of_, members_ and group_triangles_ once
+  std::size_t group_of(std::int64_t chunk_id) const;  // throws for a chunk not in the model
   std::shared_ptr<const ChunkGroupBvh> build(std::size_t group, const ChunkSource& source, std::size_t& chunk_bytes);
   void evict_beyond_cap();  // caller holds mutex_
   static bool monitor(void* self, ssize_t bytes, bool post);
@@ -140,6 +158,7 @@ class ChunkBvhCache {
   std::once_flag partitioned_;
   std::unordered_map<std::int64_t, std::size_t> group_of_;  // chunk id -> group
   std::vector<std::vector<std::int64_t>> members_;          // group -> chunk ids
+  std::vector<std::uint64_t> group_triangles_;              // group -> triangles of its chunks
   std::unordered_map<std::size_t, Slot> slots_;             // by group
   std::list<std::size_t> lru_;
   std::size_t chunk_bytes_ = 0;

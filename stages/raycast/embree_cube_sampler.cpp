@@ -6,6 +6,7 @@
 #include <embree3/rtcore.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -81,13 +82,8 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
   const HitTexturer texturer(source, *textures_);
   auto t0 = Clock::now();
   const std::vector<ChunkRef> refs = cube_chunks(eye, cull_box, params.near_plane, source);
-  std::vector<std::shared_ptr<const ChunkGroupBvh>> bvhs = cache_->acquire(refs, source);
+  const std::vector<std::vector<ChunkRef>> batches = cache_->batches(refs, source);
   stats_.gather_seconds += seconds_since(t0);
-  t0 = Clock::now();
-  const InstanceScene scene(*cache_, std::move(bvhs), eye);
-  stats_.scene_seconds += seconds_since(t0);
-  stats_.instances += scene.size();
-  t0 = Clock::now();
 
   const int size = params.face_size * params.supersample;
   if (order_size_ != size) {
@@ -98,124 +94,161 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
   }
   const EyeBox box = eye_relative_box(cull_box, eye);
   const std::size_t pixels = std::size_t(size) * std::size_t(size);
+  // Per face and pixel, the nearest hit over the batches traced so far: its
+  // colour, depth (the limit of later batches' rays) and chunk triangle.
+  struct FaceHits {
+    std::vector<Rgba8> color;
+    std::vector<float> depth;
+    std::vector<std::int64_t> chunk;  // -1: none
+    std::vector<std::uint32_t> triangle;
+  };
+  std::array<FaceHits, kCubeFaces> faces;
+  for (FaceHits& f : faces) {
+    f.color.assign(pixels, Rgba8{0, 0, 0, 0});
+    f.depth.assign(pixels, kBackgroundDepth);
+    f.chunk.assign(pixels, -1);
+    f.triangle.assign(pixels, 0);
+  }
+  std::unordered_map<std::int64_t, std::size_t> triangles_of;  // chunks hit: triangle counts
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   std::vector<RTCRayHit> rays(kStream), again(kStream);
   std::vector<float> second(kStream);  // where each ray's second segment starts (inf: none)
-  std::vector<Rgba8> color;
-  std::vector<float> depth;
+  for (const std::vector<ChunkRef>& batch : batches) {
+    t0 = Clock::now();
+    std::vector<std::shared_ptr<const ChunkGroupBvh>> bvhs = cache_->acquire(batch, source);
+    stats_.gather_seconds += seconds_since(t0);
+    t0 = Clock::now();
+    const InstanceScene scene(*cache_, std::move(bvhs), eye);
+    stats_.scene_seconds += seconds_since(t0);
+    stats_.instances += scene.size();
+    ++stats_.batches;
+    t0 = Clock::now();
+    for (int face = 0; face < kCubeFaces; ++face) {
+      FaceHits& out = faces[std::size_t(face)];
+      const FaceBasis b = cube_face_basis(face);
+      const auto to_float = [](const Vec3d& v) { return Vec3f{float(v.x), float(v.y), float(v.z)}; };
+      const Vec3f step_x = to_float(b.right * (2.0 / size)), step_y = to_float(b.up * (2.0 / size));
+      // A hit counts only when strictly nearer than an earlier batch's: ties
+      // keep the earlier one (with one batch, the limit is +inf throughout).
+      const auto accept = [&](std::uint32_t p, const SurfaceHit& hit, float t, const std::array<float, 4>* texel) {
+        if (!(t < out.depth[p])) return;
+        out.color[p] = shader_.shade(hit, texel);
+        out.depth[p] = t;
+        out.chunk[p] = hit.chunk->id;
+        out.triangle[p] = hit.triangle;
+        triangles_of.try_emplace(hit.chunk->id, hit.chunk->triangle_count());
+        ++stats_.hits;
+      };
+      for (std::size_t start = 0; start < pixels; start += kStream) {
+        const unsigned count = unsigned(std::min<std::size_t>(kStream, pixels - start));
+        for (unsigned k = 0; k < count; ++k) {
+          const std::uint32_t p = order_[start + k];
+          const std::uint32_t row = p / std::uint32_t(size), col = p - row * std::uint32_t(size);
+          const Vec3d dir = cube_face_direction(b, coordinate_[col], -coordinate_[row]);
+          const RaySegments seg = ray_segments(dir, box, params.near_plane);
+          init_ray(rays[k], dir, seg.t0, std::min(seg.t1, out.depth[p]), p);
+          second[k] = seg.two && seg.t2 < out.depth[p] ? seg.t2 : std::numeric_limits<float>::infinity();
+        }
+        rtcIntersect1M(scene.scene(), &context, rays.data(), count, sizeof(RTCRayHit));
+        stats_.rays += count;
+        // Rays that missed their first segment and have a second one: trace that.
+        unsigned missed = 0;
+        for (unsigned k = 0; k < count; ++k) {
+          if (rays[k].hit.geomID != RTC_INVALID_GEOMETRY_ID || std::isinf(second[k])) continue;
+          RTCRayHit& r = again[missed++];
+          r = rays[k];
+          r.ray.tnear = second[k];
+          r.ray.tfar = out.depth[order_[start + k]];
+          r.ray.id = k;
+          r.hit.geomID = r.hit.primID = r.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        }
+        if (missed > 0) {
+          rtcIntersect1M(scene.scene(), &context, again.data(), missed, sizeof(RTCRayHit));
+          stats_.second_rays += missed;
+          for (unsigned m = 0; m < missed; ++m) rays[again[m].ray.id] = again[m];
+        }
+        for (unsigned k = 0; k < count; ++k) {
+          const RTCRayHit& r = rays[k];
+          if (r.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+          const std::uint32_t p = order_[start + k];
+          SurfaceHit hit = surface_hit(scene, r);
+          if (texturer.untextured()) {
+            accept(p, hit, r.ray.tfar, nullptr);
+            continue;
+          }
+          const Vec3f dir{r.ray.dir_x, r.ray.dir_y, r.ray.dir_z};
+          HitTexel texel = texturer.texel(hit, dir, r.ray.tfar, step_x, step_y);
+          float t = r.ray.tfar;
+          if (texel.dropped) {
+            // Alpha-tested away: go on behind it, one hit at a time, within the
+            // ray's segments up to the nearest earlier hit (rare: foliage edges).
+            const RaySegments seg = ray_segments(Vec3d{dir.x, dir.y, dir.z}, box, params.near_plane);
+            const float limit = out.depth[p];
+            RTCIntersectContext single;
+            rtcInitIntersectContext(&single);
+            for (int behind = 0; behind < kMaxAlphaLayers && texel.dropped; ++behind) {
+              RTCRayHit next;
+              const float from = std::nextafter(t, std::numeric_limits<float>::infinity());
+              bool found = false;
+              if (from < seg.t1) {
+                init_ray(next, Vec3d{dir.x, dir.y, dir.z}, std::max(from, seg.t0), std::min(seg.t1, limit), p);
+                rtcIntersect1(scene.scene(), &single, &next);
+                found = next.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+              }
+              if (!found && seg.two) {
+                init_ray(next, Vec3d{dir.x, dir.y, dir.z}, std::max(from, seg.t2), limit, p);
+                rtcIntersect1(scene.scene(), &single, &next);
+                found = next.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+              }
+              ++stats_.alpha_retraces;
+              if (!found) break;
+              hit = surface_hit(scene, next);
+              t = next.ray.tfar;
+              texel = texturer.texel(hit, dir, t, step_x, step_y);
+            }
+            if (texel.dropped) continue;  // nothing opaque behind here
+          }
+          accept(p, hit, t, texel.textured ? &texel.texel : nullptr);
+        }
+      }
+    }
+    cache_->check_device("tracing a cube map");
+    stats_.trace_seconds += seconds_since(t0);
+    // This batch's scene is gone: its BVHs may make room for the next batch.
+    if (batches.size() > 1) cache_->trim();
+  }
+
+  t0 = Clock::now();
   CubeSample sample;
   sample.eye = eye;
   std::vector<std::uint32_t> tile_of(pixels);
   for (std::size_t p = 0; p < pixels; ++p) tile_of[p] = std::uint32_t(pixel_tile(int(p % std::size_t(size)), int(p / std::size_t(size)), size));
-  // What each face saw: chunk -> per-triangle tile masks (dense while tracing,
-  // compacted when the face is done); runs of one chunk and tile are common.
-  std::unordered_map<const Chunk*, std::size_t> slot_of;
-  std::vector<std::pair<const Chunk*, std::vector<std::uint16_t>>> slots;
+  // What each face saw: chunk -> per-triangle tile masks of the nearest hits.
+  std::unordered_map<std::int64_t, std::vector<std::uint16_t>> masks;
   for (int face = 0; face < kCubeFaces; ++face) {
-    const FaceBasis b = cube_face_basis(face);
-    slot_of.clear();
-    slots.clear();
-    const Chunk* last_chunk = nullptr;
-    std::vector<std::uint16_t>* last_tiles = nullptr;
-    const auto saw = [&](const SurfaceHit& hit, std::uint32_t p) {
-      if (hit.chunk != last_chunk) {
-        auto [it, added] = slot_of.try_emplace(hit.chunk, slots.size());
-        if (added) slots.emplace_back(hit.chunk, std::vector<std::uint16_t>(hit.chunk->triangle_count(), 0));
-        last_chunk = hit.chunk;
-        last_tiles = &slots[it->second].second;
+    FaceHits& hits = faces[std::size_t(face)];
+    masks.clear();
+    std::int64_t last_chunk = -1;
+    std::vector<std::uint16_t>* last_masks = nullptr;
+    for (std::size_t p = 0; p < pixels; ++p) {
+      const std::int64_t id = hits.chunk[p];
+      if (id < 0) continue;
+      if (id != last_chunk) {
+        auto [it, added] = masks.try_emplace(id);
+        if (added) it->second.assign(triangles_of.at(id), 0);
+        last_chunk = id;
+        last_masks = &it->second;
       }
-      (*last_tiles)[hit.triangle] |= std::uint16_t(1u << tile_of[p]);
-    };
-    const auto to_float = [](const Vec3d& v) { return Vec3f{float(v.x), float(v.y), float(v.z)}; };
-    const Vec3f step_x = to_float(b.right * (2.0 / size)), step_y = to_float(b.up * (2.0 / size));
-    color.assign(pixels, Rgba8{0, 0, 0, 0});
-    depth.assign(pixels, kBackgroundDepth);
-    for (std::size_t start = 0; start < pixels; start += kStream) {
-      const unsigned count = unsigned(std::min<std::size_t>(kStream, pixels - start));
-      for (unsigned k = 0; k < count; ++k) {
-        const std::uint32_t p = order_[start + k];
-        const std::uint32_t row = p / std::uint32_t(size), col = p - row * std::uint32_t(size);
-        const Vec3d dir = cube_face_direction(b, coordinate_[col], -coordinate_[row]);
-        const RaySegments seg = ray_segments(dir, box, params.near_plane);
-        init_ray(rays[k], dir, seg.t0, seg.t1, p);
-        second[k] = seg.two ? seg.t2 : std::numeric_limits<float>::infinity();
-      }
-      rtcIntersect1M(scene.scene(), &context, rays.data(), count, sizeof(RTCRayHit));
-      stats_.rays += count;
-      // Rays that missed their first segment and have a second one: trace that.
-      unsigned missed = 0;
-      for (unsigned k = 0; k < count; ++k) {
-        if (rays[k].hit.geomID != RTC_INVALID_GEOMETRY_ID || std::isinf(second[k])) continue;
-        RTCRayHit& r = again[missed++];
-        r = rays[k];
-        r.ray.tnear = second[k];
-        r.ray.tfar = std::numeric_limits<float>::infinity();
-        r.ray.id = k;
-        r.hit.geomID = r.hit.primID = r.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-      }
-      if (missed > 0) {
-        rtcIntersect1M(scene.scene(), &context, again.data(), missed, sizeof(RTCRayHit));
-        stats_.second_rays += missed;
-        for (unsigned m = 0; m < missed; ++m) rays[again[m].ray.id] = again[m];
-      }
-      for (unsigned k = 0; k < count; ++k) {
-        const RTCRayHit& r = rays[k];
-        if (r.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-        const std::uint32_t p = order_[start + k];
-        SurfaceHit hit = surface_hit(scene, r);
-        if (texturer.untextured()) {
-          color[p] = shader_.shade(hit);
-          depth[p] = r.ray.tfar;
-          saw(hit, p);
-          ++stats_.hits;
-          continue;
-        }
-        const Vec3f dir{r.ray.dir_x, r.ray.dir_y, r.ray.dir_z};
-        HitTexel texel = texturer.texel(hit, dir, r.ray.tfar, step_x, step_y);
-        float t = r.ray.tfar;
-        if (texel.dropped) {
-          // Alpha-tested away: go on behind it, one hit at a time, within the
-          // ray's segments (rare: foliage edges).
-          const RaySegments seg = ray_segments(Vec3d{dir.x, dir.y, dir.z}, box, params.near_plane);
-          RTCIntersectContext single;
-          rtcInitIntersectContext(&single);
-          for (int behind = 0; behind < kMaxAlphaLayers && texel.dropped; ++behind) {
-            RTCRayHit next;
-            const float from = std::nextafter(t, std::numeric_limits<float>::infinity());
-            bool found = false;
-            if (from < seg.t1) {
-              init_ray(next, Vec3d{dir.x, dir.y, dir.z}, std::max(from, seg.t0), seg.t1, p);
-              rtcIntersect1(scene.scene(), &single, &next);
-              found = next.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-            }
-            if (!found && seg.two) {
-              init_ray(next, Vec3d{dir.x, dir.y, dir.z}, std::max(from, seg.t2),
-                       std::numeric_limits<float>::infinity(), p);
-              rtcIntersect1(scene.scene(), &single, &next);
-              found = next.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-            }
-            ++stats_.alpha_retraces;
-            if (!found) break;
-            hit = surface_hit(scene, next);
-            t = next.ray.tfar;
-            texel = texturer.texel(hit, dir, t, step_x, step_y);
-          }
-          if (texel.dropped) continue;  // nothing opaque behind: background
-        }
-        color[p] = shader_.shade(hit, texel.textured ? &texel.texel : nullptr);
-        depth[p] = t;
-        saw(hit, p);
-        ++stats_.hits;
-      }
+      (*last_masks)[hits.triangle[p]] |= std::uint16_t(1u << tile_of[p]);
     }
     CubeFace& out = sample.faces[std::size_t(face)];
-    out = finish_face(color, depth, params);
-    out.seen.reserve(slots.size());
-    for (const auto& [chunk, tiles] : slots) {
+    out = finish_face(hits.color, hits.depth, params);
+    out.seen.reserve(masks.size());
+    for (const auto& [id, tiles] : masks) {
       SeenChunk seen;
-      seen.id = chunk->id;
+      seen.id = id;
       for (std::size_t t = 0; t < tiles.size(); ++t)
         if (tiles[t]) {
           seen.triangles.push_back(std::uint32_t(t));
@@ -226,7 +259,6 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
     }
     std::sort(out.seen.begin(), out.seen.end(), [](const SeenChunk& a, const SeenChunk& b) { return a.id < b.id; });
   }
-  cache_->check_device("tracing a cube map");
   stats_.trace_seconds += seconds_since(t0);
   ++stats_.cube_maps;
   return sample;

@@ -12,7 +12,11 @@
 // the directions have forward component 1; its colour is hit_shading.h's,
 // times the material's texel (hit_texturing.h) when it has a texture; a hit
 // an alpha test drops is traced again from just behind it.
-// Supersampled faces go through downsample_face like the GL path's.
+// Supersampled faces go through downsample_face like the GL path's. When a
+// cube map's groups exceed half the cache's cap (ChunkBvhCache::batches) it
+// is traced batch by batch, each batch's rays limited to the nearest hit so
+// far (a tie keeps the earlier batch's hit), so memory stays bounded whatever
+// the model size.
 //
 // Differences from the GL rasteriser are those of point sampling at pixel
 // centres versus rasterisation rules on triangle edges and float rounding
@@ -42,6 +46,7 @@ struct EmbreeSamplerStats {
   std::uint64_t hits = 0;
   std::uint64_t alpha_retraces = 0; // rays traced again behind alpha-tested texels
   std::uint64_t instances = 0;      // chunk instances over all cube maps
+  std::uint64_t batches = 0;        // group batches traced (one per cube map unless the cap splits it)
   double gather_seconds = 0;        // finding chunks + acquiring their BVHs (builds included)
   double scene_seconds = 0;         // building top-level scenes
   double trace_seconds = 0;         // ray setup + tracing + shading + downsampling
