@@ -22,13 +22,10 @@
 #include <vector>
 
 #include "bench/bench_program.h"
+#include "bench/bench_sampled_faces.h"
 #include "pipeline/bake_config.h"
 #include "pipeline/cell_grid.h"
-#include "pipeline/cell_job.h"
-#include "pipeline/sample_backend.h"
-#include "stages/background_fill.h"
 #include "stages/encode.h"
-#include "storage/geometry_store.h"
 
 namespace cellbake {
 namespace {
@@ -78,75 +75,34 @@ Args parse_args(int argc, char** argv) {
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
-struct Face {
-  std::vector<Rgba8> color;  // background filled
-  std::vector<std::uint8_t> covered;
-  std::size_t covered_count = 0;
-};
-
 struct Point {
   double bytes = 0, sq_error = 0, samples = 0, encode_ms = 0, decode_ms = 0, worst_face_psnr = 1e9;
 };
-
-double psnr(double sq_error, double samples) {
-  return sq_error <= 0 ? 99.0 : 10 * std::log10(255.0 * 255.0 * samples / sq_error);
-}
 
 int run(int argc, char** argv) {
   const Args args = parse_args(argc, argv);
   if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", "1", 1);
   BakeConfig config = load_bake_config(args.config);
   if (!args.store.empty()) config.store = args.store;
-  config.samples_initial = "centre";  // one sample per cell: whole faces, no delta scans
-  config.samples_max = 1;
-  GeometryStore store(config.store);
-  const std::unique_ptr<CubeSampler> sampler =
-      CubeSamplerFactory(parse_sample_backend(config.sample_backend), std::size_t(config.embree_cache_mb) << 20).make();
-
-  std::vector<Face> faces;
+  const std::vector<SampledFace> faces =
+      sample_centre_faces(config, select_cells(enumerate_cells(config.regions, config.cell_size), args.cells));
   const int n = config.face_size;
-  for (const CellSpec& cell : select_cells(enumerate_cells(config.regions, config.cell_size), args.cells)) {
-    CellWork work;
-    work.cell = cell;
-    run_cull_box(work, config, store);
-    run_sample(work, config, store, *sampler);
-    if (work.samples.empty()) continue;
-    for (CubeFace& f : work.samples[0].cube.faces) {
-      Face face;
-      face.covered.resize(f.depth.size());
-      for (std::size_t i = 0; i < f.depth.size(); ++i) {
-        face.covered[i] = std::isfinite(f.depth[i]) ? 1 : 0;
-        face.covered_count += face.covered[i];
-      }
-      if (face.covered_count == 0) continue;
-      fill_background_colors(f);
-      face.color = f.color;
-      faces.push_back(std::move(face));
-    }
-  }
-  if (faces.empty()) throw std::runtime_error("no face with covered pixels in the selected cells");
   std::size_t covered = 0;
-  for (const Face& f : faces) covered += f.covered_count;
+  for (const SampledFace& f : faces) covered += f.covered_count;
   std::printf("%zu faces of %d^2, %.1f %% of their pixels covered\n", faces.size(), n,
               100.0 * double(covered) / (double(faces.size()) * n * n));
   std::printf("%-10s %8s %10s %12s %14s %10s %10s\n", "codec", "quality", "KB/face", "PSNR dB", "worst face dB",
               "enc ms", "dec ms");
   for (const Codec& codec : args.codecs) {
     Point p;
-    for (const Face& f : faces) {
+    for (const SampledFace& f : faces) {
       auto t0 = Clock::now();
       const std::vector<std::uint8_t> bytes = encode_image(f.color, n, n, {codec.format, codec.quality});
       p.encode_ms += ms_since(t0);
       t0 = Clock::now();
       const DecodedImage img = decode_image(bytes);
       p.decode_ms += ms_since(t0);
-      double se = 0;
-      for (std::size_t i = 0; i < f.color.size(); ++i) {
-        if (!f.covered[i]) continue;
-        const Rgba8 &a = f.color[i], &b = img.pixels[i];
-        const double dr = a.r - b.r, dg = a.g - b.g, db = a.b - b.b;
-        se += dr * dr + dg * dg + db * db;
-      }
+      const double se = covered_sq_error(f, img.pixels);
       p.bytes += double(bytes.size());
       p.sq_error += se;
       p.samples += 3.0 * double(f.covered_count);

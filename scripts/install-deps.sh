@@ -6,7 +6,8 @@
 #   build  compilers, CMake and the libraries `cellbake` links; GLFW and
 #          Dear ImGui for `cellbake-view` (built only when they are present)
 #   test   GoogleTest, assimp's test models, Xvfb (the viewer screenshot test)
-#   bench  Google Benchmark (-DCELLBAKE_BUILD_BENCH=ON)
+#   bench  Google Benchmark (-DCELLBAKE_BUILD_BENCH=ON); libavcodec, libavutil
+#          and libswscale for bench_spatial_video (built only when present)
 #   slurm  the Slurm daemons and munge (scripts/slurm-local.sh, tests/test_slurm)
 #
 # When nothing is missing it runs no apt-get at all. Installing needs root:
@@ -24,7 +25,7 @@ declare -A group_packages=(
            libembree-dev libegl-dev libzstd-dev libavif-dev libjxl-dev
            libglfw3-dev libimgui-dev libstb-dev"
   [test]="libgtest-dev assimp-testmodels xvfb xauth"
-  [bench]="libbenchmark-dev"
+  [bench]="libbenchmark-dev libavcodec-dev libavutil-dev libswscale-dev"
   [slurm]="slurmctld slurmd slurm-client munge"
 )
 
