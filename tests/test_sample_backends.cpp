@@ -550,6 +550,30 @@ TEST(EmbreeBatches, GroupsBeyondHalfTheCapAreTracedInBatchesWithTheSamePixels) {
   EXPECT_LE(batched.cache().stats().cached_groups, 2u);
 }
 
+TEST(EmbreeBatches, GroupsBehindEarlierHitsAreSkippedUnbuilt) {
+  // A closed room around the eye, and a second room 40 m away that its walls hide.
+  auto owned = room({0, 0, 0});
+  const auto other = room({40, 0, 0}, 3);
+  const std::vector<ChunkRef> far_refs = other->query(other->model_bounds());
+  for (const ChunkRef& r : far_refs) {
+    Chunk c = *other->load(r.id);
+    c.id += 100;
+    owned->add(std::move(c));
+  }
+  const InMemoryChunkSource& source = *owned;
+  const std::size_t chunks = source.query(source.model_bounds()).size();
+  EmbreeCubeSampler whole(std::make_shared<ChunkBvhCache>(one_chunk_per_group()));
+  EmbreeCubeSampler batched(std::make_shared<ChunkBvhCache>(one_chunk_per_group(1)));
+  const Vec3d eye{0.1, 0.2, 0.3};
+  const Box3d cull = Box3d::cube({0, 0, 0}, 1.0);
+  const CubeSample a = whole.sample(eye, cull, params(32), source);
+  const CubeSample b = batched.sample(eye, cull, params(32), source);
+  expect_same_cube(a, b, "room beside a hidden room");
+  EXPECT_EQ(batched.stats().groups_hidden, far_refs.size());
+  EXPECT_EQ(batched.cache().stats().builds, chunks - far_refs.size());
+  EXPECT_EQ(whole.cache().stats().builds, chunks);
+}
+
 TEST(EmbreeBatches, AlphaTestedHitsAndSecondSegmentsAcrossBatches) {
   const auto owned = room({0, 0, 0}, 9);
   const TexturedSource source(*owned, true);

@@ -125,11 +125,16 @@ void ChunkBvhCache::partition(const ChunkSource& source) {
     for (std::size_t g = 0; g < groups.size(); ++g)
       for (std::int64_t id : groups[g]) group_of[id] = g;
     std::vector<std::uint64_t> triangles(groups.size(), 0);
-    for (const ChunkRef& r : refs) triangles[group_of.at(r.id)] += r.triangle_count;
+    std::vector<Box3d> bounds(groups.size());
+    for (const ChunkRef& r : refs) {
+      triangles[group_of.at(r.id)] += r.triangle_count;
+      bounds[group_of.at(r.id)].expand(r.bounds);
+    }
     std::lock_guard lock(mutex_);
     members_ = std::move(groups);
     group_of_ = std::move(group_of);
     group_triangles_ = std::move(triangles);
+    group_bounds_ = std::move(bounds);
   });
 }
 
@@ -140,26 +145,22 @@ std::size_t ChunkBvhCache::group_of(std::int64_t chunk_id) const {
   return it->second;
 }
 
-std::vector<std::vector<ChunkRef>> ChunkBvhCache::batches(std::span<const ChunkRef> refs, const ChunkSource& source) {
+std::vector<ChunkGroupRefs> ChunkBvhCache::groups_of(std::span<const ChunkRef> refs, const ChunkSource& source) {
   partition(source);
   std::vector<std::pair<std::size_t, std::size_t>> by_group;  // (group, index into refs)
   by_group.reserve(refs.size());
   for (std::size_t i = 0; i < refs.size(); ++i) by_group.emplace_back(group_of(refs[i].id), i);
   std::sort(by_group.begin(), by_group.end());
-  const std::size_t budget = params_.cache_bytes / 2;
-  std::vector<std::vector<ChunkRef>> out;
-  std::size_t bytes = 0, last_group = ~std::size_t{0};
+  std::vector<ChunkGroupRefs> out;
   for (const auto& [group, index] : by_group) {
-    if (group != last_group) {
-      const std::size_t group_bytes = std::size_t(group_triangles_[group]) * kEstimatedBvhBytesPerTriangle;
-      if (out.empty() || bytes + group_bytes > budget) {
-        out.emplace_back();
-        bytes = 0;
-      }
-      bytes += group_bytes;
-      last_group = group;
+    if (out.empty() || out.back().group != group) {
+      ChunkGroupRefs g;
+      g.group = group;
+      g.bounds = group_bounds_[group];
+      g.estimated_bytes = std::size_t(group_triangles_[group]) * kEstimatedBvhBytesPerTriangle;
+      out.push_back(std::move(g));
     }
-    out.back().push_back(refs[index]);
+    out.back().refs.push_back(refs[index]);
   }
   return out;
 }

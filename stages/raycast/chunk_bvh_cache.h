@@ -58,9 +58,10 @@ struct ChunkBvhCacheParams {
   // (BVHs, vertex and index buffers, and the top-level scenes of cube maps in
   // flight) plus the chunks' own attribute arrays. Beyond it the least
   // recently used BVHs that no cube map holds are dropped. A cube map whose
-  // groups would take more than half the cap is traced in batches of groups
-  // (batches()), so two threads' cube maps fit in it whatever the model size;
-  // groups dropped are rebuilt when needed again.
+  // groups would take more than half the cap (batch_bytes()) is traced in
+  // batches of groups (stages/raycast/embree_cube_sampler.h), so two threads'
+  // cube maps fit in it whatever the model size; groups dropped are rebuilt
+  // when needed again.
   std::size_t cache_bytes = std::size_t{4} << 30;
   // Triangles per chunk group at most (a single larger chunk is a group of
   // its own); 1 makes every chunk its own group.
@@ -72,11 +73,19 @@ struct ChunkBvhCacheParams {
   int scene_flags = RTC_SCENE_FLAG_NONE;
 };
 
-// What batches() assumes a group's BVH and chunks take per triangle before it
+// What groups_of() assumes a group's BVH and chunks take per triangle before it
 // is built: Embree's device memory (84 B per triangle at medium quality) plus
 // the chunk attributes the cache keeps (23 B on the 2 M plant), rounded up
 // (docs/benchmarks.md "Sampling backends (issue #12)").
 constexpr std::size_t kEstimatedBvhBytesPerTriangle = 112;
+
+// Some chunks of a cube map, by the group whose BVH holds them.
+struct ChunkGroupRefs {
+  std::size_t group = 0;
+  Box3d bounds;                  // of all the group's chunks
+  std::size_t estimated_bytes = 0;
+  std::vector<ChunkRef> refs;    // in the order given
+};
 
 struct ChunkBvhCacheStats {
   std::uint64_t builds = 0;           // group BVHs built
@@ -116,14 +125,15 @@ class ChunkBvhCache {
   std::vector<std::shared_ptr<const ChunkGroupBvh>> acquire(std::span<const ChunkRef> refs,
                                                             const ChunkSource& source);
 
-  // `refs` split into batches to acquire one after the other, each holding
-  // the refs of whole groups (in ascending group order) whose estimated bytes
-  // (kEstimatedBvhBytesPerTriangle times their groups' triangles) fit in half
-  // the cap, or a single group larger than that. One batch when everything
-  // fits. Depends only on the model, `refs` and the cap: never on what is
-  // cached or on other threads. Partitions the model like acquire(); throws
+  // The groups holding the chunks `refs`, in ascending group order, each
+  // with the world bounds and estimated bytes of its whole BVH
+  // (kEstimatedBvhBytesPerTriangle times its chunks' triangles) and the refs
+  // among `refs` it holds. Partitions the model like acquire(); throws
   // std::runtime_error for a chunk not in the model.
-  std::vector<std::vector<ChunkRef>> batches(std::span<const ChunkRef> refs, const ChunkSource& source);
+  std::vector<ChunkGroupRefs> groups_of(std::span<const ChunkRef> refs, const ChunkSource& source);
+  // What one cube map may hold at once: half the cap, so two threads' cube
+  // maps fit in it. A cube map whose groups exceed it acquires them in batches.
+  std::size_t batch_bytes() const { return params_.cache_bytes / 2; }
 
   // Drops least recently used BVHs that nobody else holds until the cache is
   // under its cap (acquire() does this first too). Call when a cube map has
@@ -144,7 +154,7 @@ class ChunkBvhCache {
     std::list<std::size_t>::iterator recency;  // front = most recent
   };
 
-  void partition(const ChunkSource& source);  // fills group_of_, members_ and group_triangles_ once
+  void partition(const ChunkSource& source);  // fills group_of_, members_, group_triangles_ and group_bounds_ once
   std::size_t group_of(std::int64_t chunk_id) const;  // throws for a chunk not in the model
   std::shared_ptr<const ChunkGroupBvh> build(std::size_t group, const ChunkSource& source, std::size_t& chunk_bytes);
   void evict_beyond_cap();  // caller holds mutex_
@@ -159,6 +169,7 @@ class ChunkBvhCache {
   std::unordered_map<std::int64_t, std::size_t> group_of_;  // chunk id -> group
   std::vector<std::vector<std::int64_t>> members_;          // group -> chunk ids
   std::vector<std::uint64_t> group_triangles_;              // group -> triangles of its chunks
+  std::vector<Box3d> group_bounds_;                         // group -> bounds of its chunks
   std::unordered_map<std::size_t, Slot> slots_;             // by group
   std::list<std::size_t> lru_;
   std::size_t chunk_bytes_ = 0;

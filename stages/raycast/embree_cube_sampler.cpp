@@ -56,6 +56,56 @@ SurfaceHit surface_hit(const InstanceScene& scene, const RTCRayHit& r) {
   return hit;
 }
 
+// Per face and pixel, the nearest hit over the batches traced so far: its
+// colour, depth (the limit of later batches' rays) and chunk triangle.
+struct FaceHits {
+  std::vector<Rgba8> color;
+  std::vector<float> depth;
+  std::vector<std::int64_t> chunk;  // -1: none
+  std::vector<std::uint32_t> triangle;
+};
+
+// True when no ray of the size x size faces can hit anything inside `box`
+// (world) nearer than what it already hit. Per face, in the face's frame
+// (right r, up u, forward f; the box's extents there bound it): a ray of the
+// face only reaches points with |r| <= f and |u| <= f, so the box's nearest
+// reachable depth is f_min = max(f_lo, min |r|, min |u|) (none when above
+// f_hi), and its rays are those through the box's projection at depths
+// f_min..f_hi (one pixel wider). Hidden when each of those pixels already has
+// a depth no greater than f_min (a hit there would not be nearer, and ties
+// keep the earlier hit).
+bool box_hidden(const Box3d& box, const Vec3d& eye, const std::array<FaceHits, kCubeFaces>& faces, int size) {
+  if (box.empty()) return true;
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  const auto min_abs = [](double lo, double hi) { return lo > 0 ? lo : hi < 0 ? -hi : 0.0; };
+  for (int face = 0; face < kCubeFaces; ++face) {
+    const FaceBasis b = cube_face_basis(face);
+    double r_lo = kInf, r_hi = -kInf, u_lo = kInf, u_hi = -kInf, f_lo = kInf, f_hi = -kInf;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3d c = Vec3d{corner & 1 ? box.hi.x : box.lo.x, corner & 2 ? box.hi.y : box.lo.y,
+                            corner & 4 ? box.hi.z : box.lo.z} - eye;
+      const double r = dot(c, b.right), u = dot(c, b.up), f = dot(c, b.forward);
+      r_lo = std::min(r_lo, r), r_hi = std::max(r_hi, r);
+      u_lo = std::min(u_lo, u), u_hi = std::max(u_hi, u);
+      f_lo = std::min(f_lo, f), f_hi = std::max(f_hi, f);
+    }
+    const double f_min = std::max({f_lo, min_abs(r_lo, r_hi), min_abs(u_lo, u_hi), 1e-9});
+    if (f_min > f_hi) continue;  // out of this face's frustum
+    // s = r / f and t = u / f over r, u in their ranges and f in [f_min, f_hi].
+    const double s_lo = r_lo / (r_lo >= 0 ? f_hi : f_min), s_hi = r_hi / (r_hi >= 0 ? f_min : f_hi);
+    const double t_lo = u_lo / (u_lo >= 0 ? f_hi : f_min), t_hi = u_hi / (u_hi >= 0 ? f_min : f_hi);
+    // Column of s: (s + 1) / 2 * size - 0.5; row of t: (1 - t) / 2 * size - 0.5.
+    const auto index = [size](double v) { return int(std::clamp(v, 0.0, double(size - 1))); };
+    const int col0 = index(std::floor((s_lo + 1) / 2 * size - 0.5) - 1), col1 = index(std::ceil((s_hi + 1) / 2 * size - 0.5) + 1);
+    const int row0 = index(std::floor((1 - t_hi) / 2 * size - 0.5) - 1), row1 = index(std::ceil((1 - t_lo) / 2 * size - 0.5) + 1);
+    const std::vector<float>& depth = faces[std::size_t(face)].depth;
+    for (int row = row0; row <= row1; ++row)
+      for (int col = col0; col <= col1; ++col)
+        if (double(depth[std::size_t(row) * std::size_t(size) + std::size_t(col)]) > f_min) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 std::vector<std::uint32_t> block_order(int size) {
@@ -82,7 +132,25 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
   const HitTexturer texturer(source, *textures_);
   auto t0 = Clock::now();
   const std::vector<ChunkRef> refs = cube_chunks(eye, cull_box, params.near_plane, source);
-  const std::vector<std::vector<ChunkRef>> batches = cache_->batches(refs, source);
+  std::vector<ChunkGroupRefs> groups = cache_->groups_of(refs, source);
+  std::size_t estimated_bytes = 0;
+  for (const ChunkGroupRefs& g : groups) estimated_bytes += g.estimated_bytes;
+  const bool one_batch = estimated_bytes <= cache_->batch_bytes();
+  if (!one_batch) {
+    // Nearest groups first, so later batches are mostly hidden behind what
+    // earlier ones hit and are skipped without being built.
+    std::vector<std::pair<double, std::size_t>> order;
+    for (std::size_t i = 0; i < groups.size(); ++i) {
+      const Box3d& g = groups[i].bounds;
+      const Vec3d nearest{std::clamp(eye.x, g.lo.x, g.hi.x), std::clamp(eye.y, g.lo.y, g.hi.y),
+                          std::clamp(eye.z, g.lo.z, g.hi.z)};
+      order.emplace_back(length(nearest - eye), i);
+    }
+    std::sort(order.begin(), order.end());
+    std::vector<ChunkGroupRefs> sorted;
+    for (const auto& [distance, i] : order) sorted.push_back(std::move(groups[i]));
+    groups = std::move(sorted);
+  }
   stats_.gather_seconds += seconds_since(t0);
 
   const int size = params.face_size * params.supersample;
@@ -94,14 +162,6 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
   }
   const EyeBox box = eye_relative_box(cull_box, eye);
   const std::size_t pixels = std::size_t(size) * std::size_t(size);
-  // Per face and pixel, the nearest hit over the batches traced so far: its
-  // colour, depth (the limit of later batches' rays) and chunk triangle.
-  struct FaceHits {
-    std::vector<Rgba8> color;
-    std::vector<float> depth;
-    std::vector<std::int64_t> chunk;  // -1: none
-    std::vector<std::uint32_t> triangle;
-  };
   std::array<FaceHits, kCubeFaces> faces;
   for (FaceHits& f : faces) {
     f.color.assign(pixels, Rgba8{0, 0, 0, 0});
@@ -115,8 +175,23 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
   context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   std::vector<RTCRayHit> rays(kStream), again(kStream);
   std::vector<float> second(kStream);  // where each ray's second segment starts (inf: none)
-  for (const std::vector<ChunkRef>& batch : batches) {
+  for (std::size_t next = 0; next < groups.size();) {
+    // The next batch: every group when all fit (as one scene); else groups in
+    // order up to the batch bytes, skipping those hidden behind earlier hits.
     t0 = Clock::now();
+    std::vector<ChunkRef> batch;
+    std::size_t bytes = 0;
+    for (; next < groups.size(); ++next) {
+      const ChunkGroupRefs& g = groups[next];
+      if (!one_batch && box_hidden(g.bounds, eye, faces, size)) {
+        ++stats_.groups_hidden;
+        continue;
+      }
+      if (!one_batch && !batch.empty() && bytes + g.estimated_bytes > cache_->batch_bytes()) break;
+      batch.insert(batch.end(), g.refs.begin(), g.refs.end());
+      bytes += g.estimated_bytes;
+    }
+    if (batch.empty()) break;
     std::vector<std::shared_ptr<const ChunkGroupBvh>> bvhs = cache_->acquire(batch, source);
     stats_.gather_seconds += seconds_since(t0);
     t0 = Clock::now();
@@ -217,7 +292,7 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
     cache_->check_device("tracing a cube map");
     stats_.trace_seconds += seconds_since(t0);
     // This batch's scene is gone: its BVHs may make room for the next batch.
-    if (batches.size() > 1) cache_->trim();
+    if (!one_batch) cache_->trim();
   }
 
   t0 = Clock::now();

@@ -13,10 +13,12 @@
 // times the material's texel (hit_texturing.h) when it has a texture; a hit
 // an alpha test drops is traced again from just behind it.
 // Supersampled faces go through downsample_face like the GL path's. When a
-// cube map's groups exceed half the cache's cap (ChunkBvhCache::batches) it
-// is traced batch by batch, each batch's rays limited to the nearest hit so
-// far (a tie keeps the earlier batch's hit), so memory stays bounded whatever
-// the model size.
+// cube map's groups exceed ChunkBvhCache::batch_bytes (half the cache's cap)
+// it is traced batch by batch, nearest groups first, each batch's rays
+// limited to the nearest hit so far (a tie keeps the earlier batch's hit), so
+// memory stays bounded whatever the model size; a group whose bounds lie
+// behind every hit its projection covers is skipped unbuilt (occlusion
+// culling, exact: none of its surfaces could be nearer).
 //
 // Differences from the GL rasteriser are those of point sampling at pixel
 // centres versus rasterisation rules on triangle edges and float rounding
@@ -47,6 +49,7 @@ struct EmbreeSamplerStats {
   std::uint64_t alpha_retraces = 0; // rays traced again behind alpha-tested texels
   std::uint64_t instances = 0;      // chunk instances over all cube maps
   std::uint64_t batches = 0;        // group batches traced (one per cube map unless the cap splits it)
+  std::uint64_t groups_hidden = 0;  // groups of split cube maps skipped: hidden behind earlier batches' hits
   double gather_seconds = 0;        // finding chunks + acquiring their BVHs (builds included)
   double scene_seconds = 0;         // building top-level scenes
   double trace_seconds = 0;         // ray setup + tracing + shading + downsampling
