@@ -2,8 +2,10 @@
 // a known uniform colour error, a known hole mask, known skins and depth errors.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "viewer/image_metrics.h"
 
@@ -70,6 +72,47 @@ TEST(ImageMetrics, ShiftedStripesLowerSsim) {
   const ImageMetrics m = compare_frames(b, a);
   EXPECT_LT(m.ssim, 0.0);  // anti-correlated structure
   EXPECT_GT(compare_frames(stripes(32, 32, 1), a).ssim, m.ssim);
+}
+
+TEST(ImageMetrics, MaskedSsimOfAFullMaskIsCompareFramesSsim) {
+  const ViewFrame a = stripes(32, 24, 0), b = stripes(32, 24, 1);
+  const std::vector<std::uint8_t> all(a.color.size(), 1);
+  EXPECT_DOUBLE_EQ(masked_ssim(b.color, a.color, 32, 24, all), compare_frames(b, a).ssim);
+}
+
+TEST(ImageMetrics, MaskedSsimIgnoresWindowsTouchingUnmaskedPixels) {
+  // Identical on the left 16 columns, inverted stripes on the right: with the
+  // left half as mask, every counted window is identical (SSIM exactly 1).
+  const ViewFrame truth = stripes(32, 32, 0);
+  ViewFrame impostor = stripes(32, 32, 2);
+  std::vector<std::uint8_t> left(truth.color.size(), 0);
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 16; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * 32 + x;
+      impostor.color[i] = truth.color[i];
+      left[i] = 1;
+    }
+  EXPECT_LT(compare_frames(impostor, truth).ssim, 0.5);
+  EXPECT_NEAR(masked_ssim(impostor.color, truth.color, 32, 32, left), 1.0, 1e-12);
+  // Constant images masked to their top half: the luminance term, as unmasked.
+  const ViewFrame dark = flat(16, 16, {100, 100, 100, 255}, 2.0f), light = flat(16, 16, {110, 110, 110, 255}, 2.0f);
+  std::vector<std::uint8_t> top(256, 0);
+  std::fill(top.begin(), top.begin() + 128, std::uint8_t{1});
+  const double c1 = 2.55 * 2.55;
+  EXPECT_NEAR(masked_ssim(light.color, dark.color, 16, 16, top),
+              (2 * 100.0 * 110.0 + c1) / (100.0 * 100.0 + 110.0 * 110.0 + c1), 1e-9);
+}
+
+TEST(ImageMetrics, MaskedSsimIsNanWithoutAWholeWindowAndRejectsBadSizes) {
+  const ViewFrame a = stripes(8, 8, 0);
+  std::vector<std::uint8_t> mask(64, 1);
+  mask[27] = 0;  // the only 8x8 window now touches an unmasked pixel
+  EXPECT_TRUE(std::isnan(masked_ssim(a.color, a.color, 8, 8, mask)));
+  mask[27] = 1;
+  EXPECT_DOUBLE_EQ(masked_ssim(a.color, a.color, 8, 8, mask), 1.0);
+  mask.pop_back();
+  EXPECT_THROW(masked_ssim(a.color, a.color, 8, 8, mask), std::invalid_argument);
+  EXPECT_THROW(masked_ssim(a.color, a.color, 0, 8, std::vector<std::uint8_t>{}), std::invalid_argument);
 }
 
 TEST(ImageMetrics, KnownHoleMaskGivesExactHoleFraction) {

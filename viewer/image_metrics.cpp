@@ -49,13 +49,20 @@ struct SummedArea {
   }
 };
 
-double mean_ssim(const ViewFrame& a, const ViewFrame& b) {
-  const int w = a.width, h = a.height;
-  SummedArea sa(w, h), sb(w, h), saa(w, h), sbb(w, h), sab(w, h);
+// Sum and count of the SSIM of every 8x8 window (one window when the image
+// is smaller) of two w x h images; with `mask`, only the windows whose pixels
+// all have mask != 0.
+struct SsimSum {
+  double total = 0;
+  long long windows = 0;
+};
+SsimSum sum_window_ssim(const std::vector<Rgba8>& a, const std::vector<Rgba8>& b, int w, int h,
+                        const std::vector<std::uint8_t>* mask) {
+  SummedArea sa(w, h), sb(w, h), saa(w, h), sbb(w, h), sab(w, h), sm(mask ? w : 0, mask ? h : 0);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * w + x;
-      const double ya = luminance(a.color[i]), yb = luminance(b.color[i]);
+      const double ya = luminance(a[i]), yb = luminance(b[i]);
       const auto accumulate = [&](SummedArea& t, double v) {
         t.at(x + 1, y + 1) = v + t.at(x, y + 1) + t.at(x + 1, y) - t.at(x, y);
       };
@@ -64,22 +71,28 @@ double mean_ssim(const ViewFrame& a, const ViewFrame& b) {
       accumulate(saa, ya * ya);
       accumulate(sbb, yb * yb);
       accumulate(sab, ya * yb);
+      if (mask) accumulate(sm, (*mask)[i] ? 1.0 : 0.0);
     }
   const int wx = std::min(8, w), wy = std::min(8, h);
   const double n = static_cast<double>(wx) * wy;
   const double c1 = (0.01 * 255) * (0.01 * 255), c2 = (0.03 * 255) * (0.03 * 255);
-  double total = 0;
-  long long windows = 0;
+  SsimSum s;
   for (int y = 0; y + wy <= h; ++y)
     for (int x = 0; x + wx <= w; ++x) {
+      if (mask && sm.sum(x, y, x + wx, y + wy) < n) continue;  // integer counts: exact in doubles
       const double ma = sa.sum(x, y, x + wx, y + wy) / n, mb = sb.sum(x, y, x + wx, y + wy) / n;
       const double va = std::max(0.0, saa.sum(x, y, x + wx, y + wy) / n - ma * ma);
       const double vb = std::max(0.0, sbb.sum(x, y, x + wx, y + wy) / n - mb * mb);
       const double cov = sab.sum(x, y, x + wx, y + wy) / n - ma * mb;
-      total += ((2 * ma * mb + c1) * (2 * cov + c2)) / ((ma * ma + mb * mb + c1) * (va + vb + c2));
-      ++windows;
+      s.total += ((2 * ma * mb + c1) * (2 * cov + c2)) / ((ma * ma + mb * mb + c1) * (va + vb + c2));
+      ++s.windows;
     }
-  return total / static_cast<double>(windows);
+  return s;
+}
+
+double mean_ssim(const ViewFrame& a, const ViewFrame& b) {
+  const SsimSum s = sum_window_ssim(a.color, b.color, a.width, a.height, nullptr);
+  return s.total / static_cast<double>(s.windows);
 }
 
 double median(std::vector<double>& v) {
@@ -144,6 +157,17 @@ ImageMetrics compare_frames(const ViewFrame& impostor, const ViewFrame& truth, c
   m.extra_fraction = sky ? static_cast<double>(extra) / static_cast<double>(sky) : 0.0;
   m.depth_error_median = median(depth_errors);
   return m;
+}
+
+double masked_ssim(const std::vector<Rgba8>& a, const std::vector<Rgba8>& b, int width, int height,
+                   const std::vector<std::uint8_t>& mask) {
+  if (width < 1 || height < 1)
+    throw std::invalid_argument("masked_ssim: size " + std::to_string(width) + "x" + std::to_string(height));
+  const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  if (a.size() != n || b.size() != n || mask.size() != n)
+    throw std::invalid_argument("masked_ssim: an image or the mask does not hold width * height values");
+  const SsimSum s = sum_window_ssim(a, b, width, height, &mask);
+  return s.windows ? s.total / static_cast<double>(s.windows) : std::numeric_limits<double>::quiet_NaN();
 }
 
 bool is_blank(const ViewFrame& frame) {

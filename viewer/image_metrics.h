@@ -58,6 +58,17 @@ struct ImageMetrics {
 };
 ImageMetrics compare_frames(const ViewFrame& impostor, const ViewFrame& truth, const ImageMetricsParams& params = {});
 
+// Mean SSIM as compare_frames defines it (8x8 uniform windows at stride 1 of
+// Rec.601 luminance, the same C1 and C2), averaged over only the windows whose
+// every pixel has mask != 0: e.g. a cube face's covered pixels, so that a
+// background fill (or sky) neither helps nor hurts. `a`, `b` and `mask` are
+// row-major width x height; images smaller than 8 on a side have the one
+// window over all of it. Returns NaN when no window lies wholly inside the
+// mask. Pure, deterministic. Throws std::invalid_argument when a size is < 1
+// or a vector does not hold width * height values.
+double masked_ssim(const std::vector<Rgba8>& a, const std::vector<Rgba8>& b, int width, int height,
+                   const std::vector<std::uint8_t>& mask);
+
 // True when `frame` shows nothing to compare: no pixel is covered, or every
 // covered pixel has the same R, G, B (a black or single-colour model, an
 // empty view). PSNR against such a truth says nothing about what a person
