@@ -18,6 +18,7 @@
 #include "pipeline/sample_backend.h"
 #include "runner/progress.h"
 #include "runner/shards.h"
+#include "stages/raycast/embree_cube_sampler.h"
 #include "stages/tsan_handoff.h"
 #include "storage/cell_db.h"
 #include "storage/cell_db_lock.h"
@@ -25,6 +26,19 @@
 
 namespace cellbake {
 namespace {
+
+// One line on the Embree backend's work in a bake (bake -v): BVH builds, the
+// cache's peak, and how cube maps beyond half the cap were split.
+std::string describe_embree_work(const ChunkBvhCacheStats& cache, const EmbreeSamplerStats& s) {
+  char line[512];
+  std::snprintf(line, sizeof line,
+                "embree: %llu cube maps in %llu batches (%llu groups skipped, hidden); %llu BVH builds of %zu groups, "
+                "%.1f M triangles in %.1f thread-s (%.1f s loading chunks); peak device memory %.0f MiB",
+                (unsigned long long)s.cube_maps, (unsigned long long)s.batches, (unsigned long long)s.groups_hidden,
+                (unsigned long long)cache.builds, cache.groups, double(cache.triangles_built) / 1e6, cache.build_seconds,
+                cache.load_seconds, double(cache.peak_device_bytes) / double(1 << 20));
+  return line;
+}
 
 // TSan tokens (stages/tsan_handoff.h) at fixed addresses, since a node body
 // reads them before it has acquired anything: the graph's start happens before
@@ -234,6 +248,16 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
     source.activate();
     g.wait_for_all();
     tsan::after(&graph_done);
+    if (options.verbose && samplers.bvh_cache() && samplers.bvh_cache()->stats().builds + samplers.bvh_cache()->stats().hits > 0) {
+      EmbreeSamplerStats total;
+      for (const auto& sampler : thread_samplers)
+        if (const auto* e = dynamic_cast<const EmbreeCubeSampler*>(sampler.get())) {
+          total.cube_maps += e->stats().cube_maps;
+          total.batches += e->stats().batches;
+          total.groups_hidden += e->stats().groups_hidden;
+        }
+      progress.line(describe_embree_work(samplers.bvh_cache()->stats(), total));
+    }
 #ifdef CELLBAKE_TSAN
     // Every graph task ends by decrementing the graph's wait count (in TBB's
     // headers, so TSan sees it); one more decrement here orders what TBB did
