@@ -27,9 +27,10 @@ jobs=("$@")
 # threads the others already run (what they check beyond is single-threaded).
 asan_tests=(test_readers test_input_checks test_bake_config test_cli_values test_encode test_encode_triangle_list
             test_geometry_store test_cell_db_migration test_output_guards test_ingest test_integrity test_merge test_bake
-            test_sample_backends)
+            test_sample_backends test_cell_cache)
 asan_exclude='^Bake\.KilledBakeResumesToTheSameDatabase$'
-tsan_tests=(test_geometry_store test_cell_db_migration test_integrity test_merge test_bake test_bake_backends)
+tsan_tests=(test_geometry_store test_cell_db_migration test_integrity test_merge test_bake test_bake_backends
+            test_cell_cache)
 tsan_exclude='^(Bake\.(KilledBakeResumesToTheSameDatabase|ChangedParametersRecomputeOnlyWhatTheyAffect)|Merge\.(MergingTheSameShardsAgainChangesNothing|ResumesIntoTheEmptyFileOfAMergeKilledBeforeItsSchema|RefusesShardsFromOtherParametersOrStores|ShardsPartitionTheCellsEvenly))$'
 
 bash scripts/install-deps.sh build test

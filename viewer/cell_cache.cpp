@@ -45,9 +45,17 @@ std::shared_ptr<const DecodedCell> CellCache::get(std::int64_t id) {
 std::shared_ptr<const DecodedCell> CellCache::get_blocking(std::int64_t id) {
   if (auto cell = get(id)) return cell;
   std::unique_lock lock(mutex_);
-  loaded_.wait(lock, [&] { return cells_.contains(id) || failures_.contains(id) || stop_; });
-  auto it = cells_.find(id);
-  return it == cells_.end() ? nullptr : it->second;
+  while (true) {
+    if (auto it = cells_.find(id); it != cells_.end()) return it->second;
+    if (failures_.contains(id) || stop_) return nullptr;
+    // Not cached: not loaded yet, or loaded and already evicted by the loads
+    // of other cells before this thread woke. Queued first unless it is.
+    if (loading_ != id && std::find(queue_.begin(), queue_.end(), id) == queue_.end()) {
+      queue_.push_front(id);
+      wake_.notify_all();
+    }
+    loaded_.wait(lock);
+  }
 }
 
 void CellCache::prefetch(const std::vector<std::int64_t>& ids) {
@@ -109,6 +117,7 @@ void CellCache::run() {
         id = queue_.front();
         queue_.pop_front();
         if (cells_.contains(id)) id = 0;
+        loading_ = id;
       }
     }
     try {
@@ -139,14 +148,17 @@ void CellCache::run() {
     try {
       if (!db) throw std::runtime_error("cell database " + database_.string() + " cannot be opened");
       const auto row = db->get_cell(id, true);
-      missing = !row;
+      // Not there or not baked yet: retried once the index shows it done.
+      missing = !row || row->status != "done";
       if (!row) throw std::runtime_error("cell " + std::to_string(id) + " is not in the database (yet)");
+      if (missing) throw std::runtime_error("cell " + std::to_string(id) + " is not baked yet (status " + row->status + ")");
       cell = std::make_shared<const DecodedCell>(decode_cell(*row, params_.source));
     } catch (const std::exception& e) {
       error = e.what();
     }
     {
       std::lock_guard lock(mutex_);
+      loading_ = 0;
       if (cell) {
         store(id, std::move(cell));
       } else {

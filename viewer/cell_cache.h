@@ -45,7 +45,8 @@ class CellCache {
   // The decoded cell if cached (a hit), else nullptr and the cell is queued
   // first (a miss). Never blocks on loading.
   std::shared_ptr<const DecodedCell> get(std::int64_t id);
-  // Waits until the cell is cached or has failed; nullptr when it failed.
+  // Waits until the cell is cached or has failed (queueing it again if
+  // another load evicted it first); nullptr when it failed.
   std::shared_ptr<const DecodedCell> get_blocking(std::int64_t id);
   // Queues cells to load behind any requested ones (already cached: ignored).
   void prefetch(const std::vector<std::int64_t>& ids);
@@ -68,7 +69,8 @@ class CellCache {
   std::map<std::int64_t, std::list<std::int64_t>::iterator> recency_;
   std::list<std::int64_t> lru_;  // front = most recent
   std::map<std::int64_t, std::string> failures_;
-  std::set<std::int64_t> missing_;  // failed because absent: retried once the index shows them done
+  std::set<std::int64_t> missing_;  // failed because absent or not baked: retried once the index shows them done
+  std::int64_t loading_ = 0;        // the cell the loader thread is reading (0: none)
   std::shared_ptr<const CellIndex> index_;
   CellCacheStats stats_;
   bool stop_ = false;
