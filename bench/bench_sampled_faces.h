@@ -21,6 +21,7 @@
 #include "stages/background_fill.h"
 #include "stages/encode.h"
 #include "storage/geometry_store.h"
+#include "viewer/image_metrics.h"
 
 namespace cellbake {
 
@@ -86,36 +87,10 @@ inline double psnr(double sq_error, double samples) {
   return sq_error <= 0 ? 99.0 : 10 * std::log10(255.0 * 255.0 * samples / sq_error);
 }
 
-// Mean SSIM (Wang et al. 2004, as viewer/image_metrics: 8x8 uniform windows of
-// Rec.601 luma, C1 = (0.01*255)^2, C2 = (0.03*255)^2) over the windows at a
-// stride of 4 pixels that lie wholly on covered pixels; 1 when there is none.
+// SSIM over the face's covered pixels (viewer/image_metrics masked_ssim:
+// 8x8 windows wholly on covered pixels); NaN when there is no such window.
 inline double covered_ssim(const SampledFace& f, const std::vector<Rgba8>& decoded) {
-  const int n = f.size, w = 8, stride = 4;
-  auto luma = [](const Rgba8& c) { return 0.299 * c.r + 0.587 * c.g + 0.114 * c.b; };
-  const double c1 = (0.01 * 255) * (0.01 * 255), c2 = (0.03 * 255) * (0.03 * 255);
-  double sum = 0;
-  std::size_t windows = 0;
-  for (int y0 = 0; y0 + w <= n; y0 += stride)
-    for (int x0 = 0; x0 + w <= n; x0 += stride) {
-      double sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
-      bool all = true;
-      for (int y = y0; y < y0 + w && all; ++y)
-        for (int x = x0; x < x0 + w; ++x) {
-          const std::size_t i = std::size_t(y) * std::size_t(n) + std::size_t(x);
-          if (!f.covered[i]) {
-            all = false;
-            break;
-          }
-          const double a = luma(f.color[i]), b = luma(decoded[i]);
-          sa += a, sb += b, saa += a * a, sbb += b * b, sab += a * b;
-        }
-      if (!all) continue;
-      const double k = w * w, ma = sa / k, mb = sb / k;
-      const double va = saa / k - ma * ma, vb = sbb / k - mb * mb, cov = sab / k - ma * mb;
-      sum += ((2 * ma * mb + c1) * (2 * cov + c2)) / ((ma * ma + mb * mb + c1) * (va + vb + c2));
-      ++windows;
-    }
-  return windows ? sum / double(windows) : 1.0;
+  return masked_ssim(decoded, f.color, f.size, f.size, f.covered);
 }
 
 }  // namespace cellbake
