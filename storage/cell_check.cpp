@@ -43,7 +43,8 @@ std::string check_cell(const CellDb& db, std::int64_t id) {
   if (!row) return "not in the database";
   if (row->status == "failed") return "";
   if (row->status != "done") return "unknown status '" + row->status + "'";
-  // Face images are face_size x face_size; a face without triangles may hold a 1 x 1 one.
+  // Face images are face_size x face_size; a face without triangles holds none
+  // (kNoFaceImage) or, baked before encode version 4, a 1 x 1 one.
   int face_size = baked_face_size(db);
   for (const auto& s : row->samples) {
     const std::string at = "sample " + std::to_string(s.index);
@@ -53,6 +54,16 @@ std::string check_cell(const CellDb& db, std::int64_t id) {
       return at + " has " + std::to_string(s.faces.size()) + " faces (6 expected, one per cube face)";
     for (const auto& f : s.faces) {
       const std::string face = at + " face " + std::to_string(f.face);
+      if (f.image_format == kNoFaceImage) {
+        if (!f.image.empty()) return face + ": an image blob for a face that stores none";
+        if (f.triangles != 0) return face + ": " + std::to_string(f.triangles) + " triangles but no image";
+      }
+      try {
+        decode_face_mesh(f.mesh);
+      } catch (const std::exception& e) {
+        return face + " mesh: " + e.what();
+      }
+      if (f.image_format == kNoFaceImage) continue;
       DecodedImage image;
       try {
         image = decode_image(f.image);
@@ -64,11 +75,6 @@ std::string check_cell(const CellDb& db, std::int64_t id) {
         if (image.width != face_size || image.height != face_size)
           return face + " image: " + std::to_string(image.width) + "x" + std::to_string(image.height) + ", not " +
                  std::to_string(face_size) + "x" + std::to_string(face_size);
-      }
-      try {
-        decode_face_mesh(f.mesh);
-      } catch (const std::exception& e) {
-        return face + " mesh: " + e.what();
       }
     }
   }

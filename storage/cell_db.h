@@ -24,10 +24,14 @@ struct NearChunkRow {
   bool whole = false;
 };
 
+// The image format of a face without triangles (nothing of it is drawn): its
+// image blob is empty. Cells baked before encode version 4 hold a 1 x 1 image.
+inline constexpr const char* kNoFaceImage = "none";
+
 struct FaceRow {
   int face = 0;                      // 0..5, cube_map.h order
-  std::string image_format;          // "jpeg" | "webp" | "png"
-  std::vector<std::uint8_t> image;   // encoded colour image
+  std::string image_format;          // "jpeg" | "webp" | "png" | "avif" | "jxl"; kNoFaceImage: none stored
+  std::vector<std::uint8_t> image;   // encoded colour image (empty for kNoFaceImage)
   std::vector<std::uint8_t> mesh;    // encoded FaceMesh (stages/encode.h)
   std::uint32_t triangles = 0;
   double boundary_error_px = 0;         // measured max screen-space movement of outlines (silhouettes, skins, borders)

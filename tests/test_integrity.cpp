@@ -21,6 +21,7 @@
 #include "storage/cell_db_lock.h"
 #include "storage/sqlite_db.h"
 #include "tests/fixture_room_obj.h"
+#include "viewer/decoded_cell.h"
 #include "tests/test_support.h"
 
 namespace cellbake {
@@ -192,6 +193,59 @@ TEST_F(Integrity, CutOrWrongSizedFaceImagesAreDamagedThoughTheHashIsRestamped) {
   }
   EXPECT_EQ(check_cell(cells, 6), "sample 0 face 4 image: 16x16, not 32x32");
   EXPECT_EQ(check_cell(cells, 7), "");
+}
+
+TEST_F(Integrity, FacesWithoutTrianglesStoreNoImageAndAreCheckedForIt) {
+  // A bake: every face without triangles stores kNoFaceImage and an empty blob, the others an image.
+  ASSERT_EQ(bake("baked.db").exit_code, 0);
+  {
+    CellDb baked(db("baked.db"), CellDb::Mode::read_only);
+    std::size_t none = 0;
+    for (std::int64_t id : baked.cell_ids()) {
+      const std::optional<CellRow> row = baked.get_cell(id, true);
+      ASSERT_TRUE(row);
+      for (const SampleRow& s : row->samples)
+        for (const FaceRow& f : s.faces) {
+          EXPECT_EQ(f.image_format == kNoFaceImage, f.triangles == 0) << "cell " << id << " face " << f.face;
+          EXPECT_EQ(f.image.empty(), f.triangles == 0) << "cell " << id << " face " << f.face;
+          none += f.image_format == kNoFaceImage;
+        }
+    }
+    EXPECT_GT(none, 0u);
+  }
+  // Sound, and the two ways such a face can be damaged (restamped: only the check tells).
+  const std::vector<Rgba8> pixels(32 * 32, Rgba8{90, 120, 150, 255});
+  {
+    CellDb cells(db("cells.db"), CellDb::Mode::read_write);
+    for (std::int64_t id = 1; id <= 3; ++id) {
+      CellRow c = sound_cell(id);
+      for (FaceRow& f : c.samples[0].faces) f.image_format = "png", f.image = encode_image(pixels, 32, 32, {"png", 80});
+      FaceRow& empty = c.samples[0].faces[2];
+      empty.image_format = kNoFaceImage;
+      empty.image.clear();
+      empty.mesh = encode_face_mesh(FaceMesh{}, MeshEncodeParams{});
+      empty.triangles = 0;
+      if (id == 2) empty.image = {1, 2, 3};
+      if (id == 3) empty.triangles = 5;
+      c.content_hash = cell_content_hash(c);
+      cells.put_cell(c);
+    }
+  }
+  CellDb cells(db("cells.db"), CellDb::Mode::read_only);
+  EXPECT_EQ(check_cell(cells, 1), "");
+  EXPECT_EQ(check_cell(cells, 2), "sample 0 face 2: an image blob for a face that stores none");
+  EXPECT_EQ(check_cell(cells, 3), "sample 0 face 2: 5 triangles but no image");
+  EXPECT_NO_THROW(decode_cell(*cells.get_cell(1, true)));
+  for (std::int64_t id : {2, 3}) {
+    try {
+      decode_cell(*cells.get_cell(id, true));
+      ADD_FAILURE() << "cell " << id << " decoded";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("cell " + std::to_string(id) + " sample 0 face 2: stores no image"),
+                std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 TEST_F(Integrity, StatusCheckListsACellWithAHalvedJpegAndRepairRedoesIt) {

@@ -129,6 +129,20 @@ DecodedCell decode_cell(const CellRow& row, const ChunkSource* source) {
     for (const FaceRow& f : s.faces) {
       const std::string face = where + " sample " + std::to_string(s.index) + " face " + std::to_string(f.face);
       if (f.face < 0 || f.face >= kCubeFaces) throw std::runtime_error(face + ": face index out of range");
+      if (f.image_format == kNoFaceImage) {  // nothing of this face is drawn
+        std::size_t triangles = 0;
+        try {
+          triangles = decode_face_mesh(f.mesh).triangle_count();
+        } catch (const std::exception& e) {
+          throw std::runtime_error(face + ": " + e.what());
+        }
+        if (!f.image.empty() || f.triangles != 0 || triangles != 0)
+          throw std::runtime_error(face + ": stores no image but " +
+                                   (f.image.empty() ? std::to_string(std::max<std::size_t>(f.triangles, triangles)) +
+                                                          " triangles"
+                                                    : "an image blob"));
+        continue;
+      }
       DecodedFace d;
       d.sample = s.index;
       d.face = f.face;
