@@ -423,7 +423,7 @@ void run_encode(CellWork& work, const BakeConfig& config) {
       fr.face = f;
       fr.image_format = config.image_format;
       if (s.simplified[f].triangle_count() > 0) {
-        fill_background_colors(face);
+        fill_unread_colors(face, s.simplified[f]);
         fr.image = encode_image(face.color, face.size, face.size, ip);
       } else {
         // Nothing of this face is drawn (sky, or geometry stands in for all

@@ -34,7 +34,7 @@ struct StageVersions {
   static constexpr int sample = 4;      // 3: several samples per cell (initial set + best-next-view); 4: lit ([shading])
   static constexpr int depth_mesh = 2;  // 2: delta scans lose the pixels their ancestors hold
   static constexpr int simplify = 3;
-  static constexpr int encode = 4;      // 2: background texels filled from their covered neighbours; 3: grid mesh codec, avif; 4: faces without triangles store no image
+  static constexpr int encode = 4;      // 2: background texels filled from their covered neighbours; 3: grid mesh codec, avif; 4: faces without triangles store no image, texels no kept triangle reads filled like background
   static constexpr int far_choice = 4;  // 1: exact far geometry per face tile where it is cheaper (issue #13); 2: depth-mesh triangles spanning geometry tiles dropped too; 3: seen triangles stored as numbers into the store's chunk; 4: faces drawn wholly as geometry are not meshed (their stored errors are 0, replaced_triangles counts meshed faces only)
 };
 

@@ -4,7 +4,10 @@
 #include "stages/background_fill.h"
 
 #include <cmath>
+#include <cstdint>
 #include <vector>
+
+#include "stages/texel_footprint.h"
 
 namespace cellbake {
 namespace {
@@ -15,11 +18,10 @@ struct Level {
   std::vector<float> weight;  // 0..1 coverage
 };
 
-}  // namespace
-
-void fill_background_colors(CubeFace& face) {
+// Push-pull over `face.color`: pixels with keep[k] == 0 get the smooth
+// extension of the kept ones, alpha 0.
+void fill_unkept(CubeFace& face, const std::vector<std::uint8_t>& keep) {
   const int n = face.size;
-  if (n <= 0 || face.depth.size() != std::size_t(n) * n || face.color.size() != face.depth.size()) return;
   std::vector<Level> levels(1);
   Level& base = levels[0];
   base.size = n;
@@ -27,7 +29,7 @@ void fill_background_colors(CubeFace& face) {
   base.weight.assign(std::size_t(n) * n, 0.f);
   bool any = false, all = true;
   for (std::size_t k = 0; k < face.depth.size(); ++k) {
-    if (!std::isfinite(face.depth[k])) {
+    if (!keep[k]) {
       all = false;
       continue;
     }
@@ -77,10 +79,31 @@ void fill_background_colors(CubeFace& face) {
   const Level& top = levels[0];
   const auto byte = [](float v) { return static_cast<std::uint8_t>(std::lround(std::fmin(255.f, std::fmax(0.f, v)))); };
   for (std::size_t k = 0; k < face.depth.size(); ++k) {
-    if (std::isfinite(face.depth[k]) || top.weight[k] <= 0.f) continue;
+    if (keep[k] || top.weight[k] <= 0.f) continue;
     const float inv = 1.f / top.weight[k];
     face.color[k] = {byte(top.rgb[3 * k] * inv), byte(top.rgb[3 * k + 1] * inv), byte(top.rgb[3 * k + 2] * inv), 0};
   }
+}
+
+bool well_formed(const CubeFace& face) {
+  const int n = face.size;
+  return n > 0 && face.depth.size() == std::size_t(n) * n && face.color.size() == face.depth.size();
+}
+
+}  // namespace
+
+void fill_background_colors(CubeFace& face) {
+  if (!well_formed(face)) return;
+  std::vector<std::uint8_t> keep(face.depth.size());
+  for (std::size_t k = 0; k < keep.size(); ++k) keep[k] = std::isfinite(face.depth[k]) ? 1 : 0;
+  fill_unkept(face, keep);
+}
+
+void fill_unread_colors(CubeFace& face, const FaceMesh& mesh) {
+  if (!well_formed(face)) return;
+  std::vector<std::uint8_t> keep = texels_read_by(mesh, face.size);
+  for (std::size_t k = 0; k < keep.size(); ++k) keep[k] = keep[k] && std::isfinite(face.depth[k]) ? 1 : 0;
+  fill_unkept(face, keep);
 }
 
 }  // namespace cellbake

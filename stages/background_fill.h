@@ -16,4 +16,11 @@ namespace cellbake {
 // changed. A face without covered pixels is left as it is. Deterministic.
 void fill_background_colors(CubeFace& face);
 
+// The same for every pixel `mesh` (the face's textured depth mesh as drawn)
+// does not read (stages/texel_footprint.h) — background, and covered pixels
+// no triangle textures from, e.g. in tiles drawn as exact geometry — so the
+// image codec spends its bytes on the pixels a viewer can show. The pixels
+// the mesh reads keep their colours exactly.
+void fill_unread_colors(CubeFace& face, const FaceMesh& mesh);
+
 }  // namespace cellbake
