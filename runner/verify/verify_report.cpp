@@ -398,7 +398,9 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
   // here, so use the database's up from params when given, else z).
   const std::string up = input.params.value("up", std::string("z"));
   const int a = up == "y" ? 2 : 0, b = up == "y" ? 0 : 1;  // y up: plan (z, x); z up: plan (x, y)
-  CellMap map{"Cell map: median PSNR per cell", "median PSNR (dB)", true, 720, {}};
+  CellMap map;
+  map.title = "Cell map: median PSNR per cell";
+  map.value_label = "median PSNR (dB)";
   map.scale_worst = kVerifyPsnrRed, map.scale_best = kVerifyPsnrGreen, map.scale_unit = " dB";
   std::vector<const VerifyCellResult*> order;
   for (const auto& c : cells) order.push_back(&c);
