@@ -13,6 +13,7 @@
 #include "pipeline/ingest.h"
 #include "storage/sqlite_db.h"
 #include "tests/fixture_room_obj.h"
+#include "tests/fixture_box_store.h"
 #include "tests/test_support.h"
 #include "viewer/cell_cache.h"
 
@@ -24,17 +25,7 @@ using namespace std::chrono_literals;
 // A 4 x 4 x 3 m box with a pillar, and a 2 x 2 grid of 1.5 m cells (ids 1..4) baked small.
 class CellCacheTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    std::ostringstream o;
-    int next = 1;
-    test::obj_box(o, next, {0, 0, 0}, {4, 4, 3}, 40);
-    test::obj_box(o, next, {1.8, 1.8, 0}, {2.2, 2.2, 3}, 1);
-    test::write_text(dir_ / "box.obj", o.str());
-    ingest_models({dir_ / "box.obj"}, dir_ / "s.db", IngestParams{},
-                  [](std::size_t n, const std::function<void(std::size_t)>& fn) {
-                    for (std::size_t i = 0; i < n; ++i) fn(i);
-                  });
-  }
+  void SetUp() override { test::ingest_box_with_pillar(dir_.path()); }
   std::filesystem::path db() const { return dir_ / "cells.db"; }
   void bake(const std::string& extra = "") {
     const auto r = test::run_cellbake("bake --store " + (dir_ / "s.db").string() +

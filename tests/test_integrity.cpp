@@ -22,6 +22,7 @@
 #include "storage/sqlite_db.h"
 #include "tests/fixture_room_obj.h"
 #include "viewer/decoded_cell.h"
+#include "tests/fixture_box_store.h"
 #include "tests/test_support.h"
 
 namespace cellbake {
@@ -31,17 +32,7 @@ namespace {
 // 1.5 m cells in it (ids 1..4), baked small.
 class Integrity : public ::testing::Test {
  protected:
-  void SetUp() override {
-    std::ostringstream o;
-    int next = 1;
-    test::obj_box(o, next, {0, 0, 0}, {4, 4, 3}, 40);  // a far field worth sampling (not drawn as geometry)
-    test::obj_box(o, next, {1.8, 1.8, 0}, {2.2, 2.2, 3}, 1);
-    test::write_text(dir_ / "box.obj", o.str());
-    ingest_models({dir_ / "box.obj"}, dir_ / "s.db", IngestParams{},
-                  [](std::size_t n, const std::function<void(std::size_t)>& fn) {
-                    for (std::size_t i = 0; i < n; ++i) fn(i);
-                  });
-  }
+  void SetUp() override { test::ingest_box_with_pillar(dir_.path()); }
   std::string db(const std::string& name) const { return (dir_ / name).string(); }
   test::CommandResult bake(const std::string& out, const std::string& extra = "") {
     return test::run_cellbake("bake --store " + db("s.db") + " --region=0.5,0.5,1,3.5,3.5,1 --cell-size 1.5 " +

@@ -16,6 +16,7 @@
 #include "pipeline/ingest.h"
 #include "storage/cell_db.h"
 #include "tests/fixture_room_obj.h"
+#include "tests/fixture_box_store.h"
 #include "tests/test_support.h"
 
 namespace cellbake {
@@ -51,17 +52,7 @@ double seconds_of(const std::string& args) {
 
 class KillResume : public ::testing::Test {
  protected:
-  void SetUp() override {
-    std::ostringstream o;
-    int next = 1;
-    test::obj_box(o, next, {0, 0, 0}, {4, 4, 3}, 40);
-    test::obj_box(o, next, {1.8, 1.8, 0}, {2.2, 2.2, 3}, 1);
-    test::write_text(dir_ / "box.obj", o.str());
-    ingest_models({dir_ / "box.obj"}, dir_ / "s.db", IngestParams{},
-                  [](std::size_t n, const std::function<void(std::size_t)>& fn) {
-                    for (std::size_t i = 0; i < n; ++i) fn(i);
-                  });
-  }
+  void SetUp() override { test::ingest_box_with_pillar(dir_.path()); }
   // The bake of 3 x 3 cells into `out` (extra: e.g. a shard).
   std::string bake_args(const std::string& out, const std::string& extra = "") const {
     return "bake --store " + (dir_ / "s.db").string() + " --region=0.5,0.5,1,3.5,3.5,1 --cell-size 1 " +
