@@ -427,7 +427,7 @@ void run_encode(CellWork& work, const BakeConfig& config) {
         fr.image = encode_image(face.color, face.size, face.size, ip);
       } else {
         // Nothing of this face is drawn (sky, or geometry stands in for all
-        // of it): no image (a 1 x 1 placeholder cost ~300 bytes in AVIF).
+        // of it): no image (encode version 3 stored a 1 x 1 one, ~300 bytes in AVIF).
         fr.image_format = kNoFaceImage;
       }
       if (config.mesh_codec == "grid") mp.face = f, mp.face_size = face.size;

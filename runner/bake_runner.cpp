@@ -248,7 +248,7 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
     source.activate();
     g.wait_for_all();
     tsan::after(&graph_done);
-    if (options.verbose && samplers.bvh_cache() && samplers.bvh_cache()->stats().builds + samplers.bvh_cache()->stats().hits > 0) {
+    if (options.verbose && samplers.bvh_cache()) {
       EmbreeSamplerStats total;
       for (const auto& sampler : thread_samplers)
         if (const auto* e = dynamic_cast<const EmbreeCubeSampler*>(sampler.get())) {
@@ -256,7 +256,7 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
           total.batches += e->stats().batches;
           total.groups_hidden += e->stats().groups_hidden;
         }
-      progress.line(describe_embree_work(samplers.bvh_cache()->stats(), total));
+      if (total.cube_maps > 0) progress.line(describe_embree_work(samplers.bvh_cache()->stats(), total));
     }
 #ifdef CELLBAKE_TSAN
     // Every graph task ends by decrementing the graph's wait count (in TBB's

@@ -435,11 +435,16 @@ TEST(ChunkBvhCache, BvhsHeldPastTheCacheAreReleasedSafely) {
   held.clear();  // scenes released after their cache
 }
 
+// An eye at standing height above the middle of the generated plant's floor.
+Vec3d plant_floor_eye(const ChunkSource& source) {
+  const Box3d model = source.model_bounds();
+  return {model.center().x, model.center().y, model.lo.z + 1.7};
+}
+
 TEST(ChunkBvhCache, GroupSizeChangesNoPixel) {
   const auto owned = generated_plant();
   const InMemoryChunkSource& source = *owned;
-  const Box3d model = source.model_bounds();
-  const Vec3d eye{model.center().x, model.center().y, model.lo.z + 1.7};
+  const Vec3d eye = plant_floor_eye(source);
   const Box3d cull = Box3d::cube(eye, 3.0);
   std::vector<CubeSample> results;
   std::vector<std::size_t> groups;
@@ -450,7 +455,7 @@ TEST(ChunkBvhCache, GroupSizeChangesNoPixel) {
     results.push_back(sampler.sample(eye, cull, params(64), source));
     groups.push_back(sampler.cache().stats().groups);
   }
-  EXPECT_EQ(groups[0], source.query(model).size());
+  EXPECT_EQ(groups[0], source.query(source.model_bounds()).size());
   EXPECT_LT(groups[1], groups[0]);
   EXPECT_GT(groups[1], 1u);
   EXPECT_EQ(groups[2], 1u);
@@ -531,8 +536,7 @@ void expect_same_cube(const CubeSample& a, const CubeSample& b, const std::strin
 TEST(EmbreeBatches, GroupsBeyondHalfTheCapAreTracedInBatchesWithTheSamePixels) {
   const auto owned = generated_plant();
   const InMemoryChunkSource& source = *owned;
-  const Box3d model = source.model_bounds();
-  const Vec3d eye{model.center().x, model.center().y, model.lo.z + 1.7};
+  const Vec3d eye = plant_floor_eye(source);
   const Box3d cull = Box3d::cube(eye, 3.0);
   ChunkBvhCacheParams roomy, tight;
   roomy.group_triangles = tight.group_triangles = 20000;

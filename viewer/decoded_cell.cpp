@@ -136,11 +136,10 @@ DecodedCell decode_cell(const CellRow& row, const ChunkSource* source) {
         } catch (const std::exception& e) {
           throw std::runtime_error(face + ": " + e.what());
         }
-        if (!f.image.empty() || f.triangles != 0 || triangles != 0)
-          throw std::runtime_error(face + ": stores no image but " +
-                                   (f.image.empty() ? std::to_string(std::max<std::size_t>(f.triangles, triangles)) +
-                                                          " triangles"
-                                                    : "an image blob"));
+        if (!f.image.empty()) throw std::runtime_error(face + ": stores no image but an image blob");
+        if (f.triangles != 0 || triangles != 0)
+          throw std::runtime_error(face + ": stores no image but " + std::to_string(std::max<std::size_t>(f.triangles, triangles)) +
+                                   " triangles");
         continue;
       }
       DecodedFace d;
