@@ -10,7 +10,7 @@
 // included) and the process's peak RSS.
 //
 //   CELLBAKE_BENCH_STORE=/tmp/h1/plant.store.db build/bench/bench_raycast_raw [face_size=512] [repetitions=5]
-//     [robust|fast] [low|medium|high] [group_triangles] [flat]
+//     [robust|fast|compact] [low|medium|high] [group_triangles] [flat]
 // (CELLBAKE_BENCH_EYES="x,y,z;..." picks the eyes, as for bench_sample). The
 // third and fourth arguments pick the chunk scenes' flags and build quality
 // (default: fast = not robust, medium, as the sampler), the fifth the triangles per chunk
@@ -194,7 +194,9 @@ int run(int argc, char** argv) {
   const std::string flags = argc > 3 ? argv[3] : "fast", quality = argc > 4 ? argv[4] : "medium";
   const bool flat = argc > 6 && std::string(argv[6]) == "flat";
   if (argc > 5) cache_params.group_triangles = std::size_t(std::atoll(argv[5]));
-  cache_params.scene_flags = flags == "robust" ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE;
+  cache_params.scene_flags = flags == "robust"    ? RTC_SCENE_FLAG_ROBUST
+                            : flags == "compact" ? RTC_SCENE_FLAG_COMPACT
+                                                 : RTC_SCENE_FLAG_NONE;
   cache_params.build_quality = quality == "high"  ? RTC_BUILD_QUALITY_HIGH
                                : quality == "low" ? RTC_BUILD_QUALITY_LOW
                                                   : RTC_BUILD_QUALITY_MEDIUM;

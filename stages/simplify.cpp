@@ -107,7 +107,8 @@ class TinSimplifier {
   // Greedy insertion, worst violation first (Garland & Heckbert 1995). Returns
   // the triangles (dense vertex ids, three per triangle).
   std::vector<std::uint32_t> run() {
-    if (!built_) build();
+    if (!triangulated_) triangulate();
+    if (!queued_) queue_all();
     for (;;) {
       while (!queue_.empty() && stale(queue_.front())) pop();
       if (queue_.empty()) break;
@@ -145,7 +146,7 @@ class TinSimplifier {
   // Triangles of the constrained triangulation of the outlines and face
   // borders alone: a lower bound on the result's size.
   std::size_t outline_triangles() {
-    if (!built_) build();
+    if (!triangulated_) triangulate();  // no queue yet: a caller may drop this simplifier for a looser one
     return labelled_faces_;
   }
 
@@ -242,10 +243,17 @@ class TinSimplifier {
     return v;
   }
 
+  // Triangulates the constraints and queues every violating face.
+  void build() {
+    triangulate();
+    queue_all();
+  }
+
   // Triangulates the fixed and outline constraints (all end points inserted
   // at once, spatially sorted, then the constraints between them), re-inserts
-  // the Steiner points, labels the components and queues every violating face.
-  void build() {
+  // the Steiner points and labels the components; the queue is left empty.
+  void triangulate() {
+    queued_ = false;
     cdt_.clear();
     owners_.clear();
     queue_.clear();
@@ -278,13 +286,18 @@ class TinSimplifier {
     for (const LatticePoint& p : steiner_) insert_steiner(p);
     label_components();
     labelled_faces_ = 0;
-    std::vector<Cdt::Face_handle> faces;
-    for (auto f = cdt_.finite_faces_begin(); f != cdt_.finite_faces_end(); ++f) {
+    for (auto f = cdt_.finite_faces_begin(); f != cdt_.finite_faces_end(); ++f)
       if (f->info().label >= 0) ++labelled_faces_;
-      faces.push_back(f);
-    }
+    triangulated_ = true;
+  }
+
+  // Queues every violating face of the triangulation (evaluating a face scans
+  // the lattice points it covers: the whole face in all, the costly part).
+  void queue_all() {
+    std::vector<Cdt::Face_handle> faces;
+    for (auto f = cdt_.finite_faces_begin(); f != cdt_.finite_faces_end(); ++f) faces.push_back(f);
     for (const Cdt::Face_handle& f : faces) enqueue(f);
-    built_ = true;
+    queued_ = true;
   }
 
   // Components of finite faces joined across unconstrained edges; each takes
@@ -544,7 +557,7 @@ class TinSimplifier {
   double eps_;
   std::size_t cap_;
   double ceiling_;
-  bool built_ = false;
+  bool triangulated_ = false, queued_ = false;
   std::size_t labelled_faces_ = 0;       // triangles of the mesh (faces with a region)
   double bound_used_ = 0, unresolved_ = 0;
   std::vector<std::int32_t> interior_region_;  // per lattice point off the outlines: its region, or -1
