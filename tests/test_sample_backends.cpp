@@ -435,6 +435,30 @@ TEST(ChunkBvhCache, BvhsHeldPastTheCacheAreReleasedSafely) {
   held.clear();  // scenes released after their cache
 }
 
+TEST(ChunkBvhCache, BatchedBvhsAreCachedApartFromTheOthers) {
+  // A cube map traced in batches builds its groups at batch_build_quality; a
+  // BVH built for one kind of cube map is never handed to the other, so the
+  // order in which threads' cube maps ran cannot change what one traces.
+  const auto owned = room({0, 0, 0}, 3);
+  const InMemoryChunkSource& source = *owned;
+  const std::vector<ChunkRef> refs = source.query(source.model_bounds());
+  auto cache = std::make_shared<ChunkBvhCache>(one_chunk_per_group());
+  const auto whole = cache->acquire(refs, source);
+  const auto batched = cache->acquire(refs, source, true);
+  ASSERT_EQ(whole.size(), refs.size());
+  ASSERT_EQ(batched.size(), refs.size());
+  for (std::size_t i = 0; i < refs.size(); ++i) EXPECT_NE(whole[i]->scene, batched[i]->scene);
+  EXPECT_EQ(cache->stats().builds, 2 * refs.size());
+  const auto again = cache->acquire(refs, source, true);
+  for (std::size_t i = 0; i < refs.size(); ++i) EXPECT_EQ(again[i]->scene, batched[i]->scene);
+  EXPECT_EQ(cache->stats().builds, 2 * refs.size());
+  EXPECT_EQ(cache->stats().cached_groups, 2 * refs.size());
+  const std::vector<ChunkGroupRefs> groups = cache->groups_of(refs, source);
+  ASSERT_FALSE(groups.empty());
+  EXPECT_EQ(groups[0].estimated_batch_bytes * kEstimatedBvhBytesPerTriangle,
+            groups[0].estimated_bytes * kEstimatedLowQualityBvhBytesPerTriangle);
+}
+
 // An eye at standing height above the middle of the generated plant's floor.
 Vec3d plant_floor_eye(const ChunkSource& source) {
   const Box3d model = source.model_bounds();

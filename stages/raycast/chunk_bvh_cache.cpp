@@ -157,7 +157,9 @@ std::vector<ChunkGroupRefs> ChunkBvhCache::groups_of(std::span<const ChunkRef> r
       ChunkGroupRefs g;
       g.group = group;
       g.bounds = group_bounds_[group];
-      g.estimated_bytes = std::size_t(group_triangles_[group]) * kEstimatedBvhBytesPerTriangle;
+      g.estimated_bytes = std::size_t(group_triangles_[group]) * estimated_bvh_bytes_per_triangle(params_.build_quality);
+      g.estimated_batch_bytes =
+          std::size_t(group_triangles_[group]) * estimated_bvh_bytes_per_triangle(params_.batch_build_quality);
       out.push_back(std::move(g));
     }
     out.back().refs.push_back(refs[index]);
@@ -165,8 +167,8 @@ std::vector<ChunkGroupRefs> ChunkBvhCache::groups_of(std::span<const ChunkRef> r
   return out;
 }
 
-std::shared_ptr<const ChunkGroupBvh> ChunkBvhCache::build(std::size_t group, const ChunkSource& source,
-                                                          std::size_t& chunk_bytes) {
+std::shared_ptr<const ChunkGroupBvh> ChunkBvhCache::build(std::size_t group, RTCBuildQuality quality,
+                                                          const ChunkSource& source, std::size_t& chunk_bytes) {
   const auto t0 = Clock::now();
   auto bvh = std::make_shared<ChunkGroupBvh>();
   Box3d bounds;
@@ -185,7 +187,7 @@ std::shared_ptr<const ChunkGroupBvh> ChunkBvhCache::build(std::size_t group, con
   bvh->scene = rtcNewScene(device_);
   if (!bvh->scene) check_device("rtcNewScene");
   rtcSetSceneFlags(bvh->scene, static_cast<RTCSceneFlags>(params_.scene_flags));
-  rtcSetSceneBuildQuality(bvh->scene, params_.build_quality);
+  rtcSetSceneBuildQuality(bvh->scene, quality);
   std::size_t triangles = 0;
   chunk_bytes = 0;
   for (std::size_t i = 0; i < bvh->chunks.size(); ++i) {
@@ -196,7 +198,7 @@ std::shared_ptr<const ChunkGroupBvh> ChunkBvhCache::build(std::size_t group, con
     triangles += count;
     RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
     if (!geometry) check_device("rtcNewGeometry");
-    rtcSetGeometryBuildQuality(geometry, params_.build_quality);
+    rtcSetGeometryBuildQuality(geometry, quality);
     // Embree's own buffers (it pads them for its 16-byte vector loads).
     auto* position_buffer = static_cast<float*>(
         rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertices));
@@ -234,7 +236,8 @@ std::shared_ptr<const ChunkGroupBvh> ChunkBvhCache::build(std::size_t group, con
 }
 
 std::vector<std::shared_ptr<const ChunkGroupBvh>> ChunkBvhCache::acquire(std::span<const ChunkRef> refs,
-                                                                         const ChunkSource& source) {
+                                                                         const ChunkSource& source, bool batched) {
+  const RTCBuildQuality quality = batched ? params_.batch_build_quality : params_.build_quality;
   partition(source);
   trim();
   std::vector<std::size_t> groups;
@@ -246,36 +249,36 @@ std::vector<std::shared_ptr<const ChunkGroupBvh>> ChunkBvhCache::acquire(std::sp
   // Claim and build one group at a time, so that concurrent callers walking
   // the same groups split the builds between them; wait only at the end.
   for (std::size_t i = 0; i < groups.size(); ++i) {
-    const std::size_t group = groups[i];
+    const std::size_t group = groups[i], key = slot_key(group, batched);
     std::promise<std::shared_ptr<const ChunkGroupBvh>> promise;
     {
       std::lock_guard lock(mutex_);
-      auto it = slots_.find(group);
+      auto it = slots_.find(key);
       if (it != slots_.end()) {
         lru_.splice(lru_.begin(), lru_, it->second.recency);
         results[i] = it->second.result;
         ++stats_.hits;
         continue;
       }
-      Slot& slot = slots_[group];
+      Slot& slot = slots_[key];
       slot.result = promise.get_future().share();
-      lru_.push_front(group);
+      lru_.push_front(key);
       slot.recency = lru_.begin();
       results[i] = slot.result;
     }
     std::size_t chunk_bytes = 0;
     try {
-      std::shared_ptr<const ChunkGroupBvh> bvh = build(group, source, chunk_bytes);
+      std::shared_ptr<const ChunkGroupBvh> bvh = build(group, quality, source, chunk_bytes);
       promise.set_value(std::move(bvh));
       std::lock_guard lock(mutex_);
-      Slot& slot = slots_.at(group);
+      Slot& slot = slots_.at(key);
       slot.built = true;
       slot.chunk_bytes = chunk_bytes;
       chunk_bytes_ += chunk_bytes;
     } catch (...) {
       promise.set_exception(std::current_exception());  // waiters see the error too
       std::lock_guard lock(mutex_);
-      auto it = slots_.find(group);
+      auto it = slots_.find(key);
       lru_.erase(it->second.recency);
       slots_.erase(it);
       throw;

@@ -67,6 +67,14 @@ struct ChunkBvhCacheParams {
   // its own); 1 makes every chunk its own group.
   std::size_t group_triangles = std::size_t{1} << 20;
   RTCBuildQuality build_quality = RTC_BUILD_QUALITY_MEDIUM;
+  // Quality of the BVHs a cube map traced in batches acquires. Batches exist
+  // because the model does not fit the cap, so their groups are dropped and
+  // rebuilt for nearly every cube map: the build, not the trace, is the cost.
+  // Embree's Morton builder (low) built 2 M triangles 2.8x faster than
+  // medium's binned SAH and traced 1.5x slower (docs/benchmarks.md). Cached
+  // apart from build_quality's BVHs of the same group, so which cube maps ran
+  // first never changes what a cube map traces.
+  RTCBuildQuality batch_build_quality = RTC_BUILD_QUALITY_LOW;
   // Embree scene flags of the group scenes. RTC_SCENE_FLAG_ROBUST would make
   // the ray/triangle test watertight; it cost 15 % in tracing on the 2 M plant
   // and changed no parity figure of tests/test_sample_backends.cpp, so it is off.
@@ -74,16 +82,23 @@ struct ChunkBvhCacheParams {
 };
 
 // What groups_of() assumes a group's BVH and chunks take per triangle before it
-// is built: Embree's device memory (84 B per triangle at medium quality) plus
-// the chunk attributes the cache keeps (23 B on the 2 M plant), rounded up
-// (docs/benchmarks.md "Sampling backends (issue #12)").
+// is built: Embree's device memory (84 B per triangle at medium quality, 110 B
+// at low, peak) plus the chunk attributes the cache keeps (23 B on the 2 M
+// plant), rounded up (docs/benchmarks.md "Sampling backends (issue #12)").
 constexpr std::size_t kEstimatedBvhBytesPerTriangle = 112;
+constexpr std::size_t kEstimatedLowQualityBvhBytesPerTriangle = 140;
+
+// kEstimatedBvhBytesPerTriangle, or the low-quality figure for RTC_BUILD_QUALITY_LOW.
+constexpr std::size_t estimated_bvh_bytes_per_triangle(RTCBuildQuality quality) {
+  return quality == RTC_BUILD_QUALITY_LOW ? kEstimatedLowQualityBvhBytesPerTriangle : kEstimatedBvhBytesPerTriangle;
+}
 
 // Some chunks of a cube map, by the group whose BVH holds them.
 struct ChunkGroupRefs {
   std::size_t group = 0;
   Box3d bounds;                  // of all the group's chunks
-  std::size_t estimated_bytes = 0;
+  std::size_t estimated_bytes = 0;        // of its BVH at ChunkBvhCacheParams::build_quality
+  std::size_t estimated_batch_bytes = 0;  // and at batch_build_quality
   std::vector<ChunkRef> refs;    // in the order given
 };
 
@@ -121,14 +136,15 @@ class ChunkBvhCache {
   // for the others, so threads that need the same groups build them in
   // parallel. Throws std::runtime_error for a malformed chunk (naming its
   // id), a chunk not in the model, load errors and Embree errors; a group
-  // whose build failed is not cached.
+  // whose build failed is not cached. `batched`: the BVHs of a cube map traced
+  // in batches (built at batch_build_quality, cached apart).
   std::vector<std::shared_ptr<const ChunkGroupBvh>> acquire(std::span<const ChunkRef> refs,
-                                                            const ChunkSource& source);
+                                                            const ChunkSource& source, bool batched = false);
 
   // The groups holding the chunks `refs`, in ascending group order, each
   // with the world bounds and estimated bytes of its whole BVH
-  // (kEstimatedBvhBytesPerTriangle times its chunks' triangles) and the refs
-  // among `refs` it holds. Partitions the model like acquire(); throws
+  // at both qualities (estimated_bvh_bytes_per_triangle times its chunks'
+  // triangles) and the refs among `refs` it holds. Partitions the model like acquire(); throws
   // std::runtime_error for a chunk not in the model.
   std::vector<ChunkGroupRefs> groups_of(std::span<const ChunkRef> refs, const ChunkSource& source);
   // What one cube map may hold at once: half the cap, so two threads' cube
@@ -156,7 +172,10 @@ class ChunkBvhCache {
 
   void partition(const ChunkSource& source);  // fills group_of_, members_, group_triangles_ and group_bounds_ once
   std::size_t group_of(std::int64_t chunk_id) const;  // throws for a chunk not in the model
-  std::shared_ptr<const ChunkGroupBvh> build(std::size_t group, const ChunkSource& source, std::size_t& chunk_bytes);
+  // A cached BVH: its group and whether it was built for batches.
+  static std::size_t slot_key(std::size_t group, bool batched) { return group * 2 + (batched ? 1 : 0); }
+  std::shared_ptr<const ChunkGroupBvh> build(std::size_t group, RTCBuildQuality quality, const ChunkSource& source,
+                                             std::size_t& chunk_bytes);
   void evict_beyond_cap();  // caller holds mutex_
   static bool monitor(void* self, ssize_t bytes, bool post);
 
@@ -170,8 +189,8 @@ class ChunkBvhCache {
   std::vector<std::vector<std::int64_t>> members_;          // group -> chunk ids
   std::vector<std::uint64_t> group_triangles_;              // group -> triangles of its chunks
   std::vector<Box3d> group_bounds_;                         // group -> bounds of its chunks
-  std::unordered_map<std::size_t, Slot> slots_;             // by group
-  std::list<std::size_t> lru_;
+  std::unordered_map<std::size_t, Slot> slots_;             // by slot_key
+  std::list<std::size_t> lru_;                              // slot keys
   std::size_t chunk_bytes_ = 0;
   ChunkBvhCacheStats stats_;  // counters; sizes filled in by stats()
 };

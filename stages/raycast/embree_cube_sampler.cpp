@@ -187,12 +187,12 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
         ++stats_.groups_hidden;
         continue;
       }
-      if (!one_batch && !batch.empty() && bytes + g.estimated_bytes > cache_->batch_bytes()) break;
+      if (!one_batch && !batch.empty() && bytes + g.estimated_batch_bytes > cache_->batch_bytes()) break;
       batch.insert(batch.end(), g.refs.begin(), g.refs.end());
-      bytes += g.estimated_bytes;
+      bytes += g.estimated_batch_bytes;
     }
     if (batch.empty()) break;
-    std::vector<std::shared_ptr<const ChunkGroupBvh>> bvhs = cache_->acquire(batch, source);
+    std::vector<std::shared_ptr<const ChunkGroupBvh>> bvhs = cache_->acquire(batch, source, !one_batch);
     stats_.gather_seconds += seconds_since(t0);
     t0 = Clock::now();
     const InstanceScene scene(*cache_, std::move(bvhs), eye);
