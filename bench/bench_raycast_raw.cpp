@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "bench/bench_store_eyes.h"
+#include "runner/heap_tuning.h"
 #include "stages/cube_map.h"
 #include "stages/cull_box.h"
 #include "stages/raycast/chunk_bvh_cache.h"
@@ -307,4 +308,7 @@ int run(int argc, char** argv) {
 }  // namespace
 }  // namespace cellbake
 
-int main(int argc, char** argv) { return cellbake::run(argc, argv); }
+int main(int argc, char** argv) {
+  cellbake::keep_large_blocks_in_the_heap();  // as cellbake does
+  return cellbake::run(argc, argv);
+}

@@ -34,6 +34,7 @@
 #include "stages/render/gl_context.h"
 #include "stages/cull_box.h"
 #include "stages/raycast/embree_cube_sampler.h"
+#include "runner/heap_tuning.h"
 #include "stages/sample.h"
 #include "storage/geometry_store.h"
 #include "tests/fixture_chunk_source.h"
@@ -231,4 +232,12 @@ BENCHMARK(BM_SampleStore)->Arg(512)->Arg(128)->Unit(benchmark::kMillisecond)->Me
 }  // namespace
 }  // namespace cellbake
 
-BENCHMARK_MAIN();
+// Google Benchmark's main, with the bake's allocator settings.
+int main(int argc, char** argv) {
+  cellbake::keep_large_blocks_in_the_heap();
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -1,8 +1,6 @@
 // The `cellbake` executable: subcommands for every job (see --help).
 #include <CLI/CLI.hpp>
 
-#include <malloc.h>
-
 #include <cstdio>
 #include <exception>
 #include <functional>
@@ -11,6 +9,7 @@
 
 #include "runner/commands.h"
 #include "runner/console.h"
+#include "runner/heap_tuning.h"
 
 namespace {
 
@@ -31,21 +30,10 @@ bool is_command(CLI::App& app, const std::string& word) {
   return false;
 }
 
-// glibc hands blocks above its (adaptive) mmap threshold back to the kernel
-// on free, and a bake frees and reallocates tens of megabytes per cube face
-// (cube maps, dense depth meshes, simplifier grids): the kernel then zeroes
-// every page again (1.25 M page faults, 4.7 s system time in a 63-cell demo
-// bake, docs/benchmarks.md). Keeping blocks up to 32 MiB (glibc's largest
-// threshold) in the heap and trimming it only past 512 MiB reuses them instead.
-void keep_large_blocks_in_the_heap() {
-  mallopt(M_MMAP_THRESHOLD, 32 << 20);
-  mallopt(M_TRIM_THRESHOLD, 512 << 20);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  keep_large_blocks_in_the_heap();
+  cellbake::keep_large_blocks_in_the_heap();
   CLI::App app{"cellbake: bake huge 3D models into a view-cell database (near field + textured depth meshes)"};
   app.set_version_flag("-V,--version", std::string("cellbake ") + CELLBAKE_VERSION);
   app.require_subcommand(1);

@@ -170,6 +170,7 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
     f.triangle.assign(pixels, 0);
   }
   std::unordered_map<std::int64_t, std::size_t> triangles_of;  // chunks hit: triangle counts
+  std::int64_t last_counted = -1;                               // the chunk last added to it
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -213,7 +214,10 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
         out.depth[p] = t;
         out.chunk[p] = hit.chunk->id;
         out.triangle[p] = hit.triangle;
-        triangles_of.try_emplace(hit.chunk->id, hit.chunk->triangle_count());
+        if (hit.chunk->id != last_counted) {  // coherent rays hit the same chunk in runs
+          triangles_of.try_emplace(hit.chunk->id, hit.chunk->triangle_count());
+          last_counted = hit.chunk->id;
+        }
         ++stats_.hits;
       };
       for (std::size_t start = 0; start < pixels; start += kStream) {
