@@ -82,7 +82,7 @@ struct ChunkBvhCacheParams {
 };
 
 // What groups_of() assumes a group's BVH and chunks take per triangle before it
-// is built: Embree's device memory (84 B per triangle at medium quality, 110 B
+// is built: Embree's device memory (84 B per triangle at medium quality, 116 B
 // at low, peak) plus the chunk attributes the cache keeps (23 B on the 2 M
 // plant), rounded up (docs/benchmarks.md "Sampling backends (issue #12)").
 constexpr std::size_t kEstimatedBvhBytesPerTriangle = 112;
