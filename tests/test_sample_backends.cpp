@@ -573,8 +573,11 @@ TEST(EmbreeBatches, GroupsBeyondHalfTheCapAreTracedInBatchesWithTheSamePixels) {
   EXPECT_GT(batched.stats().batches, 2u);
   EXPECT_EQ(batched.stats().batches, batched.cache().stats().builds);
   expect_same_cube(a, b, "generated plant");
-  // The tight cache held about one batch at a time.
-  EXPECT_LT(batched.cache().stats().peak_device_bytes, whole.cache().stats().peak_device_bytes / 2);
+  // The tight cache held about one batch at a time: its peak is about half
+  // the whole trace's (0.495-0.500 measured: the whole trace's peak varies
+  // with how many threads join Embree's builds), where one batch holding
+  // every group would peak above the whole trace (Morton BVHs are larger).
+  EXPECT_LT(double(batched.cache().stats().peak_device_bytes), 0.6 * double(whole.cache().stats().peak_device_bytes));
   EXPECT_LE(batched.cache().stats().cached_groups, 2u);
 }
 

@@ -199,15 +199,18 @@ std::shared_ptr<const ChunkGroupBvh> ChunkBvhCache::build(std::size_t group, RTC
     RTCGeometry geometry = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
     if (!geometry) check_device("rtcNewGeometry");
     rtcSetGeometryBuildQuality(geometry, quality);
-    // Embree's own buffers (it pads them for its 16-byte vector loads).
+    // Positions in Embree's own buffer (in the group frame; Embree pads it
+    // for its 16-byte vector loads). The index buffer is the chunk's own
+    // array, shared, not copied: the BVH holds the chunk for its lifetime,
+    // and index buffers need no padding.
     auto* position_buffer = static_cast<float*>(
         rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), vertices));
-    auto* index_buffer = static_cast<unsigned*>(
-        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), count));
-    if (!position_buffer || !index_buffer) {
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, chunk.indices.data(), 0,
+                               3 * sizeof(std::uint32_t), count);
+    if (const RTCError error = rtcGetDeviceError(device_); !position_buffer || error != RTC_ERROR_NONE) {
       rtcReleaseGeometry(geometry);
-      check_device("rtcSetNewGeometryBuffer");
-      throw std::runtime_error("embree: no buffers for chunk " + std::to_string(chunk.id));
+      throw std::runtime_error("embree: no buffers for chunk " + std::to_string(chunk.id) + " (error " +
+                               std::to_string(static_cast<int>(error)) + ")");
     }
     // Chunk frame -> group frame in double, rounded to float once: a vertex
     // that two chunks store at the same world position lands on the same
@@ -219,7 +222,6 @@ std::shared_ptr<const ChunkGroupBvh> ChunkBvhCache::build(std::size_t group, RTC
       position_buffer[3 * v + 1] = static_cast<float>(double(p.y) + d.y);
       position_buffer[3 * v + 2] = static_cast<float>(double(p.z) + d.z);
     }
-    std::memcpy(index_buffer, chunk.indices.data(), chunk.indices.size() * sizeof(std::uint32_t));
     rtcCommitGeometry(geometry);
     rtcAttachGeometryByID(bvh->scene, geometry, static_cast<unsigned>(i));
     rtcReleaseGeometry(geometry);
