@@ -82,9 +82,12 @@ struct ChunkBvhCacheParams {
 };
 
 // What groups_of() assumes a group's BVH and chunks take per triangle before it
-// is built: Embree's device memory (84 B per triangle at medium quality, 116 B
-// at low, peak) plus the chunk attributes the cache keeps (23 B on the 2 M
-// plant), rounded up (docs/benchmarks.md "Sampling backends (issue #12)").
+// is built: Embree's device memory plus the chunk attributes the cache keeps
+// (23 B on the 2 M plant), rounded up. Set when Embree held its own copy of
+// the index arrays (84 B per triangle at medium quality, 116 B at low, peak);
+// with the chunks' arrays shared, 72 B and 104 B, so these now overestimate by
+// 12 B, and cube maps go to batches a little early (docs/benchmarks.md
+// "Sampling backends (issue #12)").
 constexpr std::size_t kEstimatedBvhBytesPerTriangle = 112;
 constexpr std::size_t kEstimatedLowQualityBvhBytesPerTriangle = 140;
 
