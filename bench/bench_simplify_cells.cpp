@@ -105,7 +105,7 @@ int run(int argc, char** argv) {
   params.max_triangles = std::size_t(config.max_face_triangles);
 
   double ours_total = 0, meshopt_total = 0, worst_boundary = 0, worst_depth = 0;
-  std::size_t faces = 0, over_cap = 0, tris_total = 0;
+  std::size_t faces = 0, over_cap = 0, tris_total = 0, outline_total = 0, outline_above = 0;
   std::printf("%5s %4s %8s %7s %9s %9s %8s %6s %7s %9s %10s %9s %6s\n", "cell", "face", "dense", "ours", "ours_ms",
               "depth_err", "bnd_px", "flips", "mopt", "mopt_ms", "mopt_depth", "mopt_bnd", "flips");
   for (const CellSpec& cell : select_cells(enumerate_cells(config.regions, config.cell_size), args.cells)) {
@@ -147,6 +147,8 @@ int run(int argc, char** argv) {
       ours_total += ours;
       ++faces;
       tris_total += r.triangles_out;
+      outline_total += r.outline_triangles;
+      if (r.outline_triangles > r.triangles_out) ++outline_above;
       if (r.triangles_out > params.max_triangles) ++over_cap;
       worst_boundary = std::max(worst_boundary, r.achieved.max_boundary_error_px);
       worst_depth = std::max(worst_depth, r.achieved.max_depth_error_relative);
@@ -161,6 +163,9 @@ int run(int argc, char** argv) {
               "worst boundary %.2f px, worst depth %.4f\n",
               faces, ours_total, faces ? 1e3 * ours_total / faces : 0.0, meshopt_total,
               meshopt_total > 0 ? ours_total / meshopt_total : 0.0, tris_total, over_cap, worst_boundary, worst_depth);
+  std::printf("outline-only triangulations: %zu triangles, %.1f %% of the result (faces where that exceeds the "
+              "result: %zu)\n",
+              outline_total, tris_total ? 100.0 * double(outline_total) / double(tris_total) : 0.0, outline_above);
   return 0;
 }
 

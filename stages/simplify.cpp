@@ -625,11 +625,13 @@ SimplifyResult simplify_face_mesh(const FaceMesh& in, int face_size, const Simpl
     // When the outlines alone exceed the cap, the cap's looser bound applies
     // from the start, to their straightening too.
     if (tin->outline_triangles() > params.max_triangles && ceiling > eps) tin = simplifier(ceiling);
+    result.outline_triangles = tin->outline_triangles();
     tris = tin->run();
     eps = tin->bound_used();
   }
   result.mesh = compact(in, tris);
   result.triangles_out = result.mesh.triangle_count();
+  if (face_size < 4) result.outline_triangles = result.triangles_out;
   result.depth_error_bound_used = eps;
   result.cap_forced_larger_error = eps > params.depth_error_relative;
   if (params.measure_error)

@@ -45,6 +45,10 @@ struct SimplifyResult {
   FaceMesh mesh;  // vertices are a subset of the input's (bit-identical positions and uvs)
   std::size_t triangles_in = 0;
   std::size_t triangles_out = 0;
+  // Triangles of the outline-only triangulation refinement starts from (the
+  // outlines and face borders alone): a lower bound on triangles_out, known
+  // before the refinement, about half of the work, has run.
+  std::size_t outline_triangles = 0;
   double depth_error_bound_used = 0;    // interior bound of the final mesh (> params' when the cap stopped refinement)
   bool cap_forced_larger_error = false;  // the cap made us exceed depth_error_relative
   SimplifyError achieved;                // measured against the input (zero unless params.measure_error)

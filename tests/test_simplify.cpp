@@ -38,6 +38,7 @@ void expect_bounds(const SimplifyResult& r, double bound, int face) {
   EXPECT_EQ(r.achieved.flipped_triangles, 0u) << "face " << face;
   EXPECT_EQ(r.achieved.overlapping_samples, 0u) << "face " << face;
   EXPECT_EQ(r.triangles_out, r.mesh.triangle_count());
+  EXPECT_LE(r.outline_triangles, r.triangles_out) << "face " << face;  // a lower bound
 }
 
 AnalyticScene cluttered_room() {
