@@ -46,8 +46,8 @@ struct SimplifyResult {
   std::size_t triangles_in = 0;
   std::size_t triangles_out = 0;
   // Triangles of the outline-only triangulation refinement starts from (the
-  // outlines and face borders alone): a lower bound on triangles_out, known
-  // before the refinement, about half of the work, has run.
+  // outlines and face borders alone): a lower bound on triangles_out (the
+  // refinement only adds triangles), known before the refinement runs.
   std::size_t outline_triangles = 0;
   double depth_error_bound_used = 0;    // interior bound of the final mesh (> params' when the cap stopped refinement)
   bool cap_forced_larger_error = false;  // the cap made us exceed depth_error_relative
