@@ -238,11 +238,18 @@ void run_depth_mesh(CellWork& work, const BakeConfig& config) {
   }
 }
 
-const FaceMesh& face_mesh(CellWork& work, const BakeConfig& config, std::size_t sample, int face) {
+namespace {
+
+std::string face_where(std::size_t sample, int face) {
+  return "sample " + std::to_string(sample) + " face " + std::to_string(face) + ": ";
+}
+
+// The simplification of a face up to its outline triangulation (timed as the
+// depth_mesh and simplify stages).
+std::unique_ptr<FaceSimplification> start_face_simplification(CellWork& work, const BakeConfig& config,
+                                                              std::size_t sample, int face) {
   SampleWork& s = work.samples.at(sample);
-  const std::size_t f = std::size_t(face);
-  if (s.meshed.at(f)) return s.simplified[f];
-  const std::string where = "sample " + std::to_string(sample) + " face " + std::to_string(face) + ": ";
+  const std::string where = face_where(sample, face);
   FaceMesh dense;
   {
     const auto t0 = Clock::now();
@@ -261,14 +268,53 @@ const FaceMesh& face_mesh(CellWork& work, const BakeConfig& config, std::size_t 
   p.boundary_error_px = s.parent < 0 ? config.boundary_error_px : config.delta_boundary_error_px;
   p.max_triangles = static_cast<std::size_t>(config.max_face_triangles);
   p.measure_error = false;  // measured after the far choice, for the meshes kept (measure_kept_faces)
+  std::unique_ptr<FaceSimplification> started;
   try {
-    s.simplified[f] = simplify_face_mesh(dense, config.face_size, p).mesh;
+    started = std::make_unique<FaceSimplification>(std::move(dense), config.face_size, p);
   } catch (const std::exception& e) {
     throw StageError("simplify", where + e.what());
+  }
+  s.seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+  return started;
+}
+
+int pending_faces(const CellWork& work) {
+  int n = 0;
+  for (const SampleWork& s : work.samples)
+    for (const auto& p : s.pending) n += p != nullptr;
+  return n;
+}
+
+}  // namespace
+
+const FaceMesh& face_mesh(CellWork& work, const BakeConfig& config, std::size_t sample, int face) {
+  SampleWork& s = work.samples.at(sample);
+  const std::size_t f = std::size_t(face);
+  if (s.meshed.at(f)) return s.simplified[f];
+  std::unique_ptr<FaceSimplification> started = std::move(s.pending[f]);
+  if (!started) started = start_face_simplification(work, config, sample, face);
+  const auto t0 = Clock::now();
+  StageTimer timer(work, "simplify");
+  try {
+    SimplifyResult r = std::move(*started).finish();
+    s.simplified[f] = std::move(r.mesh);
+  } catch (const std::exception& e) {
+    throw StageError("simplify", face_where(sample, face) + e.what());
   }
   s.meshed[f] = 1;
   s.seconds += std::chrono::duration<double>(Clock::now() - t0).count();
   return s.simplified[f];
+}
+
+std::uint64_t face_mesh_bound(CellWork& work, const BakeConfig& config, std::size_t sample, int face) {
+  SampleWork& s = work.samples.at(sample);
+  const std::size_t f = std::size_t(face);
+  if (s.meshed.at(f)) return s.simplified[f].triangle_count();
+  if (!s.pending[f]) {
+    if (pending_faces(work) >= kMaxPendingFaces) return face_mesh(work, config, sample, face).triangle_count();
+    s.pending[f] = start_face_simplification(work, config, sample, face);
+  }
+  return s.pending[f]->outline_triangles();
 }
 
 namespace {
@@ -365,7 +411,10 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
                               config.far_geometry_factor,
                               [&](std::size_t sample, int face) -> const FaceMesh& {
                                 return face_mesh(work, config, sample, face);
-                              });
+                              },
+                              [&](std::size_t sample, int face) { return face_mesh_bound(work, config, sample, face); });
+  for (SampleWork& s : work.samples)  // bounded faces the choice never meshed: drawn wholly as geometry
+    for (auto& p : s.pending) p.reset();
   drop_replaced_and_measure_kept(work, config);
   work.far_chunks.clear();
   // The row's far geometry: whole chunks by reference, seen triangles by their

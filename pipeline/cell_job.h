@@ -11,6 +11,7 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -21,6 +22,7 @@
 #include "stages/cube_map.h"
 #include "stages/cull_box.h"
 #include "stages/far_choice.h"
+#include "stages/simplify.h"
 #include "storage/cell_db.h"
 
 namespace cellbake {
@@ -59,6 +61,9 @@ struct SampleWork {
   double seconds = 0;                     // this sample's share of the bake (render + redundancy + mesh + simplify + encode)
   std::array<char, kCubeFaces> meshed{};  // face meshed and simplified (face_mesh), else `simplified` is empty
   std::array<FaceMesh, kCubeFaces> simplified;
+  // Faces bounded but not meshed yet (face_mesh_bound): their simplification
+  // up to the outline triangulation, finished by face_mesh.
+  std::array<std::unique_ptr<FaceSimplification>, kCubeFaces> pending;
   std::array<double, kCubeFaces> boundary_error_px{};
   std::array<double, kCubeFaces> depth_error{};
 };
@@ -91,6 +96,13 @@ void run_depth_mesh(CellWork& work, const BakeConfig& config);
 // throws StageError naming the stage), then kept in SampleWork::simplified.
 // Its error is measured later, only if the far choice keeps some of it.
 const FaceMesh& face_mesh(CellWork& work, const BakeConfig& config, std::size_t sample, int face);
+// A lower bound on face_mesh's triangles for that face: the simplification's
+// outline-only triangulation (SimplifyResult::outline_triangles), kept in
+// SampleWork::pending so that face_mesh finishes it rather than starting over.
+// At most kMaxPendingFaces faces of a cell wait so (tens of MB each); beyond
+// that the face is meshed whole and its exact count returned.
+std::uint64_t face_mesh_bound(CellWork& work, const BakeConfig& config, std::size_t sample, int face);
+inline constexpr int kMaxPendingFaces = 8;
 // Chooses exact far geometry or depth meshes per face tile and drops the
 // depth-mesh triangles that geometry replaces (stages/far_choice.h); meshes
 // and simplifies only the faces the choice depends on (a face drawn wholly as

@@ -9,6 +9,7 @@ namespace cellbake {
 namespace {
 
 constexpr int kAllTiles = kCubeFaces * kFarTilesPerFace;
+constexpr std::uint32_t kFaceTiles = (1u << kFarTilesPerFace) - 1;
 
 // max over the box of w . p
 double max_dot(const Vec3d& w, const Box3d& b) {
@@ -110,21 +111,38 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
 FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
                            std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor,
                            const FarChoiceMeshSource& mesh_source) {
+  return choose_far_field(eyes, far_chunks, samples, mode, geometry_factor, mesh_source, FarChoiceBoundSource{});
+}
+
+FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
+                           std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor,
+                           const FarChoiceMeshSource& mesh_source, const FarChoiceBoundSource& bound_source) {
   FarChoice out;
   // What each tile would drop: its depth-mesh triangles, counted from the
   // meshes known so far. Triangles spanning tiles are dropped only when all
   // the tiles they reach take geometry (not counted as any tile's gain).
   std::vector<std::uint64_t> removable(kAllTiles, 0);
-  std::array<std::vector<std::uint32_t>, kCubeFaces> spanning;  // per face: the tiles of each spanning triangle
+  // Per face: how many spanning triangles reach each set of tiles (sorted by
+  // tile set), and the union of those sets.
+  std::array<std::vector<std::pair<std::uint32_t, std::uint64_t>>, kCubeFaces> spanning;
+  std::array<std::uint32_t, kCubeFaces> spanned_tiles{};
   std::vector<std::array<char, kCubeFaces>> known(samples.size());
   std::array<int, kCubeFaces> missing{};  // per face: samples whose mesh is not known yet
   const auto count_mesh = [&](int f, const FaceMesh& m) {
+    auto& sets = spanning[std::size_t(f)];
     for (std::size_t t = 0; t < m.triangle_count(); ++t) {
       const int tile = triangle_tile(m, t);
-      if (tile < 0)
-        spanning[std::size_t(f)].push_back(triangle_tile_mask(m, t));
-      else
+      if (tile >= 0) {
         ++removable[std::size_t(f * kFarTilesPerFace + tile)];
+        continue;
+      }
+      const std::uint32_t tiles = triangle_tile_mask(m, t);
+      spanned_tiles[std::size_t(f)] |= tiles;
+      const auto it = std::lower_bound(sets.begin(), sets.end(), std::make_pair(tiles, std::uint64_t{0}));
+      if (it != sets.end() && it->first == tiles)
+        ++it->second;
+      else
+        sets.insert(it, {tiles, 1});
     }
   };
   for (std::size_t i = 0; i < samples.size(); ++i)
@@ -134,28 +152,70 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
       missing[std::size_t(f)] += !known[i][std::size_t(f)];
     }
   std::vector<char> geometry(kAllTiles, 0);
-  // Asks for the missing mesh with the largest guess (then the first in
-  // sample and face order) of a face with a tile in first..first+count-1 not
-  // taken yet; false when none is missing.
-  const auto learn_one = [&](int first, int count) {
-    const auto open = [&](int f) {
-      for (int k = std::max(first, f * kFarTilesPerFace); k < std::min(first + count, (f + 1) * kFarTilesPerFace); ++k)
-        if (!geometry[std::size_t(k)]) return true;
-      return false;
-    };
+  // Face f's tiles (bits as in FaceFarChoice::geometry_tiles) already taken,
+  // and those of the group first..first+count-1 not taken yet.
+  const auto face_tiles = [&](int f, int first, int count) {
+    std::uint32_t taken = 0, open = 0;
+    for (int b = 0; b < kFarTilesPerFace; ++b) {
+      const int k = f * kFarTilesPerFace + b;
+      if (geometry[std::size_t(k)])
+        taken |= 1u << b;
+      else if (k >= first && k < first + count)
+        open |= 1u << b;
+    }
+    return std::make_pair(taken, open);
+  };
+  // Lower bounds on the triangles of meshes not known yet (bounded: asked for).
+  std::vector<std::array<std::uint64_t, kCubeFaces>> bound(samples.size());
+  std::vector<std::array<char, kCubeFaces>> bounded(samples.size());
+  std::uint64_t learned_triangles = 0, learned_faces = 0;  // over the meshes and bounds learned (a mesh replaces its bound)
+  // Learns about a missing mesh of a face with a tile in first..first+count-1
+  // not taken yet: the bound of one whose face the group covers wholly open
+  // (there every triangle counts, so the bound does too), else the mesh;
+  // each time the largest guess, then the first in sample and face order.
+  // False when no mesh is missing there.
+  const auto learn_one = [&](int first, int count, bool meshes_only) {
     std::size_t best_sample = 0;
     int best_face = -1;
+    bool best_bound = false;
+    for (std::size_t i = 0; i < samples.size(); ++i)
+      for (int f = first / kFarTilesPerFace; f <= (first + count - 1) / kFarTilesPerFace; ++f) {
+        if (known[i][std::size_t(f)]) continue;
+        const auto [taken, open] = face_tiles(f, first, count);
+        if (open == 0) continue;
+        const bool by_bound =
+            bound_source && !meshes_only && !bounded[i][std::size_t(f)] && taken == 0 && open == kFaceTiles;
+        if (best_face >= 0 && (by_bound != best_bound ? best_bound : samples[i].mesh_guess[std::size_t(f)] <=
+                                                                          samples[best_sample].mesh_guess[std::size_t(best_face)]))
+          continue;
+        best_sample = i, best_face = f, best_bound = by_bound;
+      }
+    if (best_face < 0) return false;
+    const std::size_t f = std::size_t(best_face);
+    if (best_bound) {
+      bounded[best_sample][f] = 1;
+      bound[best_sample][f] = bound_source(best_sample, best_face);
+      learned_triangles += bound[best_sample][f], ++learned_faces;
+      return true;
+    }
+    known[best_sample][f] = 1;
+    --missing[f];
+    const FaceMesh& mesh = mesh_source(best_sample, best_face);
+    count_mesh(best_face, mesh);
+    if (bounded[best_sample][f])
+      learned_triangles += mesh.triangle_count() - bound[best_sample][f];
+    else
+      learned_triangles += mesh.triangle_count(), ++learned_faces;
+    return true;
+  };
+  // Faces with a tile in the group not taken yet whose mesh is neither known
+  // nor bounded.
+  const auto unlearned_faces = [&](int first, int count) {
+    std::uint64_t n = 0;
     for (std::size_t i = 0; i < samples.size(); ++i)
       for (int f = first / kFarTilesPerFace; f <= (first + count - 1) / kFarTilesPerFace; ++f)
-        if (!known[i][std::size_t(f)] && open(f) &&
-            (best_face < 0 ||
-             samples[i].mesh_guess[std::size_t(f)] > samples[best_sample].mesh_guess[std::size_t(best_face)]))
-          best_sample = i, best_face = f;
-    if (best_face < 0) return false;
-    known[best_sample][std::size_t(best_face)] = 1;
-    --missing[std::size_t(best_face)];
-    count_mesh(best_face, mesh_source(best_sample, best_face));
-    return true;
+        n += !known[i][std::size_t(f)] && !bounded[i][std::size_t(f)] && face_tiles(f, first, count).second != 0;
+    return n;
   };
 
   // What each tile would need: elements (a whole chunk, or one triangle of a
@@ -251,22 +311,41 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
         if (!chosen[e] && stamp_of[e] != stamp) stamp_of[e] = stamp, extra += elements[e].weight;
     }
     if (!any) return false;
+    // The depth-mesh triangles taking the group drops: those within its open
+    // tiles, and those spanning tiles that all draw geometry once it is taken.
     const auto gain = [&] {
       std::uint64_t g = 0;
       for (int k = first; k < first + count; ++k)
         if (!geometry[std::size_t(k)]) g += removable[std::size_t(k)];
+      for (int f = first / kFarTilesPerFace; f <= (first + count - 1) / kFarTilesPerFace; ++f) {
+        const auto [taken, open] = face_tiles(f, first, count);
+        if (open == 0) continue;
+        for (const auto& [tiles, n] : spanning[std::size_t(f)])
+          if ((tiles & ~(taken | open)) == 0 && (tiles & open) != 0) g += n;
+        if (taken == 0 && open == kFaceTiles)  // the whole face goes: so do the bounded meshes' triangles
+          for (std::size_t i = 0; i < samples.size(); ++i)
+            if (bounded[i][std::size_t(f)] && !known[i][std::size_t(f)]) g += bound[i][std::size_t(f)];
+      }
       return g;
     };
     const auto pays = [&](std::uint64_t g) {
       return extra + g > 0 && (force || double(extra) <= geometry_factor * double(g));
     };
+    // Bounds are asked for while they may decide: while the faces not
+    // learned yet, at the mean size of those learned, could make the group
+    // pay. Otherwise meshes are (the decision is exact either way; this only
+    // saves holding bounded faces that will be meshed anyway).
     if (!(force && extra > 0))
-      while (!pays(gain()))
-        if (!learn_one(first, count)) return false;
+      for (std::uint64_t g = gain(); !pays(g); g = gain()) {
+        const bool promising =
+            learned_faces == 0 || pays(g + unlearned_faces(first, count) * learned_triangles / learned_faces);
+        if (!learn_one(first, count, !promising)) return false;
+      }
     for (int k = first; k < first + count; ++k) {
       if (geometry[std::size_t(k)]) continue;
       if (tile_elements[std::size_t(k)].empty() && removable[std::size_t(k)] == 0 &&
-          missing[std::size_t(k / kFarTilesPerFace)] == 0)
+          missing[std::size_t(k / kFarTilesPerFace)] == 0 &&
+          !(spanned_tiles[std::size_t(k / kFarTilesPerFace)] >> (k % kFarTilesPerFace) & 1u))
         continue;
       geometry[std::size_t(k)] = 1;
       for (std::uint32_t e : tile_elements[std::size_t(k)]) chosen[e] = 1;
@@ -288,7 +367,7 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
   for (int f = 0; f < kCubeFaces; ++f)
     for (int k = 0; k < kFarTilesPerFace && missing[std::size_t(f)] > 0; ++k)
       if (!geometry[std::size_t(f * kFarTilesPerFace + k)])
-        while (learn_one(f * kFarTilesPerFace, kFarTilesPerFace)) {
+        while (learn_one(f * kFarTilesPerFace, kFarTilesPerFace, true)) {
         }
 
   for (int f = 0; f < kCubeFaces; ++f) {
@@ -305,8 +384,10 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
       for (std::uint32_t e : tile_elements[tile])
         if (stamp_of[e] != stamp) stamp_of[e] = stamp, face.geometry_triangles += elements[e].weight;
     }
-    for (std::uint32_t tiles : spanning[std::size_t(f)])
-      ++((tiles & ~face.geometry_tiles) == 0 ? face.replaced_triangles : face.tdm_triangles);
+    for (const auto& [tiles, n] : spanning[std::size_t(f)])
+      ((tiles & ~face.geometry_tiles) == 0 ? face.replaced_triangles : face.tdm_triangles) += n;
+    for (std::size_t i = 0; i < samples.size(); ++i)  // meshes never learned: their faces are all geometry
+      if (bounded[i][std::size_t(f)] && !known[i][std::size_t(f)]) face.replaced_triangles += bound[i][std::size_t(f)];
   }
   // Chosen elements grouped into pieces by chunk (chunks ascend by id).
   std::vector<std::uint32_t> order;

@@ -87,9 +87,10 @@ struct FarChoiceSample {
 // triangles it adds are no more than `geometry_factor` times the depth-mesh
 // triangles it drops (exact geometry has no image error and, being part of
 // the model, never makes a view draw more than the model: a factor above 1
-// buys image quality with triangles), repeated until nothing changes (a triangle spanning tiles counts
-// as no tile's gain, but is dropped, and counted replaced, when all the tiles
-// it reaches take geometry). Counts only; meshes are not modified.
+// buys image quality with triangles), repeated until nothing changes. A
+// triangle spanning tiles is dropped, and counted replaced, when all the
+// tiles it reaches take geometry: it counts in the gain of the group that
+// completes them. Counts only; meshes are not modified.
 FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
                            std::span<const FarChoiceSample> samples, FarChoiceMode mode,
                            double geometry_factor = 1.0);
@@ -117,6 +118,24 @@ using FarChoiceMeshSource = std::function<const FaceMesh&(std::size_t sample, in
 FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
                            std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor,
                            const FarChoiceMeshSource& mesh_source);
+
+// Supplies a lower bound on the triangles of the depth mesh `mesh_source`
+// would give for face `face` of sample `sample`, cheaper than the mesh (e.g.
+// SimplifyResult::outline_triangles, known before refinement).
+using FarChoiceBoundSource = std::function<std::uint64_t(std::size_t sample, int face)>;
+
+// The same choice, asking first for bounds where a bound can decide: a group
+// covering a face none of whose tiles is taken yet drops every triangle of
+// that face, so a missing mesh counts there with its bound, and a group that
+// pays with bounds takes geometry without the meshes. Meshes are asked for
+// only where a bound cannot decide (a group covering part of a face, or one
+// that would decline), so the choice is again the one the full counts give.
+// A face whose mesh was never asked for but bounded counts its bound in
+// FaceFarChoice::replaced_triangles. Calls each source at most once per
+// face, deterministically (a bound, when asked, before the mesh).
+FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
+                           std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor,
+                           const FarChoiceMeshSource& mesh_source, const FarChoiceBoundSource& bound_source);
 
 // Which triangles use each vertex of a chunk (compressed rows: the triangles
 // of vertex v are triangles[offsets[v] .. offsets[v + 1])).

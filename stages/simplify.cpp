@@ -589,55 +589,107 @@ FaceMesh compact(const FaceMesh& in, const std::vector<std::uint32_t>& tris) {
 
 }  // namespace
 
-SimplifyResult simplify_face_mesh(const FaceMesh& in, int face_size, const SimplifyParams& params) {
+// The state between the two steps: the grid analysis, the outlines and their
+// triangulation, kept so that finishing continues where bounding stopped.
+struct FaceSimplification::State {
+  std::optional<FaceMesh> owned;
+  const FaceMesh* in = nullptr;
+  int face_size = 0;
+  SimplifyParams params;
+  FaceGrid grid;
+  std::optional<FaceRegions> regions;
+  std::optional<FaceOutlines> traced;
+  std::vector<FixedSegment> fixed;
+  std::unique_ptr<TinSimplifier> tin;
+  std::size_t triangles_in = 0, outline_triangles = 0;
+};
+
+FaceSimplification::FaceSimplification(const FaceMesh& in, int face_size, const SimplifyParams& params)
+    : state_(std::make_unique<State>()) {
+  state_->in = &in;
+  start(face_size, params);
+  outline_triangles_ = state_->outline_triangles;
+}
+
+FaceSimplification::FaceSimplification(FaceMesh&& in, int face_size, const SimplifyParams& params)
+    : state_(std::make_unique<State>()) {
+  state_->owned.emplace(std::move(in));
+  state_->in = &*state_->owned;
+  start(face_size, params);
+  outline_triangles_ = state_->outline_triangles;
+}
+
+FaceSimplification::~FaceSimplification() = default;
+FaceSimplification::FaceSimplification(FaceSimplification&&) noexcept = default;
+FaceSimplification& FaceSimplification::operator=(FaceSimplification&&) noexcept = default;
+
+void FaceSimplification::start(int face_size, const SimplifyParams& params) {
   if (!(params.depth_error_relative >= 0))
     throw std::invalid_argument("simplify_face_mesh: depth_error_relative must be >= 0");
   if (!(params.boundary_error_px >= 0))
     throw std::invalid_argument("simplify_face_mesh: boundary_error_px must be >= 0");
   if (!(params.max_depth_error_factor >= 1))
     throw std::invalid_argument("simplify_face_mesh: max_depth_error_factor must be >= 1");
-  const FaceGrid grid = read_face_grid(in, face_size);
-  SimplifyResult result;
-  result.triangles_in = in.triangle_count();
-  double eps = params.depth_error_relative;
-  std::vector<std::uint32_t> tris;
-  std::optional<FaceOutlines> traced;
-  std::optional<FaceRegions> regions;
-  if (face_size < 4) {
-    tris = dense_triangles(in);  // too small to simplify
-  } else {
-    regions = label_face_regions(grid);
-    std::vector<FixedSegment> fixed;
-    for (const BorderPiece& p : split_face_border(in, grid, params.depth_error_relative)) {
-      if (!p.covered) continue;
-      const auto a = border_point(p.side, p.a, face_size), b = border_point(p.side, p.b, face_size);
-      fixed.push_back({{a[0], a[1]}, {b[0], b[1]}});
-    }
-    traced = trace_face_outlines(grid, *regions);
-    const double ceiling = eps * params.max_depth_error_factor;
-    auto simplifier = [&](double outline_depth_error) {
-      FaceOutlines outlines = *traced;
-      straighten_face_outlines(outlines, fixed, params.boundary_error_px, outline_depth_error, face_size);
-      return std::make_unique<TinSimplifier>(grid, *regions, std::move(outlines), fixed, eps, params.max_triangles,
-                                             ceiling);
-    };
-    auto tin = simplifier(eps);
-    // When the outlines alone exceed the cap, the cap's looser bound applies
-    // from the start, to their straightening too.
-    if (tin->outline_triangles() > params.max_triangles && ceiling > eps) tin = simplifier(ceiling);
-    result.outline_triangles = tin->outline_triangles();
-    tris = tin->run();
-    eps = tin->bound_used();
+  State& st = *state_;
+  st.face_size = face_size;
+  st.params = params;
+  st.triangles_in = st.in->triangle_count();
+  st.grid = read_face_grid(*st.in, face_size);
+  if (face_size < 4) {  // too small to simplify: the dense mesh is the result
+    st.outline_triangles = st.in->triangle_count();
+    return;
   }
-  result.mesh = compact(in, tris);
+  st.regions = label_face_regions(st.grid);
+  for (const BorderPiece& p : split_face_border(*st.in, st.grid, params.depth_error_relative)) {
+    if (!p.covered) continue;
+    const auto a = border_point(p.side, p.a, face_size), b = border_point(p.side, p.b, face_size);
+    st.fixed.push_back({{a[0], a[1]}, {b[0], b[1]}});
+  }
+  st.traced = trace_face_outlines(st.grid, *st.regions);
+  const double eps = params.depth_error_relative, ceiling = eps * params.max_depth_error_factor;
+  const auto simplifier = [&](double outline_depth_error) {
+    FaceOutlines outlines = *st.traced;
+    straighten_face_outlines(outlines, st.fixed, params.boundary_error_px, outline_depth_error, face_size);
+    return std::make_unique<TinSimplifier>(st.grid, *st.regions, std::move(outlines), st.fixed, eps,
+                                           params.max_triangles, ceiling);
+  };
+  st.tin = simplifier(eps);
+  // When the outlines alone exceed the cap, the cap's looser bound applies
+  // from the start, to their straightening too.
+  if (st.tin->outline_triangles() > params.max_triangles && ceiling > eps) st.tin = simplifier(ceiling);
+  st.outline_triangles = st.tin->outline_triangles();
+  // What waits for finish() needs only the dense vertices (a third of an
+  // owned dense mesh's memory is its triangles).
+  if (st.owned && !params.measure_error) std::vector<std::uint32_t>().swap(st.owned->indices);
+}
+
+std::size_t FaceSimplification::outline_triangles() const { return outline_triangles_; }
+
+SimplifyResult FaceSimplification::finish() && {
+  if (!state_) throw std::logic_error("FaceSimplification::finish: already finished");
+  const std::unique_ptr<State> st = std::move(state_);
+  SimplifyResult result;
+  const FaceMesh& in = *st->in;
+  result.triangles_in = st->triangles_in;
+  result.outline_triangles = st->outline_triangles;
+  double eps = st->params.depth_error_relative;
+  if (st->tin) {
+    result.mesh = compact(in, st->tin->run());
+    eps = st->tin->bound_used();
+  } else {
+    result.mesh = compact(in, dense_triangles(in));
+  }
   result.triangles_out = result.mesh.triangle_count();
-  if (face_size < 4) result.outline_triangles = result.triangles_out;
   result.depth_error_bound_used = eps;
-  result.cap_forced_larger_error = eps > params.depth_error_relative;
-  if (params.measure_error)
-    result.achieved = face_size < 4 ? measure_simplification_error(in, result.mesh, face_size)
-                                    : measure_simplification_error(in, grid, *regions, *traced, result.mesh);
+  result.cap_forced_larger_error = eps > st->params.depth_error_relative;
+  if (st->params.measure_error)
+    result.achieved = st->tin ? measure_simplification_error(in, st->grid, *st->regions, *st->traced, result.mesh)
+                              : measure_simplification_error(in, result.mesh, st->face_size);
   return result;
+}
+
+SimplifyResult simplify_face_mesh(const FaceMesh& in, int face_size, const SimplifyParams& params) {
+  return FaceSimplification(in, face_size, params).finish();
 }
 
 }  // namespace cellbake

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 
 #include "stages/cube_map.h"
 #include "stages/simplify_error.h"
@@ -68,5 +69,33 @@ struct SimplifyResult {
 // outlines (then triangles_out > max_triangles). Throws std::invalid_argument
 // when `in` is not a pixel-grid mesh of that size.
 SimplifyResult simplify_face_mesh(const FaceMesh& in, int face_size, const SimplifyParams& params);
+
+// simplify_face_mesh in two steps, for a caller that may not need the mesh:
+// constructing reads the grid, straightens the outlines and triangulates them
+// (about two thirds of the work), after which outline_triangles() is a lower
+// bound on the result's triangles; finish() refines and returns exactly what
+// simplify_face_mesh returns. Holds the dense mesh's analysis (tens of MB for
+// a 512^2 face) until finished or destroyed. Throws as simplify_face_mesh.
+class FaceSimplification {
+ public:
+  // `in` must outlive this object.
+  FaceSimplification(const FaceMesh& in, int face_size, const SimplifyParams& params);
+  // Keeps `in`.
+  FaceSimplification(FaceMesh&& in, int face_size, const SimplifyParams& params);
+  ~FaceSimplification();
+  FaceSimplification(FaceSimplification&&) noexcept;
+  FaceSimplification& operator=(FaceSimplification&&) noexcept;
+
+  // SimplifyResult::outline_triangles of the result, known without refining.
+  std::size_t outline_triangles() const;
+  // Refines; callable once (throws std::logic_error after that).
+  SimplifyResult finish() &&;
+
+ private:
+  struct State;
+  void start(int face_size, const SimplifyParams& params);
+  std::unique_ptr<State> state_;
+  std::size_t outline_triangles_ = 0;
+};
 
 }  // namespace cellbake

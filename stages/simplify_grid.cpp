@@ -39,7 +39,7 @@ FaceGrid read_face_grid(const FaceMesh& mesh, int face_size) {
       throw std::invalid_argument("simplify: vertex " + std::to_string(v) + " has no positive finite depth");
   }
   g.corner_vertex.assign(std::size_t(n) * n, {kNoVertex, kNoVertex, kNoVertex, kNoVertex});
-  g.pixel_triangles.assign(std::size_t(n) * n, {kNoVertex, kNoVertex});
+  std::vector<std::uint8_t> pixel_triangles(std::size_t(n) * n, 0);  // per pixel: triangles read so far
   const std::size_t nt = mesh.indices.size() / 3;
   for (std::size_t t = 0; t < nt; ++t) {
     const std::uint32_t* tri = &mesh.indices[3 * t];
@@ -63,10 +63,7 @@ FaceGrid read_face_grid(const FaceMesh& mesh, int face_size) {
       if (slot != kNoVertex && slot != tri[k]) ok = false;
       slot = tri[k];
     }
-    auto& pt = g.pixel_triangles[std::size_t(j) * n + i];
-    if (ok && pt[0] == kNoVertex) pt[0] = std::uint32_t(t);
-    else if (ok && pt[1] == kNoVertex) pt[1] = std::uint32_t(t);
-    else ok = false;
+    if (ok) ok = ++pixel_triangles[std::size_t(j) * n + i] <= 2;
     if (!ok)
       throw std::invalid_argument("simplify: triangle " + std::to_string(t) +
                                   " is not half of a pixel of a grid mesh (two consistently oriented triangles per pixel)");
@@ -75,7 +72,7 @@ FaceGrid read_face_grid(const FaceMesh& mesh, int face_size) {
     const auto& c = g.corner_vertex[p];
     const bool any = c[0] != kNoVertex || c[1] != kNoVertex || c[2] != kNoVertex || c[3] != kNoVertex;
     const bool all = c[0] != kNoVertex && c[1] != kNoVertex && c[2] != kNoVertex && c[3] != kNoVertex;
-    if (any && (!all || g.pixel_triangles[p][1] == kNoVertex))
+    if (any && (!all || pixel_triangles[p] != 2))
       throw std::invalid_argument("simplify: pixel (" + std::to_string(p % n) + ", " + std::to_string(p / n) +
                                   ") is not covered by exactly two triangles on its four corners");
   }

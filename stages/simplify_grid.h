@@ -17,7 +17,6 @@ constexpr std::uint32_t kNoVertex = 0xffffffffu;
 struct FaceGrid {
   int size = 0;
   std::vector<std::array<std::uint32_t, 4>> corner_vertex;  // per pixel (row-major): NW, NE, SW, SE; kNoVertex if not covered
-  std::vector<std::array<std::uint32_t, 2>> pixel_triangles;  // per covered pixel: its two triangles in the input
   std::vector<std::int32_t> x, y;                           // per vertex: lattice column and row (0..size)
   std::vector<double> w;                                     // per vertex: 1 / planar depth
   int orientation = -1;  // sign of the lattice-space orientation of the input's triangles (x right, y down)

@@ -442,14 +442,40 @@ TEST(FarChoiceChoose, OneLargeWallIsDrawnAsItsTwoTriangles) {
   add_uv_triangle(big.meshes[2], {0, 0}, {0.5f, 0}, {0, 1});
   add_uv_triangle(big.meshes[2], {0, 0}, {1, 0}, {0, 1});
   big.seen[2] = {seen_triangles(4, 0, 1, left)};
+  // With the whole cell, 2 triangles replace all 320 + 4: the spanning
+  // triangles count too, since every tile they reach takes geometry (the
+  // right half of +Y draws geometry with nothing in it, so the triangle over
+  // the whole face goes).
   const FarChoice b = choose(far, {&big});
-  EXPECT_EQ(b.faces[0].geometry_tiles, kAllFaceTiles);  // with the whole cell: 2 triangles replace 320 + 3
+  EXPECT_EQ(b.faces[0].geometry_tiles, kAllFaceTiles);
   EXPECT_EQ(b.faces[0].replaced_triangles, 2u);
   EXPECT_EQ(b.faces[0].tdm_triangles, 0u);
-  EXPECT_EQ(b.faces[2].geometry_tiles, left);
-  EXPECT_EQ(b.faces[2].replaced_triangles, 8u * 40 + 1);
-  EXPECT_EQ(b.faces[2].tdm_triangles, 1u);
+  EXPECT_EQ(b.faces[2].geometry_tiles, kAllFaceTiles);
+  EXPECT_EQ(b.faces[2].replaced_triangles, 8u * 40 + 2);
+  EXPECT_EQ(b.faces[2].tdm_triangles, 0u);
   EXPECT_EQ(b.geometry_triangles, 2u);
+
+}
+
+TEST(FarChoiceChoose, SpanningTrianglesCountInTheGainOfTheGroupThatDropsThem) {
+  // 16 depth-mesh triangles within tiles and 4 spanning the whole face,
+  // against 20 triangles of geometry seen on every tile: at factor 1 the
+  // geometry pays only with the spanning triangles counted (20 <= 16 + 4).
+  SampleInput s;
+  for (int tile = 0; tile < kFarTilesPerFace; ++tile) add_tile_triangles(s.meshes[0], tile, 1);
+  for (int k = 0; k < 4; ++k) add_uv_triangle(s.meshes[0], {0.01f * float(k), 0}, {1, 0}, {0, 1});
+  s.seen[0] = {seen_triangles(3, 0, 20, std::uint16_t(kAllFaceTiles))};
+  const FarChoice pays = choose({ref(3, 20)}, {&s});
+  EXPECT_EQ(pays.faces[0].geometry_tiles, kAllFaceTiles);
+  EXPECT_EQ(pays.faces[0].replaced_triangles, 20u);
+  EXPECT_EQ(pays.faces[0].tdm_triangles, 0u);
+  EXPECT_EQ(pays.geometry_triangles, 20u);
+  // One more triangle of geometry and it no longer pays anywhere.
+  s.seen[0] = {seen_triangles(3, 0, 21, std::uint16_t(kAllFaceTiles))};
+  const FarChoice declines = choose({ref(3, 21)}, {&s});
+  EXPECT_EQ(declines.faces[0].geometry_tiles, 0u);
+  EXPECT_EQ(declines.faces[0].tdm_triangles, 20u);
+  EXPECT_EQ(declines.geometry_triangles, 0u);
 }
 
 TEST(FarChoiceChoose, NearFieldChunksInSeenListsCostNothing) {
@@ -792,6 +818,146 @@ TEST(FarChoiceLazy, ACellWhoseGeometryIsCheapMeshesOneFace) {
   EXPECT_EQ(lazy.faces[0].replaced_triangles, 640u);  // only the meshed face is counted
   EXPECT_EQ(lazy.faces[1].replaced_triangles, 0u);
   EXPECT_EQ(lazy.geometry_triangles, 30u);
+}
+
+TEST(FarChoiceLazy, BoundsDecideWholeFacesWithoutTheirMeshes) {
+  // The random cells again, now with a bound source too (85 % of each mesh's
+  // triangles, as an outline-only triangulation gives): the same geometry as
+  // the full counts, each source asked at most once per face, a face's bound
+  // before its mesh, never more meshes than without bounds, and some faces
+  // decided by their bounds alone (drawn wholly as geometry).
+  int meshes_with_bounds = 0, meshes_without = 0, bounded_only = 0;
+  for (unsigned seed = 1; seed <= 12; ++seed)
+    for (const FarChoiceMode mode : {FarChoiceMode::cheapest, FarChoiceMode::tdm, FarChoiceMode::geometry})
+      for (const double factor : {0.25, 1.0, 2.0, 8.0}) {
+        SCOPED_TRACE(testing::Message() << "seed " << seed << " mode " << int(mode) << " factor " << factor);
+        const RandomScenario sc = random_scenario(seed, 1 + int(seed % 4), seed % 2 ? 12 : 3);
+        std::vector<FarChoiceSample> full, none;
+        for (const SampleInput& in : sc.samples) {
+          full.push_back(in.view());
+          FarChoiceSample n = in.view();
+          n.meshes.fill(nullptr);
+          none.push_back(n);
+        }
+        const Box3d eyes = Box3d::cube({0, 0, 0}, 1);
+        const auto mesh_of = [&](std::size_t sample, int face) -> const FaceMesh& {
+          return sc.samples.at(sample).meshes[std::size_t(face)];
+        };
+        const FarChoice eager = choose_far_field(eyes, sc.far, full, mode, factor);
+        int lazy_meshes = 0;
+        choose_far_field(eyes, sc.far, none, mode, factor, [&](std::size_t sample, int face) -> const FaceMesh& {
+          ++lazy_meshes;
+          return mesh_of(sample, face);
+        });
+        std::set<std::pair<std::size_t, int>> meshed, bounded;
+        const FarChoice b = choose_far_field(
+            eyes, sc.far, none, mode, factor,
+            [&](std::size_t sample, int face) -> const FaceMesh& {
+              EXPECT_TRUE(meshed.insert({sample, face}).second) << "mesh asked twice";
+              return mesh_of(sample, face);
+            },
+            [&](std::size_t sample, int face) {
+              EXPECT_TRUE(bounded.insert({sample, face}).second) << "bound asked twice";
+              EXPECT_FALSE(meshed.count({sample, face})) << "bound asked after the mesh";
+              return std::uint64_t(0.85 * double(mesh_of(sample, face).triangle_count()));
+            });
+        ASSERT_EQ(eager.pieces.size(), b.pieces.size());
+        for (std::size_t k = 0; k < eager.pieces.size(); ++k) {
+          EXPECT_EQ(eager.pieces[k].chunk.id, b.pieces[k].chunk.id);
+          EXPECT_EQ(eager.pieces[k].triangles, b.pieces[k].triangles);
+        }
+        EXPECT_EQ(eager.geometry_triangles, b.geometry_triangles);
+        EXPECT_LE(int(meshed.size()), lazy_meshes);
+        meshes_with_bounds += int(meshed.size());
+        meshes_without += lazy_meshes;
+        for (const auto& [sample, face] : bounded)
+          if (!meshed.count({sample, face})) {
+            ++bounded_only;
+            EXPECT_EQ(b.faces[std::size_t(face)].geometry_tiles, kAllFaceTiles) << "face " << face;
+          }
+        for (int f = 0; f < kCubeFaces; ++f)
+          EXPECT_EQ(b.faces[std::size_t(f)].geometry_triangles, eager.faces[std::size_t(f)].geometry_triangles);
+      }
+  EXPECT_GT(bounded_only, 0);
+  EXPECT_LT(meshes_with_bounds, meshes_without);
+}
+
+TEST(FarChoiceLazy, ACellWhoseGeometryIsCheapNeedsOneBoundAndNoMesh) {
+  // The cheap cell of the test above with a bound source: the bound of the
+  // first face (600 of its 640 triangles) pays for geometry everywhere, and
+  // it is what that face reports replaced.
+  SampleInput s;
+  for (int f = 0; f < kCubeFaces; ++f) {
+    for (int tile = 0; tile < kFarTilesPerFace; ++tile) add_tile_triangles(s.meshes[std::size_t(f)], tile, 40);
+    s.seen[std::size_t(f)].push_back(seen_triangles(7, 0, 30, std::uint16_t(kAllFaceTiles)));
+  }
+  const std::vector<SampleInput> inputs(3, s);
+  std::vector<FarChoiceSample> none;
+  for (const SampleInput& in : inputs) {
+    FarChoiceSample n = in.view();
+    n.meshes.fill(nullptr);
+    none.push_back(n);
+  }
+  int meshes = 0;
+  std::vector<std::pair<std::size_t, int>> bounds;
+  const std::vector<ChunkRef> far = {ref(7, 30)};
+  const FarChoice c = choose_far_field(
+      Box3d::cube({0, 0, 0}, 1), far, none, FarChoiceMode::cheapest, 2.0,
+      [&](std::size_t sample, int face) -> const FaceMesh& {
+        ++meshes;
+        return inputs.at(sample).meshes[std::size_t(face)];
+      },
+      [&](std::size_t sample, int face) {
+        bounds.push_back({sample, face});
+        return std::uint64_t{600};
+      });
+  EXPECT_EQ(meshes, 0);
+  ASSERT_EQ(bounds.size(), 1u);
+  EXPECT_EQ(bounds[0], std::make_pair(std::size_t(0), 0));
+  for (const FaceFarChoice& f : c.faces) {
+    EXPECT_EQ(f.geometry_tiles, kAllFaceTiles);
+    EXPECT_EQ(f.tdm_triangles, 0u);
+  }
+  EXPECT_EQ(c.faces[0].replaced_triangles, 600u);
+  EXPECT_EQ(c.faces[1].replaced_triangles, 0u);
+  EXPECT_EQ(c.geometry_triangles, 30u);
+  // A geometry of 1300 triangles: one bound does not pay (2 * 600 < 1300),
+  // two do. One of 30000 (more than twice all 11520 triangles): after one
+  // bound, 18 faces of that size could not pay (2 * 18 * 600 < 30000), so
+  // every mesh is asked for without more bounds; depth meshes everywhere.
+  for (const std::uint32_t cost : {1300u, 30000u}) {
+    std::vector<SampleInput> heavy = inputs;
+    for (SampleInput& in : heavy)
+      for (auto& seen : in.seen) seen = {seen_triangles(7, 0, cost, std::uint16_t(kAllFaceTiles))};
+    std::vector<FarChoiceSample> views;
+    for (const SampleInput& in : heavy) {
+      FarChoiceSample n = in.view();
+      n.meshes.fill(nullptr);
+      views.push_back(n);
+    }
+    meshes = 0;
+    bounds.clear();
+    const FarChoice h = choose_far_field(
+        Box3d::cube({0, 0, 0}, 1), std::vector<ChunkRef>{ref(7, cost)}, views, FarChoiceMode::cheapest, 2.0,
+        [&](std::size_t sample, int face) -> const FaceMesh& {
+          ++meshes;
+          return heavy.at(sample).meshes[std::size_t(face)];
+        },
+        [&](std::size_t sample, int face) {
+          bounds.push_back({sample, face});
+          return std::uint64_t{600};
+        });
+    if (cost == 1300u) {
+      EXPECT_EQ(meshes, 0);
+      EXPECT_EQ(bounds.size(), 2u);
+      EXPECT_EQ(h.geometry_triangles, 1300u);
+    } else {
+      EXPECT_EQ(meshes, 18);
+      EXPECT_EQ(bounds.size(), 1u);
+      EXPECT_EQ(h.geometry_triangles, 0u);
+      for (const FaceFarChoice& f : h.faces) EXPECT_EQ(f.tdm_triangles, 3u * 640);
+    }
+  }
 }
 
 TEST(FarChoiceChoose, ParsesTheModeNames) {

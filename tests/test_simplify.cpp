@@ -134,6 +134,38 @@ TEST(Simplify, IsDeterministic) {
   }
 }
 
+TEST(Simplify, TwoStepsGiveTheSameResultAndBoundItFirst) {
+  // FaceSimplification (outline triangulation, then refinement) returns
+  // exactly simplify_face_mesh's result, its early outline count bounds it,
+  // also for a face over the cap and for a borrowed or an owned dense mesh.
+  const int n = 64;
+  const auto dense = build_depth_meshes(raycast_analytic_scene(cluttered_room(), {0.2, -0.1, 0.1}, n),
+                                        DepthMeshParams{});
+  SimplifyParams capped;
+  capped.max_triangles = 16;
+  for (const SimplifyParams& params : {SimplifyParams{}, capped})
+    for (int f = 0; f < kCubeFaces; ++f) {
+      SCOPED_TRACE(testing::Message() << "face " << f << " cap " << params.max_triangles);
+      const SimplifyResult whole = simplify_face_mesh(dense[std::size_t(f)], n, params);
+      FaceSimplification borrowed(dense[std::size_t(f)], n, params);
+      FaceSimplification owned(FaceMesh(dense[std::size_t(f)]), n, params);
+      EXPECT_EQ(borrowed.outline_triangles(), whole.outline_triangles);
+      EXPECT_EQ(owned.outline_triangles(), whole.outline_triangles);
+      EXPECT_LE(borrowed.outline_triangles(), whole.triangles_out);
+      FaceSimplification moved = std::move(owned);
+      for (FaceSimplification* step : {&borrowed, &moved}) {
+        const SimplifyResult r = std::move(*step).finish();
+        EXPECT_EQ(r.mesh.positions, whole.mesh.positions);
+        EXPECT_EQ(r.mesh.uvs, whole.mesh.uvs);
+        EXPECT_EQ(r.mesh.indices, whole.mesh.indices);
+        EXPECT_EQ(r.depth_error_bound_used, whole.depth_error_bound_used);
+        EXPECT_EQ(r.achieved.max_depth_error_relative, whole.achieved.max_depth_error_relative);
+        EXPECT_THROW(std::move(*step).finish(), std::logic_error);
+        EXPECT_EQ(step->outline_triangles(), whole.outline_triangles);
+      }
+    }
+}
+
 TEST(Simplify, TighterBoundKeepsMoreTriangles) {
   const int n = 64;
   const auto dense = build_depth_meshes(raycast_analytic_scene(cluttered_room(), {0, 0, 0}, n), DepthMeshParams{});
