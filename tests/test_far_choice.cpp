@@ -732,6 +732,28 @@ std::uint32_t empty_tiles(const RandomScenario& sc, int f) {
   return ~used & kAllFaceTiles;
 }
 
+// Three samples whose every tile holds 40 depth-mesh triangles, and one far
+// chunk (id 7) of `geometry` triangles seen on every tile.
+std::vector<SampleInput> cheap_cell(std::uint32_t geometry) {
+  SampleInput s;
+  for (int f = 0; f < kCubeFaces; ++f) {
+    for (int tile = 0; tile < kFarTilesPerFace; ++tile) add_tile_triangles(s.meshes[std::size_t(f)], tile, 40);
+    s.seen[std::size_t(f)].push_back(seen_triangles(7, 0, geometry, std::uint16_t(kAllFaceTiles)));
+  }
+  return std::vector<SampleInput>(3, s);
+}
+
+// The samples' views with no mesh given (each to be asked for).
+std::vector<FarChoiceSample> without_meshes(const std::vector<SampleInput>& inputs) {
+  std::vector<FarChoiceSample> none;
+  for (const SampleInput& in : inputs) {
+    FarChoiceSample n = in.view();
+    n.meshes.fill(nullptr);
+    none.push_back(n);
+  }
+  return none;
+}
+
 TEST(FarChoiceLazy, MeshesOnDemandChooseTheSameGeometryAndKeepTheSameTiles) {
   // Random cells, every mode and several factors: the lazy choice (no mesh
   // given, each asked for on demand) draws the same far geometry, asks for
@@ -743,13 +765,9 @@ TEST(FarChoiceLazy, MeshesOnDemandChooseTheSameGeometryAndKeepTheSameTiles) {
       for (const double factor : {0.25, 1.0, 2.0, 8.0}) {
         SCOPED_TRACE(testing::Message() << "seed " << seed << " mode " << int(mode) << " factor " << factor);
         const RandomScenario sc = random_scenario(seed, 1 + int(seed % 4), seed % 2 ? 12 : 3);
-        std::vector<FarChoiceSample> full, none;
-        for (const SampleInput& s : sc.samples) {
-          full.push_back(s.view());
-          FarChoiceSample n = s.view();
-          n.meshes.fill(nullptr);
-          none.push_back(n);
-        }
+        std::vector<FarChoiceSample> full;
+        for (const SampleInput& in : sc.samples) full.push_back(in.view());
+        const std::vector<FarChoiceSample> none = without_meshes(sc.samples);
         const Box3d eyes = Box3d::cube({0, 0, 0}, 1);
         const FarChoice eager = choose_far_field(eyes, sc.far, full, mode, factor);
         std::set<std::pair<std::size_t, int>> asked;
@@ -790,18 +808,8 @@ TEST(FarChoiceLazy, ACellWhoseGeometryIsCheapMeshesOneFace) {
   // Three samples whose every tile holds 40 depth-mesh triangles, and one far
   // chunk of 30 triangles seen on every tile: the first face meshed (sample
   // 0, face 0: 640 triangles) already pays for geometry everywhere.
-  SampleInput s;
-  for (int f = 0; f < kCubeFaces; ++f) {
-    for (int tile = 0; tile < kFarTilesPerFace; ++tile) add_tile_triangles(s.meshes[std::size_t(f)], tile, 40);
-    s.seen[std::size_t(f)].push_back(seen_triangles(7, 0, 30, std::uint16_t(kAllFaceTiles)));
-  }
-  const std::vector<SampleInput> inputs(3, s);
-  std::vector<FarChoiceSample> none;
-  for (const SampleInput& in : inputs) {
-    FarChoiceSample n = in.view();
-    n.meshes.fill(nullptr);
-    none.push_back(n);
-  }
+  const std::vector<SampleInput> inputs = cheap_cell(30);
+  const std::vector<FarChoiceSample> none = without_meshes(inputs);
   std::vector<std::pair<std::size_t, int>> asked;
   const std::vector<ChunkRef> far = {ref(7, 30)};
   const FarChoice lazy = choose_far_field(Box3d::cube({0, 0, 0}, 1), far, none, FarChoiceMode::cheapest, 2.0,
@@ -832,13 +840,9 @@ TEST(FarChoiceLazy, BoundsDecideWholeFacesWithoutTheirMeshes) {
       for (const double factor : {0.25, 1.0, 2.0, 8.0}) {
         SCOPED_TRACE(testing::Message() << "seed " << seed << " mode " << int(mode) << " factor " << factor);
         const RandomScenario sc = random_scenario(seed, 1 + int(seed % 4), seed % 2 ? 12 : 3);
-        std::vector<FarChoiceSample> full, none;
-        for (const SampleInput& in : sc.samples) {
-          full.push_back(in.view());
-          FarChoiceSample n = in.view();
-          n.meshes.fill(nullptr);
-          none.push_back(n);
-        }
+        std::vector<FarChoiceSample> full;
+        for (const SampleInput& in : sc.samples) full.push_back(in.view());
+        const std::vector<FarChoiceSample> none = without_meshes(sc.samples);
         const Box3d eyes = Box3d::cube({0, 0, 0}, 1);
         const auto mesh_of = [&](std::size_t sample, int face) -> const FaceMesh& {
           return sc.samples.at(sample).meshes[std::size_t(face)];
@@ -886,18 +890,8 @@ TEST(FarChoiceLazy, ACellWhoseGeometryIsCheapNeedsOneBoundAndNoMesh) {
   // The cheap cell of the test above with a bound source: the bound of the
   // first face (600 of its 640 triangles) pays for geometry everywhere, and
   // it is what that face reports replaced.
-  SampleInput s;
-  for (int f = 0; f < kCubeFaces; ++f) {
-    for (int tile = 0; tile < kFarTilesPerFace; ++tile) add_tile_triangles(s.meshes[std::size_t(f)], tile, 40);
-    s.seen[std::size_t(f)].push_back(seen_triangles(7, 0, 30, std::uint16_t(kAllFaceTiles)));
-  }
-  const std::vector<SampleInput> inputs(3, s);
-  std::vector<FarChoiceSample> none;
-  for (const SampleInput& in : inputs) {
-    FarChoiceSample n = in.view();
-    n.meshes.fill(nullptr);
-    none.push_back(n);
-  }
+  const std::vector<SampleInput> inputs = cheap_cell(30);
+  const std::vector<FarChoiceSample> none = without_meshes(inputs);
   int meshes = 0;
   std::vector<std::pair<std::size_t, int>> bounds;
   const std::vector<ChunkRef> far = {ref(7, 30)};
@@ -926,15 +920,8 @@ TEST(FarChoiceLazy, ACellWhoseGeometryIsCheapNeedsOneBoundAndNoMesh) {
   // bound, 18 faces of that size could not pay (2 * 18 * 600 < 30000), so
   // every mesh is asked for without more bounds; depth meshes everywhere.
   for (const std::uint32_t cost : {1300u, 30000u}) {
-    std::vector<SampleInput> heavy = inputs;
-    for (SampleInput& in : heavy)
-      for (auto& seen : in.seen) seen = {seen_triangles(7, 0, cost, std::uint16_t(kAllFaceTiles))};
-    std::vector<FarChoiceSample> views;
-    for (const SampleInput& in : heavy) {
-      FarChoiceSample n = in.view();
-      n.meshes.fill(nullptr);
-      views.push_back(n);
-    }
+    const std::vector<SampleInput> heavy = cheap_cell(cost);
+    const std::vector<FarChoiceSample> views = without_meshes(heavy);
     meshes = 0;
     bounds.clear();
     const FarChoice h = choose_far_field(
