@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <functional>
 #include <random>
 #include <set>
 
@@ -732,6 +733,17 @@ std::uint32_t empty_tiles(const RandomScenario& sc, int f) {
   return ~used & kAllFaceTiles;
 }
 
+// Calls `check` on 12 random cells in every mode at several geometry
+// factors (each call traced with its seed, mode and factor).
+void for_each_random_cell(const std::function<void(const RandomScenario&, FarChoiceMode, double)>& check) {
+  for (unsigned seed = 1; seed <= 12; ++seed)
+    for (const FarChoiceMode mode : {FarChoiceMode::cheapest, FarChoiceMode::tdm, FarChoiceMode::geometry})
+      for (const double factor : {0.25, 1.0, 2.0, 8.0}) {
+        SCOPED_TRACE(testing::Message() << "seed " << seed << " mode " << int(mode) << " factor " << factor);
+        check(random_scenario(seed, 1 + int(seed % 4), seed % 2 ? 12 : 3), mode, factor);
+      }
+}
+
 // Three samples whose every tile holds 40 depth-mesh triangles, and one far
 // chunk (id 7) of `geometry` triangles seen on every tile.
 std::vector<SampleInput> cheap_cell(std::uint32_t geometry) {
@@ -760,47 +772,43 @@ TEST(FarChoiceLazy, MeshesOnDemandChooseTheSameGeometryAndKeepTheSameTiles) {
   // each face at most once, and differs from the full-count choice only on
   // tiles with nothing to draw (which it may mark as geometry).
   int asked_total = 0, possible_total = 0;
-  for (unsigned seed = 1; seed <= 12; ++seed)
-    for (const FarChoiceMode mode : {FarChoiceMode::cheapest, FarChoiceMode::tdm, FarChoiceMode::geometry})
-      for (const double factor : {0.25, 1.0, 2.0, 8.0}) {
-        SCOPED_TRACE(testing::Message() << "seed " << seed << " mode " << int(mode) << " factor " << factor);
-        const RandomScenario sc = random_scenario(seed, 1 + int(seed % 4), seed % 2 ? 12 : 3);
-        std::vector<FarChoiceSample> full;
-        for (const SampleInput& in : sc.samples) full.push_back(in.view());
-        const std::vector<FarChoiceSample> none = without_meshes(sc.samples);
-        const Box3d eyes = Box3d::cube({0, 0, 0}, 1);
-        const FarChoice eager = choose_far_field(eyes, sc.far, full, mode, factor);
-        std::set<std::pair<std::size_t, int>> asked;
-        const FarChoice lazy = choose_far_field(eyes, sc.far, none, mode, factor,
-                                                [&](std::size_t sample, int face) -> const FaceMesh& {
-                                                  EXPECT_TRUE(asked.insert({sample, face}).second) << "asked twice";
-                                                  return sc.samples.at(sample).meshes[std::size_t(face)];
-                                                });
-        asked_total += int(asked.size());
-        possible_total += int(sc.samples.size()) * kCubeFaces;
-        ASSERT_EQ(eager.pieces.size(), lazy.pieces.size());
-        for (std::size_t k = 0; k < eager.pieces.size(); ++k) {
-          EXPECT_EQ(eager.pieces[k].chunk.id, lazy.pieces[k].chunk.id);
-          EXPECT_EQ(eager.pieces[k].triangles, lazy.pieces[k].triangles);
-        }
-        EXPECT_EQ(eager.geometry_triangles, lazy.geometry_triangles);
-        if (mode == FarChoiceMode::tdm) EXPECT_EQ(asked.size(), sc.samples.size() * kCubeFaces);
-        for (int f = 0; f < kCubeFaces; ++f) {
-          const FaceFarChoice &e = eager.faces[std::size_t(f)], &l = lazy.faces[std::size_t(f)];
-          const std::uint32_t nothing = empty_tiles(sc, f);
-          EXPECT_EQ(e.geometry_tiles & ~l.geometry_tiles, 0u) << "face " << f;
-          EXPECT_EQ(l.geometry_tiles & ~e.geometry_tiles & ~nothing, 0u) << "face " << f;
-          EXPECT_LE(l.tdm_triangles, e.tdm_triangles) << "face " << f;
-          EXPECT_EQ(l.geometry_triangles, e.geometry_triangles) << "face " << f;
-          bool all_asked = true;
-          for (std::size_t i = 0; i < sc.samples.size(); ++i) all_asked = all_asked && asked.count({i, f});
-          if (!all_asked) EXPECT_EQ(l.geometry_tiles, kAllFaceTiles) << "face " << f << " not meshed but kept";
-          if (l.geometry_tiles == e.geometry_tiles && all_asked) {
-            EXPECT_EQ(l.tdm_triangles, e.tdm_triangles) << "face " << f;
-            EXPECT_EQ(l.replaced_triangles, e.replaced_triangles) << "face " << f;
-          }
-        }
+  for_each_random_cell([&](const RandomScenario& sc, FarChoiceMode mode, double factor) {
+    std::vector<FarChoiceSample> full;
+    for (const SampleInput& in : sc.samples) full.push_back(in.view());
+    const std::vector<FarChoiceSample> none = without_meshes(sc.samples);
+    const Box3d eyes = Box3d::cube({0, 0, 0}, 1);
+    const FarChoice eager = choose_far_field(eyes, sc.far, full, mode, factor);
+    std::set<std::pair<std::size_t, int>> asked;
+    const FarChoice lazy = choose_far_field(
+        eyes, sc.far, none, mode, factor, [&](std::size_t sample, int face) -> const FaceMesh& {
+          EXPECT_TRUE(asked.insert({sample, face}).second) << "asked twice";
+          return sc.samples.at(sample).meshes[std::size_t(face)];
+        });
+    asked_total += int(asked.size());
+    possible_total += int(sc.samples.size()) * kCubeFaces;
+    ASSERT_EQ(eager.pieces.size(), lazy.pieces.size());
+    for (std::size_t k = 0; k < eager.pieces.size(); ++k) {
+      EXPECT_EQ(eager.pieces[k].chunk.id, lazy.pieces[k].chunk.id);
+      EXPECT_EQ(eager.pieces[k].triangles, lazy.pieces[k].triangles);
+    }
+    EXPECT_EQ(eager.geometry_triangles, lazy.geometry_triangles);
+    if (mode == FarChoiceMode::tdm) EXPECT_EQ(asked.size(), sc.samples.size() * kCubeFaces);
+    for (int f = 0; f < kCubeFaces; ++f) {
+      const FaceFarChoice &e = eager.faces[std::size_t(f)], &l = lazy.faces[std::size_t(f)];
+      const std::uint32_t nothing = empty_tiles(sc, f);
+      EXPECT_EQ(e.geometry_tiles & ~l.geometry_tiles, 0u) << "face " << f;
+      EXPECT_EQ(l.geometry_tiles & ~e.geometry_tiles & ~nothing, 0u) << "face " << f;
+      EXPECT_LE(l.tdm_triangles, e.tdm_triangles) << "face " << f;
+      EXPECT_EQ(l.geometry_triangles, e.geometry_triangles) << "face " << f;
+      bool all_asked = true;
+      for (std::size_t i = 0; i < sc.samples.size(); ++i) all_asked = all_asked && asked.count({i, f});
+      if (!all_asked) EXPECT_EQ(l.geometry_tiles, kAllFaceTiles) << "face " << f << " not meshed but kept";
+      if (l.geometry_tiles == e.geometry_tiles && all_asked) {
+        EXPECT_EQ(l.tdm_triangles, e.tdm_triangles) << "face " << f;
+        EXPECT_EQ(l.replaced_triangles, e.replaced_triangles) << "face " << f;
       }
+    }
+  });
   EXPECT_LT(asked_total, possible_total);  // some faces were never meshed
 }
 
@@ -835,53 +843,49 @@ TEST(FarChoiceLazy, BoundsDecideWholeFacesWithoutTheirMeshes) {
   // before its mesh, never more meshes than without bounds, and some faces
   // decided by their bounds alone (drawn wholly as geometry).
   int meshes_with_bounds = 0, meshes_without = 0, bounded_only = 0;
-  for (unsigned seed = 1; seed <= 12; ++seed)
-    for (const FarChoiceMode mode : {FarChoiceMode::cheapest, FarChoiceMode::tdm, FarChoiceMode::geometry})
-      for (const double factor : {0.25, 1.0, 2.0, 8.0}) {
-        SCOPED_TRACE(testing::Message() << "seed " << seed << " mode " << int(mode) << " factor " << factor);
-        const RandomScenario sc = random_scenario(seed, 1 + int(seed % 4), seed % 2 ? 12 : 3);
-        std::vector<FarChoiceSample> full;
-        for (const SampleInput& in : sc.samples) full.push_back(in.view());
-        const std::vector<FarChoiceSample> none = without_meshes(sc.samples);
-        const Box3d eyes = Box3d::cube({0, 0, 0}, 1);
-        const auto mesh_of = [&](std::size_t sample, int face) -> const FaceMesh& {
-          return sc.samples.at(sample).meshes[std::size_t(face)];
-        };
-        const FarChoice eager = choose_far_field(eyes, sc.far, full, mode, factor);
-        int lazy_meshes = 0;
-        choose_far_field(eyes, sc.far, none, mode, factor, [&](std::size_t sample, int face) -> const FaceMesh& {
-          ++lazy_meshes;
+  for_each_random_cell([&](const RandomScenario& sc, FarChoiceMode mode, double factor) {
+    std::vector<FarChoiceSample> full;
+    for (const SampleInput& in : sc.samples) full.push_back(in.view());
+    const std::vector<FarChoiceSample> none = without_meshes(sc.samples);
+    const Box3d eyes = Box3d::cube({0, 0, 0}, 1);
+    const auto mesh_of = [&](std::size_t sample, int face) -> const FaceMesh& {
+      return sc.samples.at(sample).meshes[std::size_t(face)];
+    };
+    const FarChoice eager = choose_far_field(eyes, sc.far, full, mode, factor);
+    int lazy_meshes = 0;
+    choose_far_field(eyes, sc.far, none, mode, factor, [&](std::size_t sample, int face) -> const FaceMesh& {
+      ++lazy_meshes;
+      return mesh_of(sample, face);
+    });
+    std::set<std::pair<std::size_t, int>> meshed, bounded;
+    const FarChoice b = choose_far_field(
+        eyes, sc.far, none, mode, factor,
+        [&](std::size_t sample, int face) -> const FaceMesh& {
+          EXPECT_TRUE(meshed.insert({sample, face}).second) << "mesh asked twice";
           return mesh_of(sample, face);
+        },
+        [&](std::size_t sample, int face) {
+          EXPECT_TRUE(bounded.insert({sample, face}).second) << "bound asked twice";
+          EXPECT_FALSE(meshed.count({sample, face})) << "bound asked after the mesh";
+          return std::uint64_t(0.85 * double(mesh_of(sample, face).triangle_count()));
         });
-        std::set<std::pair<std::size_t, int>> meshed, bounded;
-        const FarChoice b = choose_far_field(
-            eyes, sc.far, none, mode, factor,
-            [&](std::size_t sample, int face) -> const FaceMesh& {
-              EXPECT_TRUE(meshed.insert({sample, face}).second) << "mesh asked twice";
-              return mesh_of(sample, face);
-            },
-            [&](std::size_t sample, int face) {
-              EXPECT_TRUE(bounded.insert({sample, face}).second) << "bound asked twice";
-              EXPECT_FALSE(meshed.count({sample, face})) << "bound asked after the mesh";
-              return std::uint64_t(0.85 * double(mesh_of(sample, face).triangle_count()));
-            });
-        ASSERT_EQ(eager.pieces.size(), b.pieces.size());
-        for (std::size_t k = 0; k < eager.pieces.size(); ++k) {
-          EXPECT_EQ(eager.pieces[k].chunk.id, b.pieces[k].chunk.id);
-          EXPECT_EQ(eager.pieces[k].triangles, b.pieces[k].triangles);
-        }
-        EXPECT_EQ(eager.geometry_triangles, b.geometry_triangles);
-        EXPECT_LE(int(meshed.size()), lazy_meshes);
-        meshes_with_bounds += int(meshed.size());
-        meshes_without += lazy_meshes;
-        for (const auto& [sample, face] : bounded)
-          if (!meshed.count({sample, face})) {
-            ++bounded_only;
-            EXPECT_EQ(b.faces[std::size_t(face)].geometry_tiles, kAllFaceTiles) << "face " << face;
-          }
-        for (int f = 0; f < kCubeFaces; ++f)
-          EXPECT_EQ(b.faces[std::size_t(f)].geometry_triangles, eager.faces[std::size_t(f)].geometry_triangles);
+    ASSERT_EQ(eager.pieces.size(), b.pieces.size());
+    for (std::size_t k = 0; k < eager.pieces.size(); ++k) {
+      EXPECT_EQ(eager.pieces[k].chunk.id, b.pieces[k].chunk.id);
+      EXPECT_EQ(eager.pieces[k].triangles, b.pieces[k].triangles);
+    }
+    EXPECT_EQ(eager.geometry_triangles, b.geometry_triangles);
+    EXPECT_LE(int(meshed.size()), lazy_meshes);
+    meshes_with_bounds += int(meshed.size());
+    meshes_without += lazy_meshes;
+    for (const auto& [sample, face] : bounded)
+      if (!meshed.count({sample, face})) {
+        ++bounded_only;
+        EXPECT_EQ(b.faces[std::size_t(face)].geometry_tiles, kAllFaceTiles) << "face " << face;
       }
+    for (int f = 0; f < kCubeFaces; ++f)
+      EXPECT_EQ(b.faces[std::size_t(f)].geometry_triangles, eager.faces[std::size_t(f)].geometry_triangles);
+  });
   EXPECT_GT(bounded_only, 0);
   EXPECT_LT(meshes_with_bounds, meshes_without);
 }
