@@ -120,7 +120,8 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
   FarChoice out;
   // What each tile would drop: its depth-mesh triangles, counted from the
   // meshes known so far. Triangles spanning tiles are dropped only when all
-  // the tiles they reach take geometry (not counted as any tile's gain).
+  // the tiles they reach take geometry (counted in the gain of the group
+  // that completes them, not in any one tile's).
   std::vector<std::uint64_t> removable(kAllTiles, 0);
   // Per face: how many spanning triangles reach each set of tiles (sorted by
   // tile set), and the union of those sets.
@@ -169,6 +170,7 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
   std::vector<std::array<std::uint64_t, kCubeFaces>> bound(samples.size());
   std::vector<std::array<char, kCubeFaces>> bounded(samples.size());
   std::uint64_t learned_triangles = 0, learned_faces = 0;  // over the meshes and bounds learned (a mesh replaces its bound)
+  const auto bound_only = [&](std::size_t i, int f) { return bounded[i][std::size_t(f)] && !known[i][std::size_t(f)]; };
   // Learns about a missing mesh of a face with a tile in first..first+count-1
   // not taken yet: the bound of one whose face the group covers wholly open
   // (there every triangle counts, so the bound does too), else the mesh;
@@ -203,7 +205,7 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
     const FaceMesh& mesh = mesh_source(best_sample, best_face);
     count_mesh(best_face, mesh);
     if (bounded[best_sample][f])
-      learned_triangles += mesh.triangle_count() - bound[best_sample][f];
+      learned_triangles = learned_triangles - bound[best_sample][f] + mesh.triangle_count();
     else
       learned_triangles += mesh.triangle_count(), ++learned_faces;
     return true;
@@ -324,7 +326,7 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
           if ((tiles & ~(taken | open)) == 0 && (tiles & open) != 0) g += n;
         if (taken == 0 && open == kFaceTiles)  // the whole face goes: so do the bounded meshes' triangles
           for (std::size_t i = 0; i < samples.size(); ++i)
-            if (bounded[i][std::size_t(f)] && !known[i][std::size_t(f)]) g += bound[i][std::size_t(f)];
+            if (bound_only(i, f)) g += bound[i][std::size_t(f)];
       }
       return g;
     };
@@ -387,7 +389,7 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
     for (const auto& [tiles, n] : spanning[std::size_t(f)])
       ((tiles & ~face.geometry_tiles) == 0 ? face.replaced_triangles : face.tdm_triangles) += n;
     for (std::size_t i = 0; i < samples.size(); ++i)  // meshes never learned: their faces are all geometry
-      if (bounded[i][std::size_t(f)] && !known[i][std::size_t(f)]) face.replaced_triangles += bound[i][std::size_t(f)];
+      if (bound_only(i, f)) face.replaced_triangles += bound[i][std::size_t(f)];
   }
   // Chosen elements grouped into pieces by chunk (chunks ascend by id).
   std::vector<std::uint32_t> order;

@@ -601,14 +601,13 @@ struct FaceSimplification::State {
   std::optional<FaceOutlines> traced;
   std::vector<FixedSegment> fixed;
   std::unique_ptr<TinSimplifier> tin;
-  std::size_t triangles_in = 0, outline_triangles = 0;
+  std::size_t triangles_in = 0;
 };
 
 FaceSimplification::FaceSimplification(const FaceMesh& in, int face_size, const SimplifyParams& params)
     : state_(std::make_unique<State>()) {
   state_->in = &in;
   start(face_size, params);
-  outline_triangles_ = state_->outline_triangles;
 }
 
 FaceSimplification::FaceSimplification(FaceMesh&& in, int face_size, const SimplifyParams& params)
@@ -616,7 +615,6 @@ FaceSimplification::FaceSimplification(FaceMesh&& in, int face_size, const Simpl
   state_->owned.emplace(std::move(in));
   state_->in = &*state_->owned;
   start(face_size, params);
-  outline_triangles_ = state_->outline_triangles;
 }
 
 FaceSimplification::~FaceSimplification() = default;
@@ -636,7 +634,7 @@ void FaceSimplification::start(int face_size, const SimplifyParams& params) {
   st.triangles_in = st.in->triangle_count();
   st.grid = read_face_grid(*st.in, face_size);
   if (face_size < 4) {  // too small to simplify: the dense mesh is the result
-    st.outline_triangles = st.in->triangle_count();
+    outline_triangles_ = st.in->triangle_count();
     return;
   }
   st.regions = label_face_regions(st.grid);
@@ -657,7 +655,7 @@ void FaceSimplification::start(int face_size, const SimplifyParams& params) {
   // When the outlines alone exceed the cap, the cap's looser bound applies
   // from the start, to their straightening too.
   if (st.tin->outline_triangles() > params.max_triangles && ceiling > eps) st.tin = simplifier(ceiling);
-  st.outline_triangles = st.tin->outline_triangles();
+  outline_triangles_ = st.tin->outline_triangles();
   // What waits for finish() needs only the dense vertices (a third of an
   // owned dense mesh's memory is its triangles).
   if (st.owned && !params.measure_error) std::vector<std::uint32_t>().swap(st.owned->indices);
@@ -671,7 +669,7 @@ SimplifyResult FaceSimplification::finish() && {
   SimplifyResult result;
   const FaceMesh& in = *st->in;
   result.triangles_in = st->triangles_in;
-  result.outline_triangles = st->outline_triangles;
+  result.outline_triangles = outline_triangles_;
   double eps = st->params.depth_error_relative;
   if (st->tin) {
     result.mesh = compact(in, st->tin->run());
