@@ -656,9 +656,9 @@ void FaceSimplification::start(int face_size, const SimplifyParams& params) {
   // from the start, to their straightening too.
   if (st.tin->outline_triangles() > params.max_triangles && ceiling > eps) st.tin = simplifier(ceiling);
   outline_triangles_ = st.tin->outline_triangles();
-  // What waits for finish() needs only the dense vertices (a third of an
-  // owned dense mesh's memory is its triangles).
-  if (st.owned && !params.measure_error) std::vector<std::uint32_t>().swap(st.owned->indices);
+  // What waits for finish() needs only the dense vertices, to measure too (a
+  // third of an owned dense mesh's memory is its triangles).
+  if (st.owned) std::vector<std::uint32_t>().swap(st.owned->indices);
 }
 
 std::size_t FaceSimplification::outline_triangles() const { return outline_triangles_; }

@@ -16,6 +16,7 @@
 #include "pipeline/ingest.h"
 #include "runner/bake_runner.h"
 #include "runner/parallel.h"
+#include "stages/simplify.h"
 #include "storage/cell_db.h"
 #include "fixture_room_obj.h"
 #include "test_support.h"
@@ -75,6 +76,44 @@ TEST(Bake, BakesEveryCellAndSkipsThemOnRerun) {
   s = run_bake(c, quiet());
   EXPECT_EQ(s.cells_up_to_date, 15u);
   EXPECT_EQ(s.cells_baked, 0u);
+}
+
+TEST(Bake, FacesStoreTheErrorMeasuredOnTheirSimplifiedMesh) {
+  test::TempDir dir;
+  make_room_store(dir);
+  BakeConfig c = room_config(dir, "cells.db");
+  c.far_choice = "tdm";  // every face keeps its mesh (the room's cheapest far field is all geometry)
+  c.samples_max = 2;
+  run_bake(c, quiet());
+  CellDb db(c.database, CellDb::Mode::read_only);
+  const double depth_bound = c.depth_error_relative * SimplifyParams{}.max_depth_error_factor * (1 + 1e-6) + 1e-7;
+  const double boundary_bound = std::max(c.boundary_error_px, c.delta_boundary_error_px) + 1e-9;
+  int measured = 0, meshes = 0;
+  ASSERT_EQ(db.cell_ids().size(), 15u);
+  for (const std::int64_t id : db.cell_ids()) {
+    const auto cell = db.get_cell(id);
+    ASSERT_TRUE(cell) << id;
+    double max_boundary = 0, max_depth = 0;
+    for (const SampleRow& sample : cell->samples)
+      for (const FaceRow& f : sample.faces) {
+        EXPECT_GE(f.depth_error, 0);
+        EXPECT_GE(f.boundary_error_px, 0);
+        EXPECT_LE(f.depth_error, depth_bound) << "cell " << id << " face " << f.face;
+        EXPECT_LE(f.boundary_error_px, boundary_bound) << "cell " << id << " face " << f.face;
+        if (f.triangles == 0) {  // nothing kept: nothing measured
+          EXPECT_EQ(f.depth_error, 0);
+          EXPECT_EQ(f.boundary_error_px, 0);
+        }
+        meshes += f.triangles > 0;
+        measured += f.depth_error > 0 || f.boundary_error_px > 0;
+        max_boundary = std::max(max_boundary, f.boundary_error_px);
+        max_depth = std::max(max_depth, f.depth_error);
+      }
+    EXPECT_EQ(cell->max_boundary_error_px, max_boundary) << id;
+    EXPECT_EQ(cell->max_depth_error, max_depth) << id;
+  }
+  EXPECT_GT(meshes, 0);
+  EXPECT_GT(measured, 0);  // the simplifier's errors were measured, not left at zero
 }
 
 TEST(Bake, ChangedParametersRecomputeOnlyWhatTheyAffect) {
