@@ -267,10 +267,7 @@ std::unique_ptr<FaceSimplification> start_face_simplification(CellWork& work, co
   p.depth_error_relative = config.depth_error_relative;
   p.boundary_error_px = s.parent < 0 ? config.boundary_error_px : config.delta_boundary_error_px;
   p.max_triangles = static_cast<std::size_t>(config.max_face_triangles);
-  // Measured while the simplifier still holds the dense grid, regions and
-  // outlines: measuring later, for the faces the far choice keeps, would
-  // build and analyse each kept face's dense mesh a second time.
-  p.measure_error = true;
+  p.measure_error = false;  // measured after the far choice, for the meshes kept (drop_replaced_and_measure_kept)
   std::unique_ptr<FaceSimplification> started;
   try {
     started = std::make_unique<FaceSimplification>(std::move(dense), config.face_size, p);
@@ -288,6 +285,13 @@ int pending_faces(const CellWork& work) {
   return n;
 }
 
+int ruler_faces(const CellWork& work) {
+  int n = 0;
+  for (const SampleWork& s : work.samples)
+    for (const SimplifyRuler& r : s.rulers) n += bool(r);
+  return n;
+}
+
 }  // namespace
 
 const FaceMesh& face_mesh(CellWork& work, const BakeConfig& config, std::size_t sample, int face) {
@@ -299,10 +303,11 @@ const FaceMesh& face_mesh(CellWork& work, const BakeConfig& config, std::size_t 
   const auto t0 = Clock::now();
   StageTimer timer(work, "simplify");
   try {
-    SimplifyResult r = std::move(*started).finish();
+    // Up to kMaxRulerFaces faces of the cell keep their dense mesh's analysis
+    // to be measured without building it again.
+    SimplifyResult r = ruler_faces(work) < kMaxRulerFaces ? std::move(*started).finish(s.rulers[f])
+                                                          : std::move(*started).finish();
     s.simplified[f] = std::move(r.mesh);
-    s.boundary_error_px[f] = r.achieved.max_boundary_error_px;
-    s.depth_error[f] = r.achieved.max_depth_error_relative;
   } catch (const std::exception& e) {
     throw StageError("simplify", face_where(sample, face) + e.what());
   }
@@ -324,19 +329,47 @@ std::uint64_t face_mesh_bound(CellWork& work, const BakeConfig& config, std::siz
 
 namespace {
 
-// Drops the depth-mesh triangles geometry tiles replace. A face drawn wholly
-// as geometry stores no mesh and no error; the others keep the error
-// face_mesh measured on their whole simplified mesh.
-void drop_replaced(CellWork& work) {
-  for (SampleWork& s : work.samples)
+// Drops the depth-mesh triangles geometry tiles replace, and measures the
+// simplifier's error (stored with each face) for the faces that keep some,
+// against the simplified mesh as it was before the drop: with the face's
+// ruler when face_mesh kept one, else by building the dense mesh again
+// (timed as depth_mesh) and analysing it (timed as simplify); the same
+// figures either way. Faces drawn wholly as geometry store no mesh and no error.
+void drop_replaced_and_measure_kept(CellWork& work, const BakeConfig& config) {
+  for (std::size_t i = 0; i < work.samples.size(); ++i) {
+    SampleWork& s = work.samples[i];
     for (int f = 0; f < kCubeFaces; ++f) {
       const std::size_t k = std::size_t(f);
-      drop_geometry_tiles(s.simplified[k], work.far->faces[k].geometry_tiles);
-      if (s.simplified[k].triangle_count() == 0) {
+      const SimplifyRuler ruler = std::move(s.rulers[k]);  // freed once this face is done
+      s.boundary_error_px[k] = s.depth_error[k] = 0;
+      FaceMesh kept = s.simplified[k];
+      drop_geometry_tiles(kept, work.far->faces[k].geometry_tiles);
+      if (kept.triangle_count() == 0) {
         s.simplified[k] = FaceMesh{};
-        s.boundary_error_px[k] = s.depth_error[k] = 0;
+        continue;
       }
+      const std::string where = face_where(i, f);
+      FaceMesh dense;
+      if (!ruler) {
+        StageTimer timer(work, "depth_mesh");
+        try {
+          dense = build_depth_mesh_face(s.cube, depth_mesh_params(config), f);
+        } catch (const std::exception& e) {
+          throw StageError("depth_mesh", where + e.what());
+        }
+      }
+      StageTimer timer(work, "simplify");
+      try {
+        const SimplifyError e = ruler ? ruler.measure(s.simplified[k])
+                                      : measure_simplification_error(dense, s.simplified[k], config.face_size);
+        s.boundary_error_px[k] = e.max_boundary_error_px;
+        s.depth_error[k] = e.max_depth_error_relative;
+      } catch (const std::exception& e) {
+        throw StageError("simplify", where + e.what());
+      }
+      s.simplified[k] = std::move(kept);
     }
+  }
 }
 
 }  // namespace
@@ -395,7 +428,7 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
                               [&](std::size_t sample, int face) { return face_mesh_bound(work, config, sample, face); });
   for (SampleWork& s : work.samples)  // bounded faces the choice never meshed: drawn wholly as geometry
     for (auto& p : s.pending) p.reset();
-  drop_replaced(work);
+  drop_replaced_and_measure_kept(work, config);
   work.far_chunks.clear();
   // The row's far geometry: whole chunks by reference, seen triangles by their
   // numbers in the stored chunk (the viewer cuts them out of the store's chunk).

@@ -64,6 +64,10 @@ struct SampleWork {
   // Faces bounded but not meshed yet (face_mesh_bound): their simplification
   // up to the outline triangulation, finished by face_mesh.
   std::array<std::unique_ptr<FaceSimplification>, kCubeFaces> pending;
+  // Faces meshed while the cell had fewer than kMaxRulerFaces rulers: what
+  // measuring their simplified mesh needs of the dense one, until the far
+  // choice has kept or dropped them.
+  std::array<SimplifyRuler, kCubeFaces> rulers;
   std::array<double, kCubeFaces> boundary_error_px{};
   std::array<double, kCubeFaces> depth_error{};
 };
@@ -103,6 +107,9 @@ const FaceMesh& face_mesh(CellWork& work, const BakeConfig& config, std::size_t 
 // that the face is meshed whole and its exact count returned.
 std::uint64_t face_mesh_bound(CellWork& work, const BakeConfig& config, std::size_t sample, int face);
 inline constexpr int kMaxPendingFaces = 8;
+// At most this many faces of a cell keep a SimplifyRuler (~15 MB each) from
+// face_mesh until the far choice is done.
+inline constexpr int kMaxRulerFaces = 8;
 // Chooses exact far geometry or depth meshes per face tile and drops the
 // depth-mesh triangles that geometry replaces (stages/far_choice.h); meshes
 // and simplifies only the faces the choice depends on (a face drawn wholly as

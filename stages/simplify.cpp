@@ -589,16 +589,28 @@ FaceMesh compact(const FaceMesh& in, const std::vector<std::uint32_t>& tris) {
 
 }  // namespace
 
-// The state between the two steps: the grid analysis, the outlines and their
-// triangulation, kept so that finishing continues where bounding stopped.
-struct FaceSimplification::State {
+// What measuring a result needs of the dense mesh it came from: the dense
+// vertices, the grid, the regions and the traced (not straightened) outlines.
+struct DenseFaceAnalysis {
   std::optional<FaceMesh> owned;
   const FaceMesh* in = nullptr;
   int face_size = 0;
-  SimplifyParams params;
   FaceGrid grid;
-  std::optional<FaceRegions> regions;
+  std::optional<FaceRegions> regions;  // unset (and traced too) when the face is too small to simplify
   std::optional<FaceOutlines> traced;
+
+  SimplifyError measure(const FaceMesh& simplified) const {
+    return regions ? measure_simplification_error(*in, grid, *regions, *traced, simplified)
+                   : measure_simplification_error(*in, simplified, face_size);
+  }
+};
+
+// The state between the two steps: the dense mesh's analysis (at a stable
+// address: the simplifier refers to its grid and regions), the outlines and
+// their triangulation, kept so that finishing continues where bounding stopped.
+struct FaceSimplification::State {
+  std::unique_ptr<DenseFaceAnalysis> dense = std::make_unique<DenseFaceAnalysis>();
+  SimplifyParams params;
   std::vector<FixedSegment> fixed;
   std::unique_ptr<TinSimplifier> tin;
   std::size_t triangles_in = 0;
@@ -606,14 +618,15 @@ struct FaceSimplification::State {
 
 FaceSimplification::FaceSimplification(const FaceMesh& in, int face_size, const SimplifyParams& params)
     : state_(std::make_unique<State>()) {
-  state_->in = &in;
+  state_->dense->in = &in;
   start(face_size, params);
 }
 
 FaceSimplification::FaceSimplification(FaceMesh&& in, int face_size, const SimplifyParams& params)
     : state_(std::make_unique<State>()) {
-  state_->owned.emplace(std::move(in));
-  state_->in = &*state_->owned;
+  DenseFaceAnalysis& dense = *state_->dense;
+  dense.owned.emplace(std::move(in));
+  dense.in = &*dense.owned;
   start(face_size, params);
 }
 
@@ -629,26 +642,27 @@ void FaceSimplification::start(int face_size, const SimplifyParams& params) {
   if (!(params.max_depth_error_factor >= 1))
     throw std::invalid_argument("simplify_face_mesh: max_depth_error_factor must be >= 1");
   State& st = *state_;
-  st.face_size = face_size;
+  DenseFaceAnalysis& dense = *st.dense;
+  dense.face_size = face_size;
   st.params = params;
-  st.triangles_in = st.in->triangle_count();
-  st.grid = read_face_grid(*st.in, face_size);
+  st.triangles_in = dense.in->triangle_count();
+  dense.grid = read_face_grid(*dense.in, face_size);
   if (face_size < 4) {  // too small to simplify: the dense mesh is the result
-    outline_triangles_ = st.in->triangle_count();
+    outline_triangles_ = dense.in->triangle_count();
     return;
   }
-  st.regions = label_face_regions(st.grid);
-  for (const BorderPiece& p : split_face_border(*st.in, st.grid, params.depth_error_relative)) {
+  dense.regions = label_face_regions(dense.grid);
+  for (const BorderPiece& p : split_face_border(*dense.in, dense.grid, params.depth_error_relative)) {
     if (!p.covered) continue;
     const auto a = border_point(p.side, p.a, face_size), b = border_point(p.side, p.b, face_size);
     st.fixed.push_back({{a[0], a[1]}, {b[0], b[1]}});
   }
-  st.traced = trace_face_outlines(st.grid, *st.regions);
+  dense.traced = trace_face_outlines(dense.grid, *dense.regions);
   const double eps = params.depth_error_relative, ceiling = eps * params.max_depth_error_factor;
   const auto simplifier = [&](double outline_depth_error) {
-    FaceOutlines outlines = *st.traced;
+    FaceOutlines outlines = *dense.traced;
     straighten_face_outlines(outlines, st.fixed, params.boundary_error_px, outline_depth_error, face_size);
-    return std::make_unique<TinSimplifier>(st.grid, *st.regions, std::move(outlines), st.fixed, eps,
+    return std::make_unique<TinSimplifier>(dense.grid, *dense.regions, std::move(outlines), st.fixed, eps,
                                            params.max_triangles, ceiling);
   };
   st.tin = simplifier(eps);
@@ -658,16 +672,24 @@ void FaceSimplification::start(int face_size, const SimplifyParams& params) {
   outline_triangles_ = st.tin->outline_triangles();
   // What waits for finish() needs only the dense vertices, to measure too (a
   // third of an owned dense mesh's memory is its triangles).
-  if (st.owned) std::vector<std::uint32_t>().swap(st.owned->indices);
+  if (dense.owned) std::vector<std::uint32_t>().swap(dense.owned->indices);
 }
 
 std::size_t FaceSimplification::outline_triangles() const { return outline_triangles_; }
 
 SimplifyResult FaceSimplification::finish() && {
+  SimplifyRuler ruler;
+  const bool measure = state_ && state_->params.measure_error;
+  SimplifyResult result = std::move(*this).finish(ruler);
+  if (measure) result.achieved = ruler.measure(result.mesh);
+  return result;
+}
+
+SimplifyResult FaceSimplification::finish(SimplifyRuler& ruler) && {
   if (!state_) throw std::logic_error("FaceSimplification::finish: already finished");
-  const std::unique_ptr<State> st = std::move(state_);
+  std::unique_ptr<State> st = std::move(state_);
   SimplifyResult result;
-  const FaceMesh& in = *st->in;
+  const FaceMesh& in = *st->dense->in;
   result.triangles_in = st->triangles_in;
   result.outline_triangles = outline_triangles_;
   double eps = st->params.depth_error_relative;
@@ -680,10 +702,19 @@ SimplifyResult FaceSimplification::finish() && {
   result.triangles_out = result.mesh.triangle_count();
   result.depth_error_bound_used = eps;
   result.cap_forced_larger_error = eps > st->params.depth_error_relative;
-  if (st->params.measure_error)
-    result.achieved = st->tin ? measure_simplification_error(in, st->grid, *st->regions, *st->traced, result.mesh)
-                              : measure_simplification_error(in, result.mesh, st->face_size);
+  st->tin.reset();  // it refers to the analysis handed over below
+  ruler.dense_ = std::move(st->dense);
   return result;
+}
+
+SimplifyRuler::SimplifyRuler() = default;
+SimplifyRuler::~SimplifyRuler() = default;
+SimplifyRuler::SimplifyRuler(SimplifyRuler&&) noexcept = default;
+SimplifyRuler& SimplifyRuler::operator=(SimplifyRuler&&) noexcept = default;
+
+SimplifyError SimplifyRuler::measure(const FaceMesh& simplified) const {
+  if (!dense_) throw std::logic_error("SimplifyRuler::measure: holds no dense mesh");
+  return dense_->measure(simplified);
 }
 
 SimplifyResult simplify_face_mesh(const FaceMesh& in, int face_size, const SimplifyParams& params) {

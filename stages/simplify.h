@@ -36,10 +36,9 @@ struct SimplifyParams {
   // depth_error_relative, so neighbouring faces still agree.
   std::size_t max_triangles = 10000;
   double max_depth_error_factor = 8;
-  // Measure SimplifyResult::achieved (about a third of the time) from the
-  // grid, regions and outlines the simplification already holds; measuring
-  // afterwards with measure_simplification_error gives the same figures but
-  // analyses the dense mesh again.
+  // Measure SimplifyResult::achieved (about a third of the time). A caller
+  // that keeps only some meshes measures those it keeps later, with a
+  // SimplifyRuler or measure_simplification_error (the same figures).
   bool measure_error = true;
 };
 
@@ -71,6 +70,31 @@ struct SimplifyResult {
 // when `in` is not a pixel-grid mesh of that size.
 SimplifyResult simplify_face_mesh(const FaceMesh& in, int face_size, const SimplifyParams& params);
 
+struct DenseFaceAnalysis;
+
+// What measuring a simplified face needs of the dense mesh it came from (its
+// vertices, grid, regions and outlines: ~15 MB for a 512^2 face), kept by
+// FaceSimplification::finish(ruler) so that a caller can measure later only
+// the meshes it keeps, without analysing their dense meshes again.
+class SimplifyRuler {
+ public:
+  SimplifyRuler();
+  ~SimplifyRuler();
+  SimplifyRuler(SimplifyRuler&&) noexcept;
+  SimplifyRuler& operator=(SimplifyRuler&&) noexcept;
+
+  // Whether it holds a dense mesh's analysis.
+  explicit operator bool() const { return dense_ != nullptr; }
+  // SimplifyResult::achieved for `simplified`, the mesh finish(ruler)
+  // returned: the figures measure_simplification_error gives against the
+  // dense mesh. Throws std::logic_error when it holds none.
+  SimplifyError measure(const FaceMesh& simplified) const;
+
+ private:
+  friend class FaceSimplification;
+  std::unique_ptr<DenseFaceAnalysis> dense_;
+};
+
 // simplify_face_mesh in two steps, for a caller that may not need the mesh:
 // constructing reads the grid, straightens the outlines and triangulates them
 // (about two thirds of the work), after which outline_triangles() is a lower
@@ -91,6 +115,10 @@ class FaceSimplification {
   std::size_t outline_triangles() const;
   // Refines; callable once (throws std::logic_error after that).
   SimplifyResult finish() &&;
+  // The same, without measuring (achieved stays zero, whatever
+  // params.measure_error says); `ruler` takes the dense mesh's analysis to
+  // measure the result later. A borrowed input must outlive the ruler.
+  SimplifyResult finish(SimplifyRuler& ruler) &&;
 
  private:
   struct State;

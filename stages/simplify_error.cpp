@@ -60,18 +60,31 @@ class SegmentIndex {
   }
 
   // Distance from (px, py) to the nearest segment, at most kBoundarySaturationPx.
+  // The nearest point lies in a cell whose bucket holds its segment, and no
+  // farther from (px, py) than that cell's square; so a cell no nearer than
+  // the best distance so far is skipped (the result is the same as scanning it).
   double distance(double px, double py) const {
     const int cx = cell(px), cy = cell(py);
     double best = kBoundarySaturationPx;
+    auto scan = [&](int x, int y, double gap_y) {
+      if (x < 0 || x >= cells_) return;
+      const double gap_x = std::max({0.0, double(x) * kCell - px, px - double(x + 1) * kCell});
+      if (gap_x * gap_x + gap_y * gap_y >= best * best) return;
+      for (std::uint32_t k : bucket_[std::size_t(y) * cells_ + x])
+        best = std::min(best, distance_to_segment(px, py, segments_[k]));
+    };
     for (int ring = 0; ring * kCell <= kBoundarySaturationPx + kCell; ++ring) {
       if ((ring - 1) * kCell >= best) break;
-      for (int y = cy - ring; y <= cy + ring; ++y)
-        for (int x = cx - ring; x <= cx + ring; ++x) {
-          if (std::max(std::abs(x - cx), std::abs(y - cy)) != ring || x < 0 || y < 0 || x >= cells_ || y >= cells_)
-            continue;
-          for (std::uint32_t k : bucket_[std::size_t(y) * cells_ + x])
-            best = std::min(best, distance_to_segment(px, py, segments_[k]));
+      for (int y = std::max(cy - ring, 0); y <= std::min(cy + ring, cells_ - 1); ++y) {
+        const double gap_y = std::max({0.0, double(y) * kCell - py, py - double(y + 1) * kCell});
+        if (gap_y >= best) continue;
+        if (std::abs(y - cy) == ring) {
+          for (int x = cx - ring; x <= cx + ring; ++x) scan(x, y, gap_y);
+        } else {
+          scan(cx - ring, y, gap_y);
+          scan(cx + ring, y, gap_y);
         }
+      }
     }
     return best;
   }

@@ -166,6 +166,49 @@ TEST(Simplify, TwoStepsGiveTheSameResultAndBoundItFirst) {
     }
 }
 
+// The same error figures, field by field.
+void expect_same_error(const SimplifyError& a, const SimplifyError& b) {
+  EXPECT_EQ(a.max_depth_error_relative, b.max_depth_error_relative);
+  EXPECT_EQ(a.max_boundary_error_px, b.max_boundary_error_px);
+  EXPECT_EQ(a.uncovered_samples, b.uncovered_samples);
+  EXPECT_EQ(a.spurious_samples, b.spurious_samples);
+  EXPECT_EQ(a.flipped_triangles, b.flipped_triangles);
+  EXPECT_EQ(a.overlapping_samples, b.overlapping_samples);
+}
+
+TEST(Simplify, ARulerMeasuresTheResultLaterWithTheSameFigures) {
+  // finish(ruler) returns finish()'s mesh unmeasured, and the ruler measures
+  // it as finish() and measure_simplification_error do, for owned and
+  // borrowed dense meshes, a face over the cap and one too small to simplify.
+  for (const int n : {64, 2}) {
+    const auto dense = build_depth_meshes(raycast_analytic_scene(cluttered_room(), {0.2, -0.1, 0.1}, n),
+                                          DepthMeshParams{});
+    SimplifyParams capped;
+    capped.max_triangles = 16;
+    for (const SimplifyParams& params : {SimplifyParams{}, capped})
+      for (int f = 0; f < kCubeFaces; ++f) {
+        SCOPED_TRACE(testing::Message() << "size " << n << " face " << f << " cap " << params.max_triangles);
+        const FaceMesh& face = dense[std::size_t(f)];
+        const SimplifyResult whole = simplify_face_mesh(face, n, params);
+        SimplifyRuler owned_ruler, borrowed_ruler;
+        EXPECT_FALSE(owned_ruler);
+        EXPECT_THROW(owned_ruler.measure(whole.mesh), std::logic_error);
+        const SimplifyResult owned = FaceSimplification(FaceMesh(face), n, params).finish(owned_ruler);
+        const SimplifyResult borrowed = FaceSimplification(face, n, params).finish(borrowed_ruler);
+        for (const SimplifyResult* r : {&owned, &borrowed}) {
+          EXPECT_EQ(r->mesh.positions, whole.mesh.positions);
+          EXPECT_EQ(r->mesh.indices, whole.mesh.indices);
+          expect_same_error(r->achieved, SimplifyError{});
+        }
+        ASSERT_TRUE(owned_ruler);
+        SimplifyRuler moved = std::move(owned_ruler);
+        expect_same_error(moved.measure(owned.mesh), whole.achieved);
+        expect_same_error(borrowed_ruler.measure(borrowed.mesh), whole.achieved);
+        expect_same_error(moved.measure(owned.mesh), measure_simplification_error(face, owned.mesh, n));
+      }
+  }
+}
+
 TEST(Simplify, TighterBoundKeepsMoreTriangles) {
   const int n = 64;
   const auto dense = build_depth_meshes(raycast_analytic_scene(cluttered_room(), {0, 0, 0}, n), DepthMeshParams{});
