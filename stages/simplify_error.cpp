@@ -111,9 +111,12 @@ double directed_distance(const std::vector<Segment2>& from, const SegmentIndex& 
   std::vector<Sampled> sampled;
   sampled.reserve(from.size());
   double worst = 0;
+  const Segment2* previous = nullptr;  // chains list segments end to start: their shared ends are measured once
   for (const Segment2& s : from) {
     const int steps = std::max(1, int(std::ceil(std::hypot(s.bx - s.ax, s.by - s.ay) * 8)));
-    const Sampled m{&s, steps, to.distance(s.ax, s.ay), to.distance(s.bx, s.by)};
+    const bool continues = previous && previous->bx == s.ax && previous->by == s.ay;
+    const Sampled m{&s, steps, continues ? sampled.back().d1 : to.distance(s.ax, s.ay), to.distance(s.bx, s.by)};
+    previous = &s;
     worst = std::max({worst, m.d0, m.d1});
     sampled.push_back(m);
   }

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 #include <set>
@@ -134,16 +135,25 @@ TEST(Simplify, IsDeterministic) {
   }
 }
 
+// The cluttered room's dense faces of n^2 pixels, seen from off its centre.
+std::array<FaceMesh, kCubeFaces> off_centre_room_faces(int n) {
+  return build_depth_meshes(raycast_analytic_scene(cluttered_room(), {0.2, -0.1, 0.1}, n), DepthMeshParams{});
+}
+
+// The default parameters, and a cap of 16 triangles that every face exceeds.
+std::array<SimplifyParams, 2> default_and_capped_params() {
+  SimplifyParams capped;
+  capped.max_triangles = 16;
+  return {SimplifyParams{}, capped};
+}
+
 TEST(Simplify, TwoStepsGiveTheSameResultAndBoundItFirst) {
   // FaceSimplification (outline triangulation, then refinement) returns
   // exactly simplify_face_mesh's result, its early outline count bounds it,
   // also for a face over the cap and for a borrowed or an owned dense mesh.
   const int n = 64;
-  const auto dense = build_depth_meshes(raycast_analytic_scene(cluttered_room(), {0.2, -0.1, 0.1}, n),
-                                        DepthMeshParams{});
-  SimplifyParams capped;
-  capped.max_triangles = 16;
-  for (const SimplifyParams& params : {SimplifyParams{}, capped})
+  const auto dense = off_centre_room_faces(n);
+  for (const SimplifyParams& params : default_and_capped_params())
     for (int f = 0; f < kCubeFaces; ++f) {
       SCOPED_TRACE(testing::Message() << "face " << f << " cap " << params.max_triangles);
       const SimplifyResult whole = simplify_face_mesh(dense[std::size_t(f)], n, params);
@@ -181,11 +191,8 @@ TEST(Simplify, ARulerMeasuresTheResultLaterWithTheSameFigures) {
   // it as finish() and measure_simplification_error do, for owned and
   // borrowed dense meshes, a face over the cap and one too small to simplify.
   for (const int n : {64, 2}) {
-    const auto dense = build_depth_meshes(raycast_analytic_scene(cluttered_room(), {0.2, -0.1, 0.1}, n),
-                                          DepthMeshParams{});
-    SimplifyParams capped;
-    capped.max_triangles = 16;
-    for (const SimplifyParams& params : {SimplifyParams{}, capped})
+    const auto dense = off_centre_room_faces(n);
+    for (const SimplifyParams& params : default_and_capped_params())
       for (int f = 0; f < kCubeFaces; ++f) {
         SCOPED_TRACE(testing::Message() << "size " << n << " face " << f << " cap " << params.max_triangles);
         const FaceMesh& face = dense[std::size_t(f)];
