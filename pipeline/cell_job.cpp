@@ -278,17 +278,13 @@ std::unique_ptr<FaceSimplification> start_face_simplification(CellWork& work, co
   return started;
 }
 
-int pending_faces(const CellWork& work) {
+// Faces of the cell that hold something in `slots` (SampleWork::pending or
+// SampleWork::rulers).
+template <typename Slots>
+int faces_holding(const CellWork& work, Slots SampleWork::*slots) {
   int n = 0;
   for (const SampleWork& s : work.samples)
-    for (const auto& p : s.pending) n += p != nullptr;
-  return n;
-}
-
-int ruler_faces(const CellWork& work) {
-  int n = 0;
-  for (const SampleWork& s : work.samples)
-    for (const SimplifyRuler& r : s.rulers) n += bool(r);
+    for (const auto& held : s.*slots) n += bool(held);
   return n;
 }
 
@@ -305,8 +301,9 @@ const FaceMesh& face_mesh(CellWork& work, const BakeConfig& config, std::size_t 
   try {
     // Up to kMaxRulerFaces faces of the cell keep their dense mesh's analysis
     // to be measured without building it again.
-    SimplifyResult r = ruler_faces(work) < kMaxRulerFaces ? std::move(*started).finish(s.rulers[f])
-                                                          : std::move(*started).finish();
+    SimplifyResult r = faces_holding(work, &SampleWork::rulers) < kMaxRulerFaces
+                           ? std::move(*started).finish(s.rulers[f])
+                           : std::move(*started).finish();
     s.simplified[f] = std::move(r.mesh);
   } catch (const std::exception& e) {
     throw StageError("simplify", face_where(sample, face) + e.what());
@@ -321,7 +318,8 @@ std::uint64_t face_mesh_bound(CellWork& work, const BakeConfig& config, std::siz
   const std::size_t f = std::size_t(face);
   if (s.meshed.at(f)) return s.simplified[f].triangle_count();
   if (!s.pending[f]) {
-    if (pending_faces(work) >= kMaxPendingFaces) return face_mesh(work, config, sample, face).triangle_count();
+    if (faces_holding(work, &SampleWork::pending) >= kMaxPendingFaces)
+      return face_mesh(work, config, sample, face).triangle_count();
     s.pending[f] = start_face_simplification(work, config, sample, face);
   }
   return s.pending[f]->outline_triangles();
