@@ -3,11 +3,13 @@
 // viewer does after the version-1 quantisation), then encodes it with
 //  * v1   - per-axis quantisation over the mesh bounds + meshoptimizer codecs;
 //  * grid - blob version 2 (pixel corners, log depth, predicted residuals, zstd)
-//           at each --depth-error;
+//           at each --depth-error and --zstd-level (the first level is used for
+//           every depth error, every level for the first depth error);
 // and prints bytes per triangle, the largest relative depth error and the
 // largest pixel-corner error the round trip made, and decode milliseconds per face.
 //
-//   bench_mesh_codec /tmp/demo/c3.db [--cells FIRST-LAST] [--depth-error 0.001,0.0005] [--repeat 5]
+//   bench_mesh_codec /tmp/demo/c3.db [--cells FIRST-LAST] [--depth-error 0.001,0.0005] [--zstd-level 15,19]
+//                    [--repeat 5]
 //
 // Not a Google Benchmark program: it reads a database and reports error
 // figures next to the sizes and times.
@@ -33,6 +35,7 @@ using Clock = std::chrono::steady_clock;
 struct Args {
   std::string db, cells;
   std::vector<double> depth_errors = {0.002, 0.001, 0.0005};
+  std::vector<int> zstd_levels = {MeshEncodeParams{}.zstd_level};
   int repeat = 5;
 };
 
@@ -42,6 +45,10 @@ Args parse_args(int argc, char** argv) {
   app.add_option("database", a.db, "Cell database")->required();
   app.add_option("--cells", a.cells, "Cells FIRST-LAST (default: all)");
   app.add_option("--depth-error", a.depth_errors, "Relative depth errors to code at")->delimiter(',')->capture_default_str();
+  app.add_option("--zstd-level", a.zstd_levels, "zstd levels of the grid coding (the first one for every depth error)")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 22))
+      ->capture_default_str();
   app.add_option("--repeat", a.repeat, "Timed repetitions")->check(CLI::PositiveNumber)->capture_default_str();
   try {
     app.parse(argc, argv);
@@ -126,7 +133,17 @@ int run(const Args& args) {
   }
   std::size_t faces = 0, triangles = 0;
   Totals stored, v1;
-  std::vector<Totals> grid(args.depth_errors.size());
+  // Grid codings measured: every depth error at the first level, then the
+  // other levels at the first depth error.
+  struct Variant {
+    double depth_error;
+    int zstd_level;
+  };
+  std::vector<Variant> variants;
+  for (double e : args.depth_errors) variants.push_back({e, args.zstd_levels.front()});
+  for (std::size_t l = 1; l < args.zstd_levels.size(); ++l)
+    variants.push_back({args.depth_errors.front(), args.zstd_levels[l]});
+  std::vector<Totals> grid(variants.size());
   for (std::int64_t id : ids) {
     const std::optional<CellRow> row = db.get_cell(id);
     if (!row) continue;
@@ -141,11 +158,12 @@ int run(const Args& args) {
         const auto b1 = encode_face_mesh(mesh, p1);
         v1.bytes += double(b1.size());
         v1.decode_ms += decode_ms(b1, args.repeat);
-        for (std::size_t e = 0; e < args.depth_errors.size(); ++e) {
+        for (std::size_t e = 0; e < variants.size(); ++e) {
           MeshEncodeParams p2;
           p2.face = f.face;
           p2.face_size = n;
-          p2.depth_error_relative = args.depth_errors[e];
+          p2.depth_error_relative = variants[e].depth_error;
+          p2.zstd_level = variants[e].zstd_level;
           const auto t0 = Clock::now();
           const auto b2 = encode_face_mesh(mesh, p2);
           grid[e].encode_ms += std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
@@ -167,7 +185,7 @@ int run(const Args& args) {
               "-", "-", v1.decode_ms / faces);
   for (std::size_t e = 0; e < grid.size(); ++e) {
     char name[64];
-    std::snprintf(name, sizeof name, "grid e=%g", args.depth_errors[e]);
+    std::snprintf(name, sizeof name, "grid e=%g zstd %d", variants[e].depth_error, variants[e].zstd_level);
     std::printf("%-22s %10.2f %12.1f %14.6f %14.6f %10.3f %10.2f%s\n", name, grid[e].bytes / triangles,
                 grid[e].bytes / faces / 1024, grid[e].max_depth_error, grid[e].max_corner_error,
                 grid[e].decode_ms / faces, grid[e].encode_ms / faces, grid[e].fallbacks ? " (fallbacks!)" : "");

@@ -180,7 +180,8 @@ FaceMesh optimized_order(const FaceMesh& mesh) {
 std::vector<std::uint8_t> encode_face_mesh(const FaceMesh& input, const MeshEncodeParams& params) {
   check_mesh(input, params.position_bits);
   if (params.face >= 0 && params.face_size > 0)
-    if (auto grid = encode_grid_face_mesh(input, params.face, params.face_size, params.depth_error_relative))
+    if (auto grid = encode_grid_face_mesh(input, params.face, params.face_size, params.depth_error_relative,
+                                          params.zstd_level))
       return std::move(*grid);
   const FaceMesh mesh = params.optimize_order ? optimized_order(input) : input;
 

@@ -36,7 +36,6 @@ constexpr std::size_t kHeaderSize = 48;
 constexpr std::uint8_t kFlagZstd = 1;
 constexpr std::uint32_t kMaxFaceSize = 16384;
 constexpr std::int64_t kMaxQRange = std::int64_t{1} << 24;
-constexpr int kZstdLevel = 19;
 
 [[noreturn]] void fail(const std::string& what) { throw std::runtime_error("face mesh blob: " + what); }
 
@@ -286,7 +285,7 @@ std::array<double, 3> corner_direction(const FaceBasis& b, std::int64_t i, std::
 }  // namespace
 
 std::optional<std::vector<std::uint8_t>> encode_grid_face_mesh(const FaceMesh& mesh, int face, int face_size,
-                                                               double depth_error_relative) {
+                                                               double depth_error_relative, int zstd_level) {
   if (face < 0 || face >= kCubeFaces || face_size < 1 || std::uint32_t(face_size) > kMaxFaceSize ||
       !(depth_error_relative > 0 && depth_error_relative < 0.5) || mesh.uvs.size() != mesh.positions.size() ||
       mesh.positions.size() > std::numeric_limits<std::uint32_t>::max() / 4)
@@ -368,7 +367,7 @@ std::optional<std::vector<std::uint8_t>> encode_grid_face_mesh(const FaceMesh& m
 
     std::vector<std::uint8_t> packed(ZSTD_compressBound(payload.size()));
     const std::size_t packed_size =
-        ZSTD_compress(packed.data(), packed.size(), payload.data(), payload.size(), kZstdLevel);
+        ZSTD_compress(packed.data(), packed.size(), payload.data(), payload.size(), zstd_level);
     if (!ZSTD_isError(packed_size) && packed_size < payload.size() &&
         payload.size() <= 128 * std::uint64_t{packed_size} + 65536) {
       packed.resize(packed_size);

@@ -26,9 +26,10 @@ inline constexpr std::uint8_t kGridMeshVersion = 2;
 // corners possibly rotated). Decoded depths are within a relative error of
 // `depth_error_relative` (> 0) of the input's (plus float rounding); pixel
 // corners are exact. Deterministic. The mesh must already be valid (indices in
-// range, finite values).
+// range, finite values). `zstd_level` (clamped by zstd to its range) trades
+// encode time for bytes; it never changes the decoded mesh.
 std::optional<std::vector<std::uint8_t>> encode_grid_face_mesh(const FaceMesh& mesh, int face, int face_size,
-                                                               double depth_error_relative);
+                                                               double depth_error_relative, int zstd_level);
 
 // Decodes a version-2 blob; positions are recomputed on their pixel rays
 // exactly as build_depth_meshes computes them, so faces sharing a border
