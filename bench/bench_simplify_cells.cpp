@@ -6,9 +6,11 @@
 //                 triangle count (error target 1e-2, locked borders: the
 //                 outlines and skins are mesh borders, so they stay exact
 //                 and meshopt may stop above the count);
-// and measures both with one ruler (measure_simplification_error). Prints one
-// row per face and a summary: total seconds, the speed ratio, the worst
-// boundary error and the faces above the triangle cap.
+// and measures both with one ruler (measure_simplification_error). Also times
+// what a bake spends measuring a kept face (`measure_ms`: SimplifyRuler::measure
+// on our result, the analysis already held). Prints one row per face and a
+// summary: total seconds, the speed ratio, the worst boundary error and the
+// faces above the triangle cap.
 //
 //   cellbake demo --out /tmp/demo
 //   bench_simplify_cells /tmp/demo/plant-demo.toml --store /tmp/demo/plant.store.db --cells 20-27 --repeat 3
@@ -104,10 +106,10 @@ int run(int argc, char** argv) {
   params.boundary_error_px = config.boundary_error_px;
   params.max_triangles = std::size_t(config.max_face_triangles);
 
-  double ours_total = 0, meshopt_total = 0, worst_boundary = 0, worst_depth = 0;
+  double ours_total = 0, meshopt_total = 0, measure_total = 0, worst_boundary = 0, worst_depth = 0;
   std::size_t faces = 0, over_cap = 0, tris_total = 0, outline_total = 0, outline_above = 0;
-  std::printf("%5s %4s %8s %7s %9s %9s %8s %6s %7s %9s %10s %9s %6s\n", "cell", "face", "dense", "ours", "ours_ms",
-              "depth_err", "bnd_px", "flips", "mopt", "mopt_ms", "mopt_depth", "mopt_bnd", "flips");
+  std::printf("%5s %4s %8s %7s %9s %10s %9s %8s %6s %7s %9s %10s %9s %6s\n", "cell", "face", "dense", "ours", "ours_ms",
+              "measure_ms", "depth_err", "bnd_px", "flips", "mopt", "mopt_ms", "mopt_depth", "mopt_bnd", "flips");
   for (const CellSpec& cell : select_cells(enumerate_cells(config.regions, config.cell_size), args.cells)) {
     CellWork work;
     work.cell = cell;
@@ -128,6 +130,24 @@ int run(int argc, char** argv) {
         r = simplify_face_mesh(dense, config.face_size, params);
         ours_s.push_back(seconds_since(t0));
       }
+      // The bake's measuring of a kept face: a ruler from finish(ruler), then measure().
+      std::vector<double> measure_s;
+      {
+        SimplifyParams unmeasured = params;
+        unmeasured.measure_error = false;
+        SimplifyRuler ruler;
+        const SimplifyResult kept = FaceSimplification(dense, config.face_size, unmeasured).finish(ruler);
+        for (int k = 0; k < args.repeat; ++k) {
+          const auto t0 = Clock::now();
+          const SimplifyError e = ruler.measure(kept.mesh);
+          measure_s.push_back(seconds_since(t0));
+          if (e.max_boundary_error_px != r.achieved.max_boundary_error_px ||
+              e.max_depth_error_relative != r.achieved.max_depth_error_relative)
+            throw std::runtime_error("cell " + std::to_string(cell.id) + " face " + std::to_string(f) +
+                                     ": the ruler measured other figures than simplify_face_mesh");
+        }
+      }
+      measure_total += median(measure_s);
       double mopt_ms = 0;
       SimplifyError mopt_err;
       std::size_t mopt_tris = 0;
@@ -152,16 +172,18 @@ int run(int argc, char** argv) {
       if (r.triangles_out > params.max_triangles) ++over_cap;
       worst_boundary = std::max(worst_boundary, r.achieved.max_boundary_error_px);
       worst_depth = std::max(worst_depth, r.achieved.max_depth_error_relative);
-      std::printf("%5lld %4d %8zu %7zu %9.1f %9.4f %8.2f %6zu %7zu %9.1f %10.4f %9.2f %6zu\n",
+      std::printf("%5lld %4d %8zu %7zu %9.1f %10.2f %9.4f %8.2f %6zu %7zu %9.1f %10.4f %9.2f %6zu\n",
                   static_cast<long long>(cell.id), f, r.triangles_in, r.triangles_out, 1e3 * ours,
+                  1e3 * median(measure_s),
                   r.achieved.max_depth_error_relative, r.achieved.max_boundary_error_px, r.achieved.flipped_triangles,
                   mopt_tris, mopt_ms, mopt_err.max_depth_error_relative, mopt_err.max_boundary_error_px,
                   mopt_err.flipped_triangles);
     }
   }
-  std::printf("faces %zu, ours %.3f s (%.1f ms/face), meshopt %.3f s, ours/meshopt %.2f, triangles %zu, over cap %zu, "
-              "worst boundary %.2f px, worst depth %.4f\n",
-              faces, ours_total, faces ? 1e3 * ours_total / faces : 0.0, meshopt_total,
+  std::printf("faces %zu, ours %.3f s (%.1f ms/face), measuring %.1f ms/face, meshopt %.3f s, ours/meshopt %.2f, "
+              "triangles %zu, over cap %zu, worst boundary %.2f px, worst depth %.4f\n",
+              faces, ours_total, faces ? 1e3 * ours_total / faces : 0.0, faces ? 1e3 * measure_total / faces : 0.0,
+              meshopt_total,
               meshopt_total > 0 ? ours_total / meshopt_total : 0.0, tris_total, over_cap, worst_boundary, worst_depth);
   std::printf("outline-only triangulations: %zu triangles, %.1f %% of the result (faces where that exceeds the "
               "result: %zu)\n",

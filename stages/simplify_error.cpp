@@ -44,34 +44,37 @@ bool contains(const ScreenVertex& a, const ScreenVertex& b, const ScreenVertex& 
   return side(a, b) && side(b, c) && side(c, a);
 }
 
-// Segments bucketed on a uniform grid for nearest-distance queries.
+// Segments bucketed on a uniform grid for nearest-distance queries (one
+// array of segment numbers, bucket by bucket in segment order).
 class SegmentIndex {
  public:
   SegmentIndex(std::vector<Segment2> segments, int face_size)
       : segments_(std::move(segments)), cells_(face_size / kCell + 2) {
-    bucket_.resize(std::size_t(cells_) * cells_);
-    for (std::size_t k = 0; k < segments_.size(); ++k) {
-      const Segment2& s = segments_[k];
-      const int x0 = cell(std::min(s.ax, s.bx)), x1 = cell(std::max(s.ax, s.bx));
-      const int y0 = cell(std::min(s.ay, s.by)), y1 = cell(std::max(s.ay, s.by));
-      for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) bucket_[std::size_t(y) * cells_ + x].push_back(std::uint32_t(k));
-    }
+    first_.assign(std::size_t(cells_) * cells_ + 1, 0);
+    for_each_cell([&](std::size_t, std::size_t c) { ++first_[c + 1]; });
+    for (std::size_t c = 1; c < first_.size(); ++c) first_[c] += first_[c - 1];
+    members_.resize(first_.back());
+    std::vector<std::uint32_t> next(first_.begin(), first_.end() - 1);
+    for_each_cell([&](std::size_t k, std::size_t c) { members_[next[c]++] = std::uint32_t(k); });
   }
 
-  // Distance from (px, py) to the nearest segment, at most kBoundarySaturationPx.
+  // Distance d from (px, py) to the nearest segment, at most
+  // kBoundarySaturationPx; or, once a scanned cell brings the best distance so
+  // far to `enough` or below, that distance (then d <= result <= enough).
   // The nearest point lies in a cell whose bucket holds its segment, and no
   // farther from (px, py) than that cell's square; so a cell no nearer than
   // the best distance so far is skipped (the result is the same as scanning it).
-  double distance(double px, double py) const {
+  double distance(double px, double py, double enough = -1) const {
     const int cx = cell(px), cy = cell(py);
     double best = kBoundarySaturationPx;
     auto scan = [&](int x, int y, double gap_y) {
-      if (x < 0 || x >= cells_) return;
+      if (x < 0 || x >= cells_) return false;
       const double gap_x = std::max({0.0, double(x) * kCell - px, px - double(x + 1) * kCell});
-      if (gap_x * gap_x + gap_y * gap_y >= best * best) return;
-      for (std::uint32_t k : bucket_[std::size_t(y) * cells_ + x])
-        best = std::min(best, distance_to_segment(px, py, segments_[k]));
+      if (gap_x * gap_x + gap_y * gap_y >= best * best) return false;
+      const std::size_t c = std::size_t(y) * cells_ + x;
+      for (std::uint32_t m = first_[c]; m < first_[c + 1]; ++m)
+        best = std::min(best, distance_to_segment(px, py, segments_[members_[m]]));
+      return best <= enough;
     };
     for (int ring = 0; ring * kCell <= kBoundarySaturationPx + kCell; ++ring) {
       if ((ring - 1) * kCell >= best) break;
@@ -79,10 +82,10 @@ class SegmentIndex {
         const double gap_y = std::max({0.0, double(y) * kCell - py, py - double(y + 1) * kCell});
         if (gap_y >= best) continue;
         if (std::abs(y - cy) == ring) {
-          for (int x = cx - ring; x <= cx + ring; ++x) scan(x, y, gap_y);
-        } else {
-          scan(cx - ring, y, gap_y);
-          scan(cx + ring, y, gap_y);
+          for (int x = cx - ring; x <= cx + ring; ++x)
+            if (scan(x, y, gap_y)) return best;
+        } else if (scan(cx - ring, y, gap_y) || scan(cx + ring, y, gap_y)) {
+          return best;
         }
       }
     }
@@ -92,16 +95,31 @@ class SegmentIndex {
  private:
   static constexpr int kCell = 2;
   int cell(double v) const { return std::clamp(int(std::floor(v / kCell)), 0, cells_ - 1); }
+  // Calls visit(segment, cell) for every cell of every segment's bounding box.
+  template <typename Visit>
+  void for_each_cell(Visit&& visit) const {
+    for (std::size_t k = 0; k < segments_.size(); ++k) {
+      const Segment2& s = segments_[k];
+      const int x0 = cell(std::min(s.ax, s.bx)), x1 = cell(std::max(s.ax, s.bx));
+      const int y0 = cell(std::min(s.ay, s.by)), y1 = cell(std::max(s.ay, s.by));
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) visit(k, std::size_t(y) * cells_ + x);
+    }
+  }
   std::vector<Segment2> segments_;
   int cells_;
-  std::vector<std::vector<std::uint32_t>> bucket_;
+  std::vector<std::uint32_t> first_;    // bucket c holds members_[first_[c] .. first_[c + 1])
+  std::vector<std::uint32_t> members_;
 };
 
 // Max over points sampled every 1/8 px along `from` of the distance to `to`.
 // The distance is 1-Lipschitz along a segment, so a run of samples between two
 // measured ones (d0, d1, `gap` px apart) stays below (d0 + d1 + gap) / 2; runs
 // whose bound cannot beat the running max are skipped (the result equals
-// measuring every sample).
+// measuring every sample). A sample no farther than the running max cannot
+// raise it, so its query may stop at any distance within the max (an upper
+// bound on its own, which keeps the run bounds valid): the result is still
+// the max over every sample.
 double directed_distance(const std::vector<Segment2>& from, const SegmentIndex& to) {
   struct Sampled {
     const Segment2* s;
@@ -115,14 +133,16 @@ double directed_distance(const std::vector<Segment2>& from, const SegmentIndex& 
   for (const Segment2& s : from) {
     const int steps = std::max(1, int(std::ceil(std::hypot(s.bx - s.ax, s.by - s.ay) * 8)));
     const bool continues = previous && previous->bx == s.ax && previous->by == s.ay;
-    const Sampled m{&s, steps, continues ? sampled.back().d1 : to.distance(s.ax, s.ay), to.distance(s.bx, s.by)};
+    const double d0 = continues ? sampled.back().d1 : to.distance(s.ax, s.ay, worst);
+    worst = std::max(worst, d0);
+    const Sampled m{&s, steps, d0, to.distance(s.bx, s.by, worst)};
     previous = &s;
-    worst = std::max({worst, m.d0, m.d1});
+    worst = std::max(worst, m.d1);
     sampled.push_back(m);
   }
   auto at = [&](const Segment2& s, int k, int steps) {
     const double t = double(k) / steps;
-    return to.distance(s.ax + t * (s.bx - s.ax), s.ay + t * (s.by - s.ay));
+    return to.distance(s.ax + t * (s.bx - s.ax), s.ay + t * (s.by - s.ay), worst);
   };
   struct Run {
     int k0, k1;
@@ -147,32 +167,73 @@ double directed_distance(const std::vector<Segment2>& from, const SegmentIndex& 
 }
 
 // Boundary edges (used by exactly one triangle) of `mesh` in lattice
-// coordinates; `skip_face_sides` leaves out those on the face square's sides.
-std::vector<Segment2> boundary_edges(const FaceMesh& mesh, int n, bool skip_face_sides) {
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> edges;  // (key, count)
+// coordinates, in the order of their vertex pairs.
+std::vector<Segment2> boundary_edges(const FaceMesh& mesh, int n) {
+  std::vector<std::uint64_t> edges;  // (lower vertex, higher vertex)
   edges.reserve(mesh.indices.size());
   for (std::size_t t = 0; t + 2 < mesh.indices.size(); t += 3)
     for (int e = 0; e < 3; ++e) {
       std::uint32_t a = mesh.indices[t + e], b = mesh.indices[t + (e + 1) % 3];
       if (a > b) std::swap(a, b);
-      edges.push_back({(std::uint64_t(a) << 32) | b, 1});
+      edges.push_back((std::uint64_t(a) << 32) | b);
     }
   std::sort(edges.begin(), edges.end());
   std::vector<Segment2> out;
   for (std::size_t k = 0; k < edges.size();) {
     std::size_t m = k;
-    while (m < edges.size() && edges[m].first == edges[k].first) ++m;
+    while (m < edges.size() && edges[m] == edges[k]) ++m;
     if (m - k == 1) {
-      const Uv a = mesh.uvs[edges[k].first >> 32], b = mesh.uvs[edges[k].first & 0xffffffffu];
-      const Segment2 s{double(a.u) * n, double(a.v) * n, double(b.u) * n, double(b.v) * n};
-      auto same_side = [&](double p, double q) {
-        return (std::abs(p) < 1e-4 && std::abs(q) < 1e-4) || (std::abs(p - n) < 1e-4 && std::abs(q - n) < 1e-4);
-      };
-      if (!(skip_face_sides && (same_side(s.ax, s.bx) || same_side(s.ay, s.by)))) out.push_back(s);
+      const Uv a = mesh.uvs[edges[k] >> 32], b = mesh.uvs[edges[k] & 0xffffffffu];
+      out.push_back({double(a.u) * n, double(a.v) * n, double(b.u) * n, double(b.v) * n});
     }
     k = m;
   }
   return out;
+}
+
+// Where a unit lattice edge is recorded in a mask over the (n + 1)^2 lattice
+// points of an n-pixel face: at its lower-left end, bit 1 when it runs along
+// x, bit 2 along y; false when s is not such an edge (ends not integral, not
+// one pixel apart along an axis, or off the face).
+bool unit_edge_slot(const Segment2& s, int n, std::size_t& at, std::uint8_t& bit) {
+  const double x0 = std::min(s.ax, s.bx), y0 = std::min(s.ay, s.by);
+  const double dx = std::abs(s.bx - s.ax), dy = std::abs(s.by - s.ay);
+  if (!(x0 >= 0 && y0 >= 0 && x0 <= n && y0 <= n) || x0 != std::floor(x0) || y0 != std::floor(y0)) return false;
+  if (dx == 1 && dy == 0 && x0 + 1 <= n) {
+    bit = 1;
+  } else if (dx == 0 && dy == 1 && y0 + 1 <= n) {
+    bit = 2;
+  } else {
+    return false;
+  }
+  at = std::size_t(y0) * std::size_t(n + 1) + std::size_t(x0);
+  return true;
+}
+
+// `from` without the unit lattice edges that `other` holds too. Every point
+// sampled on such an edge is exactly 0 px from the same edge in `other` (its
+// coordinates are exact multiples of 1/8), so dropping these edges never
+// changes directed_distance(from, index of a superset of other).
+std::vector<Segment2> without_shared_unit_edges(const std::vector<Segment2>& from, const std::vector<Segment2>& other,
+                                                int n) {
+  std::vector<std::uint8_t> mask(std::size_t(n + 1) * std::size_t(n + 1), 0);
+  std::size_t at = 0;
+  std::uint8_t bit = 0;
+  for (const Segment2& s : other)
+    if (unit_edge_slot(s, n, at, bit)) mask[at] |= bit;
+  std::vector<Segment2> out;
+  out.reserve(from.size());
+  for (const Segment2& s : from)
+    if (!unit_edge_slot(s, n, at, bit) || !(mask[at] & bit)) out.push_back(s);
+  return out;
+}
+
+// Whether segment s lies on a side of the n-pixel face square.
+bool on_face_side(const Segment2& s, int n) {
+  auto same_side = [&](double p, double q) {
+    return (std::abs(p) < 1e-4 && std::abs(q) < 1e-4) || (std::abs(p - n) < 1e-4 && std::abs(q - n) < 1e-4);
+  };
+  return same_side(s.ax, s.bx) || same_side(s.ay, s.by);
 }
 
 // Per simplified vertex: the region of the dense vertex it copies (same
@@ -225,7 +286,17 @@ SimplifyError measure_simplification_error(const FaceMesh& dense, const FaceGrid
   // Per sample: how many simplified triangles cover it.
   std::vector<std::uint8_t> hits(std::size_t(n) * n * 4, 0);
   const std::size_t nt = simplified.indices.size() / 3;
+  // Triangles in tile order of their first vertex, so that neighbours in the
+  // loop read neighbouring pixels (every figure below is order-independent).
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> order(nt);
   for (std::size_t t = 0; t < nt; ++t) {
+    const ScreenVertex& a = sv[simplified.indices[3 * t]];
+    const std::uint32_t tx = std::uint32_t(std::clamp(a.x, 0.0, double(n))) / 16;
+    const std::uint32_t ty = std::uint32_t(std::clamp(a.y, 0.0, double(n))) / 16;
+    order[t] = {(ty << 16) | tx, std::uint32_t(t)};
+  }
+  std::sort(order.begin(), order.end());
+  for (const auto& [tile, t] : order) {
     const ScreenVertex& a = sv[simplified.indices[3 * t]];
     const ScreenVertex& b = sv[simplified.indices[3 * t + 1]];
     const ScreenVertex& c = sv[simplified.indices[3 * t + 2]];
@@ -281,8 +352,16 @@ SimplifyError measure_simplification_error(const FaceMesh& dense, const FaceGrid
             if (!contains(a, b, c, orient, i + dx, j + dy)) continue;
             const std::uint32_t v = grid.vertex(i, j, i + dx, j + dy);
             const double w_out = alpha * grid.x[v] + beta * grid.y[v] + gamma;
-            const double e_rel = w_out > 0 ? std::abs(grid.w[v] - w_out) / w_out : std::numeric_limits<double>::infinity();
-            err.max_depth_error_relative = std::max(err.max_depth_error_relative, e_rel);
+            if (!(w_out > 0)) {
+              err.max_depth_error_relative = std::numeric_limits<double>::infinity();
+              continue;
+            }
+            // Divides only where the quotient may exceed the max so far (a
+            // correctly rounded quotient above it needs |dw| >= max * w_out,
+            // so the margin keeps every such case): the same max.
+            const double dw = std::abs(grid.w[v] - w_out);
+            if (dw > err.max_depth_error_relative * w_out * (1 - 1e-9))
+              err.max_depth_error_relative = std::max(err.max_depth_error_relative, dw / w_out);
           }
       }
   }
@@ -304,7 +383,10 @@ SimplifyError measure_simplification_error(const FaceMesh& dense, const FaceGrid
     for (std::size_t k = 0; k + 1 < c.points.size(); ++k)
       dense_outline.push_back({double(c.points[k].x), double(c.points[k].y), double(c.points[k + 1].x),
                                double(c.points[k + 1].y)});
-  const std::vector<Segment2> simplified_outline = boundary_edges(simplified, n, true);
+  std::vector<Segment2> simplified_boundary = boundary_edges(simplified, n);
+  std::vector<Segment2> simplified_outline;
+  for (const Segment2& s : simplified_boundary)
+    if (!on_face_side(s, n)) simplified_outline.push_back(s);
   if (!dense_outline.empty() || !simplified_outline.empty()) {
     std::vector<Segment2> dense_boundary = dense_outline;  // plus the covered face-side edges
     for (int t = 0; t < n; ++t) {
@@ -313,10 +395,13 @@ SimplifyError measure_simplification_error(const FaceMesh& dense, const FaceGrid
       if (grid.covered(0, t)) dense_boundary.push_back({0, double(t), 0, double(t + 1)});
       if (grid.covered(n - 1, t)) dense_boundary.push_back({double(n), double(t), double(n), double(t + 1)});
     }
+    // Edges both outlines share are 0 px from the other one: only the rest is measured.
+    const std::vector<Segment2> simplified_moved = without_shared_unit_edges(simplified_outline, dense_outline, n);
+    const std::vector<Segment2> dense_moved = without_shared_unit_edges(dense_outline, simplified_boundary, n);
     const SegmentIndex dense_index(std::move(dense_boundary), n);
-    const SegmentIndex simplified_index(boundary_edges(simplified, n, false), n);
+    const SegmentIndex simplified_index(std::move(simplified_boundary), n);
     err.max_boundary_error_px =
-        std::max(directed_distance(simplified_outline, dense_index), directed_distance(dense_outline, simplified_index));
+        std::max(directed_distance(simplified_moved, dense_index), directed_distance(dense_moved, simplified_index));
   }
   return err;
 }
