@@ -196,8 +196,10 @@ struct Segment {
 // Repairs crossings until none is left; every pass re-inserts one point into
 // each chain segment that conflicts with another segment or joins the two
 // sides of its outline at both ends.
+// Segments that meet share a lattice point, so they share the grid cell that
+// holds it: pairs are tested within cells only, after a bounding-box test.
 void repair_crossings(FaceOutlines& outlines, const std::vector<FixedSegment>& fixed, int face_size) {
-  constexpr int kCell = 16;
+  constexpr int kCell = 4;
   const int cells = face_size / kCell + 1;
   for (;;) {
     std::vector<Segment> segments;
@@ -211,27 +213,38 @@ void repair_crossings(FaceOutlines& outlines, const std::vector<FixedSegment>& f
           prev = k;
         }
     }
-    std::vector<std::vector<std::uint32_t>> bucket(std::size_t(cells) * cells);
-    for (std::size_t s = 0; s < segments.size(); ++s) {
-      const Segment& g = segments[s];
-      const int x0 = std::min(g.a.x, g.b.x) / kCell, x1 = std::max(g.a.x, g.b.x) / kCell;
-      const int y0 = std::min(g.a.y, g.b.y) / kCell, y1 = std::max(g.a.y, g.b.y) / kCell;
-      for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) bucket[std::size_t(y) * cells + x].push_back(std::uint32_t(s));
-    }
+    // Cell c holds members[first[c] .. first[c + 1]), in segment order.
+    auto for_each_cell = [&](auto&& visit) {
+      for (std::size_t s = 0; s < segments.size(); ++s) {
+        const Segment& g = segments[s];
+        const int x0 = std::min(g.a.x, g.b.x) / kCell, x1 = std::max(g.a.x, g.b.x) / kCell;
+        const int y0 = std::min(g.a.y, g.b.y) / kCell, y1 = std::max(g.a.y, g.b.y) / kCell;
+        for (int y = y0; y <= y1; ++y)
+          for (int x = x0; x <= x1; ++x) visit(s, std::size_t(y) * cells + x);
+      }
+    };
+    std::vector<std::uint32_t> first(std::size_t(cells) * cells + 1, 0);
+    for_each_cell([&](std::size_t, std::size_t c) { ++first[c + 1]; });
+    for (std::size_t c = 1; c < first.size(); ++c) first[c] += first[c - 1];
+    std::vector<std::uint32_t> members(first.back());
+    std::vector<std::uint32_t> next(first.begin(), first.end() - 1);
+    for_each_cell([&](std::size_t s, std::size_t c) { members[next[c]++] = std::uint32_t(s); });
     std::vector<std::uint8_t> conflict(segments.size(), 0);
     for (std::size_t s = 0; s < segments.size(); ++s) {
       const Segment& g = segments[s];
       if (g.chain >= 0 && g.j > g.i + 1 && outlines.chains[g.chain].joined[g.i] && outlines.chains[g.chain].joined[g.j])
         conflict[s] = 1;
     }
-    for (const auto& b : bucket)
-      for (std::size_t p = 0; p < b.size(); ++p)
-        for (std::size_t q = p + 1; q < b.size(); ++q) {
-          const Segment& s = segments[b[p]];
-          const Segment& t = segments[b[q]];
+    for (std::size_t c = 0; c + 1 < first.size(); ++c)
+      for (std::uint32_t p = first[c]; p < first[c + 1]; ++p)
+        for (std::uint32_t q = p + 1; q < first[c + 1]; ++q) {
+          const Segment& s = segments[members[p]];
+          const Segment& t = segments[members[q]];
           if (s.chain < 0 && t.chain < 0) continue;
-          if (segments_conflict(s.a, s.b, t.a, t.b)) conflict[b[p]] = conflict[b[q]] = 1;
+          if (std::max(s.a.x, s.b.x) < std::min(t.a.x, t.b.x) || std::max(t.a.x, t.b.x) < std::min(s.a.x, s.b.x) ||
+              std::max(s.a.y, s.b.y) < std::min(t.a.y, t.b.y) || std::max(t.a.y, t.b.y) < std::min(s.a.y, s.b.y))
+            continue;  // apart: no shared point
+          if (segments_conflict(s.a, s.b, t.a, t.b)) conflict[members[p]] = conflict[members[q]] = 1;
         }
     bool changed = false;
     for (std::size_t s = 0; s < segments.size(); ++s)
