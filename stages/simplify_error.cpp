@@ -7,6 +7,7 @@
 #include <limits>
 #include <vector>
 
+#include "stages/cell_buckets.h"
 #include "stages/simplify_grid.h"
 #include "stages/simplify_outline.h"
 
@@ -44,19 +45,13 @@ bool contains(const ScreenVertex& a, const ScreenVertex& b, const ScreenVertex& 
   return side(a, b) && side(b, c) && side(c, a);
 }
 
-// Segments bucketed on a uniform grid for nearest-distance queries (one
-// array of segment numbers, bucket by bucket in segment order).
+// Segments bucketed on a uniform grid for nearest-distance queries.
 class SegmentIndex {
  public:
   SegmentIndex(std::vector<Segment2> segments, int face_size)
-      : segments_(std::move(segments)), cells_(face_size / kCell + 2) {
-    first_.assign(std::size_t(cells_) * cells_ + 1, 0);
-    for_each_cell([&](std::size_t, std::size_t c) { ++first_[c + 1]; });
-    for (std::size_t c = 1; c < first_.size(); ++c) first_[c] += first_[c - 1];
-    members_.resize(first_.back());
-    std::vector<std::uint32_t> next(first_.begin(), first_.end() - 1);
-    for_each_cell([&](std::size_t k, std::size_t c) { members_[next[c]++] = std::uint32_t(k); });
-  }
+      : segments_(std::move(segments)),
+        cells_(face_size / kCell + 2),
+        buckets_(std::size_t(cells_) * cells_, [&](auto&& visit) { for_each_cell(visit); }) {}
 
   // Distance d from (px, py) to the nearest segment, at most
   // kBoundarySaturationPx; or, once a scanned cell brings the best distance so
@@ -71,9 +66,8 @@ class SegmentIndex {
       if (x < 0 || x >= cells_) return false;
       const double gap_x = std::max({0.0, double(x) * kCell - px, px - double(x + 1) * kCell});
       if (gap_x * gap_x + gap_y * gap_y >= best * best) return false;
-      const std::size_t c = std::size_t(y) * cells_ + x;
-      for (std::uint32_t m = first_[c]; m < first_[c + 1]; ++m)
-        best = std::min(best, distance_to_segment(px, py, segments_[members_[m]]));
+      for (std::uint32_t k : buckets_[std::size_t(y) * cells_ + x])
+        best = std::min(best, distance_to_segment(px, py, segments_[k]));
       return best <= enough;
     };
     for (int ring = 0; ring * kCell <= kBoundarySaturationPx + kCell; ++ring) {
@@ -108,8 +102,7 @@ class SegmentIndex {
   }
   std::vector<Segment2> segments_;
   int cells_;
-  std::vector<std::uint32_t> first_;    // bucket c holds members_[first_[c] .. first_[c + 1])
-  std::vector<std::uint32_t> members_;
+  CellBuckets buckets_;
 };
 
 // Max over points sampled every 1/8 px along `from` of the distance to `to`.

@@ -9,7 +9,10 @@
 #include <cmath>
 #include <cstdlib>
 #include <numeric>
+#include <span>
 #include <utility>
+
+#include "stages/cell_buckets.h"
 
 namespace cellbake {
 namespace {
@@ -213,8 +216,7 @@ void repair_crossings(FaceOutlines& outlines, const std::vector<FixedSegment>& f
           prev = k;
         }
     }
-    // Cell c holds members[first[c] .. first[c + 1]), in segment order.
-    auto for_each_cell = [&](auto&& visit) {
+    const CellBuckets buckets(std::size_t(cells) * cells, [&](auto&& visit) {
       for (std::size_t s = 0; s < segments.size(); ++s) {
         const Segment& g = segments[s];
         const int x0 = std::min(g.a.x, g.b.x) / kCell, x1 = std::max(g.a.x, g.b.x) / kCell;
@@ -222,22 +224,17 @@ void repair_crossings(FaceOutlines& outlines, const std::vector<FixedSegment>& f
         for (int y = y0; y <= y1; ++y)
           for (int x = x0; x <= x1; ++x) visit(s, std::size_t(y) * cells + x);
       }
-    };
-    std::vector<std::uint32_t> first(std::size_t(cells) * cells + 1, 0);
-    for_each_cell([&](std::size_t, std::size_t c) { ++first[c + 1]; });
-    for (std::size_t c = 1; c < first.size(); ++c) first[c] += first[c - 1];
-    std::vector<std::uint32_t> members(first.back());
-    std::vector<std::uint32_t> next(first.begin(), first.end() - 1);
-    for_each_cell([&](std::size_t s, std::size_t c) { members[next[c]++] = std::uint32_t(s); });
+    });
     std::vector<std::uint8_t> conflict(segments.size(), 0);
     for (std::size_t s = 0; s < segments.size(); ++s) {
       const Segment& g = segments[s];
       if (g.chain >= 0 && g.j > g.i + 1 && outlines.chains[g.chain].joined[g.i] && outlines.chains[g.chain].joined[g.j])
         conflict[s] = 1;
     }
-    for (std::size_t c = 0; c + 1 < first.size(); ++c)
-      for (std::uint32_t p = first[c]; p < first[c + 1]; ++p)
-        for (std::uint32_t q = p + 1; q < first[c + 1]; ++q) {
+    for (std::size_t c = 0; c < buckets.cell_count(); ++c) {
+      const std::span<const std::uint32_t> members = buckets[c];
+      for (std::size_t p = 0; p < members.size(); ++p)
+        for (std::size_t q = p + 1; q < members.size(); ++q) {
           const Segment& s = segments[members[p]];
           const Segment& t = segments[members[q]];
           if (s.chain < 0 && t.chain < 0) continue;
@@ -246,6 +243,7 @@ void repair_crossings(FaceOutlines& outlines, const std::vector<FixedSegment>& f
             continue;  // apart: no shared point
           if (segments_conflict(s.a, s.b, t.a, t.b)) conflict[members[p]] = conflict[members[q]] = 1;
         }
+    }
     bool changed = false;
     for (std::size_t s = 0; s < segments.size(); ++s)
       if (conflict[s] && segments[s].chain >= 0)
