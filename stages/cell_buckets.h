@@ -12,8 +12,6 @@ namespace cellbake {
 
 class CellBuckets {
  public:
-  CellBuckets() = default;
-
   // Buckets over `cell_count` cells. `for_each_cell(visit)` must call
   // visit(item, cell) for every cell of every item, items in increasing order
   // (item < 2^32, cell < cell_count), the same way each time: it is called
@@ -27,7 +25,7 @@ class CellBuckets {
     for_each_cell([&](std::size_t item, std::size_t cell) { members_[next[cell]++] = std::uint32_t(item); });
   }
 
-  std::size_t cell_count() const { return first_.empty() ? 0 : first_.size() - 1; }
+  std::size_t cell_count() const { return first_.size() - 1; }
   // The items of cell c, in increasing order.
   std::span<const std::uint32_t> operator[](std::size_t c) const {
     return {members_.data() + first_[c], members_.data() + first_[c + 1]};

@@ -279,17 +279,7 @@ SimplifyError measure_simplification_error(const FaceMesh& dense, const FaceGrid
   // Per sample: how many simplified triangles cover it.
   std::vector<std::uint8_t> hits(std::size_t(n) * n * 4, 0);
   const std::size_t nt = simplified.indices.size() / 3;
-  // Triangles in tile order of their first vertex, so that neighbours in the
-  // loop read neighbouring pixels (every figure below is order-independent).
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> order(nt);
   for (std::size_t t = 0; t < nt; ++t) {
-    const ScreenVertex& a = sv[simplified.indices[3 * t]];
-    const std::uint32_t tx = std::uint32_t(std::clamp(a.x, 0.0, double(n))) / 16;
-    const std::uint32_t ty = std::uint32_t(std::clamp(a.y, 0.0, double(n))) / 16;
-    order[t] = {(ty << 16) | tx, std::uint32_t(t)};
-  }
-  std::sort(order.begin(), order.end());
-  for (const auto& [tile, t] : order) {
     const ScreenVertex& a = sv[simplified.indices[3 * t]];
     const ScreenVertex& b = sv[simplified.indices[3 * t + 1]];
     const ScreenVertex& c = sv[simplified.indices[3 * t + 2]];
