@@ -39,7 +39,6 @@
 #include <stdexcept>
 #include <string>
 #include <tuple>
-#include <unordered_map>
 #include <vector>
 
 #include "stages/simplify_border.h"
@@ -100,7 +99,8 @@ class TinSimplifier {
   TinSimplifier(const FaceGrid& g, const FaceRegions& regions, FaceOutlines outlines,
                 const std::vector<FixedSegment>& fixed, double eps, std::size_t cap, double ceiling)
       : g_(g), regions_(regions), outlines_(std::move(outlines)), fixed_(fixed), n_(g.size), eps_(eps), cap_(cap),
-        ceiling_(std::max(eps, ceiling)), steiner_flag_(std::size_t(n_ + 1) * (n_ + 1), 0) {
+        ceiling_(std::max(eps, ceiling)), steiner_flag_(std::size_t(n_ + 1) * (n_ + 1), 0),
+        point_id_of_(std::size_t(n_ + 1) * (n_ + 1), kNoPoint) {
     index_interior_lattice();
   }
 
@@ -161,6 +161,13 @@ class TinSimplifier {
   static LatticePoint lattice_of(const CdtPoint& p) { return {int(std::lround(p.x())), int(std::lround(p.y()))}; }
   int label(int i, int j) const { return regions_.label[std::size_t(j) * n_ + i]; }
   bool capped() const { return labelled_faces_ + 2 > cap_; }  // one more insertion would pass the cap
+
+  // The owner of the constraint with key k, or null.
+  const ConstraintOwner* owner_of(std::uint64_t k) const {
+    const auto it = std::lower_bound(owners_.begin(), owners_.end(), k,
+                                     [](const KeyedOwner& o, std::uint64_t key) { return o.first < key; });
+    return it != owners_.end() && it->first == k ? &it->second : nullptr;
+  }
 
   // Lattice points off every outline: all pixels around one share a region
   // and a vertex (or none is covered), so their vertex needs no search.
@@ -259,15 +266,17 @@ class TinSimplifier {
     queue_.clear();
     std::vector<CdtPoint> points;
     std::vector<std::pair<std::size_t, std::size_t>> segments;
-    std::unordered_map<std::size_t, std::size_t> point_of;
     auto point_id = [&](LatticePoint p) {
-      const auto [it, added] = point_of.try_emplace(lattice_index(p.x, p.y), points.size());
-      if (added) points.emplace_back(p.x, p.y);
-      return it->second;
+      std::uint32_t& id = point_id_of_[lattice_index(p.x, p.y)];
+      if (id == kNoPoint) {
+        id = std::uint32_t(points.size());
+        points.emplace_back(p.x, p.y);
+      }
+      return std::size_t(id);
     };
     for (const FixedSegment& s : fixed_) {
       segments.emplace_back(point_id(s.a), point_id(s.b));
-      owners_[key(lattice_index(s.a.x, s.a.y), lattice_index(s.b.x, s.b.y))] = {};
+      owners_.push_back({key(lattice_index(s.a.x, s.a.y), lattice_index(s.b.x, s.b.y)), {}});
     }
     for (std::size_t c = 0; c < outlines_.chains.size(); ++c) {
       const OutlineChain& ch = outlines_.chains[c];
@@ -277,11 +286,21 @@ class TinSimplifier {
           const LatticePoint a = ch.points[prev], b = ch.points[k];
           if (!(a == b)) {
             segments.emplace_back(point_id(a), point_id(b));
-            owners_[key(lattice_index(a.x, a.y), lattice_index(b.x, b.y))] = {int(c), int(prev), int(k)};
+            owners_.push_back({key(lattice_index(a.x, a.y), lattice_index(b.x, b.y)), {int(c), int(prev), int(k)}});
           }
           prev = k;
         }
     }
+    for (const CdtPoint& p : points) point_id_of_[lattice_index(int(p.x()), int(p.y()))] = kNoPoint;
+    // By key; of a key given twice, the last owner stands.
+    std::stable_sort(owners_.begin(), owners_.end(),
+                     [](const KeyedOwner& a, const KeyedOwner& b) { return a.first < b.first; });
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < owners_.size(); ++i) {
+      if (i + 1 < owners_.size() && owners_[i + 1].first == owners_[i].first) continue;
+      owners_[kept++] = owners_[i];
+    }
+    owners_.resize(kept);
     cdt_.insert_constraints(points.begin(), points.end(), segments.begin(), segments.end());
     for (const LatticePoint& p : steiner_) insert_steiner(p);
     label_components();
@@ -403,10 +422,10 @@ class TinSimplifier {
       if (cdt_.is_constrained({g, e})) {
         const LatticePoint q = lattice_of(g->vertex(Cdt::cw(gk))->point());
         LatticePoint step{(q.x > p.x) - (q.x < p.x), (q.y > p.y) - (q.y < p.y)};
-        const auto it = owners_.find(key(lattice_index(p.x, p.y), lattice_index(q.x, q.y)));
-        if (it != owners_.end() && it->second.chain >= 0) {
-          const OutlineChain& c = outlines_.chains[it->second.chain];
-          const LatticePoint next = c.points[it->second.i] == p ? c.points[it->second.i + 1] : c.points[it->second.j - 1];
+        const ConstraintOwner* owner = owner_of(key(lattice_index(p.x, p.y), lattice_index(q.x, q.y)));
+        if (owner && owner->chain >= 0) {
+          const OutlineChain& c = outlines_.chains[owner->chain];
+          const LatticePoint next = c.points[owner->i] == p ? c.points[owner->i + 1] : c.points[owner->j - 1];
           step = {next.x - p.x, next.y - p.y};
         }
         // Pixel clockwise of the step (math orientation of the lattice coordinates).
@@ -513,10 +532,10 @@ class TinSimplifier {
           if (err > worst_free && (!outline || unique_vertex(l, q))) worst_free = err, out.free_at = q;
         } else if (err > worst_bound) {
           const LatticePoint a = p[(edge + 1) % 3], b = p[(edge + 2) % 3];
-          const auto it = owners_.find(key(lattice_index(a.x, a.y), lattice_index(b.x, b.y)));
-          if (it != owners_.end() && it->second.chain >= 0) {
+          const ConstraintOwner* owner = owner_of(key(lattice_index(a.x, a.y), lattice_index(b.x, b.y)));
+          if (owner && owner->chain >= 0) {
             worst_bound = err;
-            out.bound_owner = it->second;
+            out.bound_owner = *owner;
           }
         }
       }
@@ -567,7 +586,10 @@ class TinSimplifier {
   Cdt cdt_;
   std::uint32_t stamp_counter_ = 0;
   std::vector<QueuedFace> queue_;  // a max-heap by queued_before
-  std::unordered_map<std::uint64_t, ConstraintOwner> owners_;
+  using KeyedOwner = std::pair<std::uint64_t, ConstraintOwner>;
+  std::vector<KeyedOwner> owners_;  // constraint owners by key (ascending, unique)
+  static constexpr std::uint32_t kNoPoint = ~std::uint32_t{0};
+  std::vector<std::uint32_t> point_id_of_;  // per lattice point: triangulate's point number (kNoPoint between calls)
 };
 
 std::vector<std::uint32_t> dense_triangles(const FaceMesh& in) { return in.indices; }

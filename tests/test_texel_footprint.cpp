@@ -64,6 +64,63 @@ TEST(TexelFootprint, EveryTexelABilinearLookupReadsIsMarkedAndLittleElse) {
   }
 }
 
+// The per-texel test texels_read_by answers (its contract): the square of
+// half-size h around the texel centre against each edge's side, texel by texel.
+bool square_overlaps_triangle(const FaceMesh& m, int size, int x, int y, double h) {
+  double px[3], py[3];
+  for (int c = 0; c < 3; ++c) px[c] = double(m.uvs[c].u) * size, py[c] = double(m.uvs[c].v) * size;
+  const double cx = x + 0.5, cy = y + 0.5;
+  for (int e = 0; e < 3; ++e) {
+    const int a = e, b = (e + 1) % 3, r = (e + 2) % 3;
+    const double nx = py[b] - py[a], ny = px[a] - px[b];
+    if (nx == 0 && ny == 0) continue;
+    const double side = nx * (px[r] - px[a]) + ny * (py[r] - py[a]);
+    const double centre = nx * (cx - px[a]) + ny * (cy - py[a]), reach = h * (std::abs(nx) + std::abs(ny));
+    if (side >= 0 ? centre + reach < 0 : centre - reach > 0) return false;
+  }
+  return true;
+}
+
+// Row runs (texels_read_by finds each row's run from the edges) mark exactly
+// the texels the per-texel test accepts, also where a square only touches an
+// edge: lattice-aligned corners (as the bake's meshes have), axis-parallel,
+// degenerate and sliver triangles.
+TEST(TexelFootprint, RowRunsMarkExactlyTheTexelsWhoseSquareMeetsTheTriangle) {
+  std::mt19937 rng(11);
+  const int size = 40;
+  std::uniform_int_distribution<int> lattice(-2, size + 2);
+  std::uniform_real_distribution<float> anywhere(-0.05f, 1.05f);
+  std::size_t texels = 0;
+  for (int round = 0; round < 3000; ++round) {
+    Uv c[3];
+    for (Uv& v : c) {
+      if (round % 2 == 0) v = {float(lattice(rng)) / size, float(lattice(rng)) / size};
+      else v = {anywhere(rng), anywhere(rng)};
+    }
+    if (round % 7 == 1) c[2] = c[1];                                                // a repeated corner
+    if (round % 7 == 2) c[1].v = c[0].v;                                            // a horizontal edge
+    if (round % 7 == 3) c[2].u = c[0].u;                                            // a vertical edge
+    if (round % 7 == 4) c[2] = {(c[0].u + c[1].u) / 2, (c[0].v + c[1].v) / 2};      // collinear
+    if (round % 7 == 5) c[2] = {c[1].u + 0.3f / size, c[1].v + 0.001f / size};     // a sliver
+    const FaceMesh m = one_triangle(c[0], c[1], c[2]);
+    const std::vector<std::uint8_t> marked = texels_read_by(m, size);
+    const double h = 1.0 + 1e-6;
+    double lo_x = 1e300, hi_x = -1e300, lo_y = 1e300, hi_y = -1e300;
+    for (const Uv& v : c) {
+      lo_x = std::min(lo_x, double(v.u) * size), hi_x = std::max(hi_x, double(v.u) * size);
+      lo_y = std::min(lo_y, double(v.v) * size), hi_y = std::max(hi_y, double(v.v) * size);
+    }
+    for (int y = 0; y < size; ++y)
+      for (int x = 0; x < size; ++x) {
+        const bool in_box = x + 0.5 >= lo_x - h && x + 0.5 <= hi_x + h && y + 0.5 >= lo_y - h && y + 0.5 <= hi_y + h;
+        const bool expected = in_box && square_overlaps_triangle(m, size, x, y, h);
+        texels += expected;
+        ASSERT_EQ(marked[std::size_t(y) * size + x] != 0, expected) << "round " << round << " texel " << x << "," << y;
+      }
+  }
+  EXPECT_GT(texels, 100000u);  // the triangles do cover texels
+}
+
 TEST(TexelFootprint, NoTrianglesReadNothingAndTwoTrianglesOverTheFaceReadAll) {
   EXPECT_EQ(texels_read_by(FaceMesh{}, 8), std::vector<std::uint8_t>(64, 0));
   FaceMesh quad;
