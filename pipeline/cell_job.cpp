@@ -255,7 +255,7 @@ std::unique_ptr<FaceSimplification> start_face_simplification(CellWork& work, co
     const auto t0 = Clock::now();
     StageTimer timer(work, "depth_mesh");
     try {
-      dense = build_depth_mesh_face(s.cube, depth_mesh_params(config), face);
+      dense = build_depth_mesh_face(s.cube, depth_mesh_params(config), face, &work.depth_mesh_scratch);
     } catch (const std::exception& e) {
       throw StageError("depth_mesh", where + e.what());
     }
@@ -351,7 +351,7 @@ void drop_replaced_and_measure_kept(CellWork& work, const BakeConfig& config) {
       if (!ruler) {
         StageTimer timer(work, "depth_mesh");
         try {
-          dense = build_depth_mesh_face(s.cube, depth_mesh_params(config), f);
+          dense = build_depth_mesh_face(s.cube, depth_mesh_params(config), f, &work.depth_mesh_scratch);
         } catch (const std::exception& e) {
           throw StageError("depth_mesh", where + e.what());
         }
@@ -427,6 +427,7 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
   for (SampleWork& s : work.samples)  // bounded faces the choice never meshed: drawn wholly as geometry
     for (auto& p : s.pending) p.reset();
   drop_replaced_and_measure_kept(work, config);
+  work.depth_mesh_scratch = DepthMeshScratch{};
   work.far_chunks.clear();
   // The row's far geometry: whole chunks by reference, seen triangles by their
   // numbers in the stored chunk (the viewer cuts them out of the store's chunk).

@@ -21,6 +21,7 @@
 #include "stages/chunk_source.h"
 #include "stages/cube_map.h"
 #include "stages/cull_box.h"
+#include "stages/depth_mesh.h"
 #include "stages/far_choice.h"
 #include "stages/simplify.h"
 #include "storage/cell_db.h"
@@ -81,6 +82,7 @@ struct CellWork {
   std::vector<SampleWork> samples;    // set by run_sample, in the order taken (none when the far field is
                                       // drawn as geometry whole: empty or under far.geometry_below triangles)
   std::optional<FarChoice> far;       // set by run_far_choice
+  DepthMeshScratch depth_mesh_scratch;  // run_far_choice's memory for meshing faces one by one (freed after it)
   std::map<std::string, double> seconds;
   std::string failed_stage, error;  // set when a stage threw
   CellRow row;                      // filled by run_encode / make_failed_row

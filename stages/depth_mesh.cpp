@@ -48,6 +48,32 @@ struct PixelRef {
   friend bool operator==(const PixelRef&, const PixelRef&) = default;
 };
 
+// A pixel's surface point in a face's screen frame (CubeLattice::screen).
+struct PixelScreen {
+  double s, t, w;
+};
+
+}  // namespace
+
+struct DepthMeshScratch::Buffers {
+  std::vector<Vec3d> points;
+  std::vector<double> distances;
+  std::vector<PixelScreen> screens;
+  std::array<std::vector<std::uint8_t>, kCubeFaces> flags;
+};
+
+DepthMeshScratch::DepthMeshScratch() = default;
+DepthMeshScratch::~DepthMeshScratch() = default;
+DepthMeshScratch::DepthMeshScratch(DepthMeshScratch&&) noexcept = default;
+DepthMeshScratch& DepthMeshScratch::operator=(DepthMeshScratch&&) noexcept = default;
+
+DepthMeshScratch::Buffers& DepthMeshScratch::buffers() {
+  if (!buffers_) buffers_ = std::make_unique<Buffers>();
+  return *buffers_;
+}
+
+namespace {
+
 struct IntBasis {
   Lattice forward, right, up;
 };
@@ -57,8 +83,11 @@ long dot(const Lattice& a, const Lattice& b) { return a[0] * b[0] + a[1] * b[1] 
 
 class CubeLattice {
  public:
-  CubeLattice(const CubeSample& sample, const DepthMeshParams& params)
-      : sample_(sample), n_(sample.faces[0].size) {
+  // The cached face's per-pixel arrays live in `buffers` (reused as they are:
+  // cache_face overwrites every element it later reads).
+  CubeLattice(const CubeSample& sample, const DepthMeshParams& params, DepthMeshScratch::Buffers& buffers)
+      : sample_(sample), n_(sample.faces[0].size), points_(buffers.points), distances_(buffers.distances),
+        screens_(buffers.screens), flags_(buffers.flags) {
     for (int f = 0; f < kCubeFaces; ++f) {
       const FaceBasis b = cube_face_basis(f);
       basis_[f] = b;
@@ -90,9 +119,7 @@ class CubeLattice {
 
   // A pixel's surface point in the screen frame of face `frame`: s = right / z,
   // t = up / z, w = 1 / z with z = forward component (cached for the cached face).
-  struct Screen {
-    double s, t, w;
-  };
+  using Screen = PixelScreen;
   Screen screen(const PixelRef& p, int frame) const {
     if (p.face == cached_face_ && frame == cached_face_) return screens_[std::size_t(p.j) * n_ + p.i];
     return compute_screen(point(p), frame);
@@ -128,7 +155,7 @@ class CubeLattice {
     }
     cached_face_ = f;
     std::vector<std::uint8_t>& flags = flags_[f];
-    flags.assign(count, 0);
+    flags.resize(count);  // every flag is written below
     const std::vector<float>& depth = sample_.faces[f].depth;
     auto pair_skin = [&](std::size_t a, int i, int j) {  // a before (i, j) in canonical order
       if (i < 0 || j < 0 || i >= n_ || j >= n_) return false;
@@ -240,11 +267,11 @@ class CubeLattice {
   std::array<FaceBasis, kCubeFaces> basis_;
   std::array<IntBasis, kCubeFaces> ibasis_;
   int cached_face_ = -1;
-  std::vector<Vec3d> points_;
-  std::vector<double> distances_;
-  std::vector<Screen> screens_;
+  std::vector<Vec3d>& points_;
+  std::vector<double>& distances_;
+  std::vector<Screen>& screens_;
   std::vector<double> column_s_;
-  std::array<std::vector<std::uint8_t>, kCubeFaces> flags_;
+  std::array<std::vector<std::uint8_t>, kCubeFaces>& flags_;
 };
 
 // Connected components (labels 0..k-1, by first occurrence) of the pixels
@@ -416,6 +443,11 @@ void validate(const CubeSample& sample) {
     if (face.depth.size() != std::size_t(n) * n)
       throw std::invalid_argument("build_depth_meshes: face " + std::to_string(f) + " holds " +
                                   std::to_string(face.depth.size()) + " depths, expected " + std::to_string(n * n));
+    // A branch-free scan first (it vectorises; the bake validates each sample
+    // once per face it meshes), then the first bad pixel for the message.
+    bool all_positive = true;
+    for (const float z : face.depth) all_positive &= z > 0;  // false for NaN
+    if (all_positive) continue;
     for (std::size_t k = 0; k < face.depth.size(); ++k) {
       const float z = face.depth[k];
       if (std::isnan(z) || !(z > 0))
@@ -632,7 +664,8 @@ std::size_t count_skin_edges(const CubeLattice& lat) {
 std::array<FaceMesh, kCubeFaces> build_depth_meshes(const CubeSample& sample, const DepthMeshParams& params,
                                                     DepthMeshStats* stats) {
   validate(sample);
-  CubeLattice lat(sample, params);
+  DepthMeshScratch scratch;
+  CubeLattice lat(sample, params, scratch.buffers());
   const InteriorCornerLabels interior_labels = interior_corner_labels();
   std::array<FaceMesh, kCubeFaces> meshes;
   for (int f = 0; f < kCubeFaces; ++f) {
@@ -672,11 +705,13 @@ std::uint64_t outline_edge_guess(const CubeFace& face, const DepthMeshParams& pa
   return edges;
 }
 
-FaceMesh build_depth_mesh_face(const CubeSample& sample, const DepthMeshParams& params, int face) {
+FaceMesh build_depth_mesh_face(const CubeSample& sample, const DepthMeshParams& params, int face,
+                               DepthMeshScratch* scratch) {
   if (face < 0 || face >= kCubeFaces)
     throw std::invalid_argument("build_depth_mesh_face: no cube face " + std::to_string(face));
   validate(sample);
-  CubeLattice lat(sample, params);
+  DepthMeshScratch own;
+  CubeLattice lat(sample, params, (scratch ? *scratch : own).buffers());
   lat.cache_face(face);
   return build_face(lat, interior_corner_labels(), face);
 }

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstddef>
+#include <memory>
 
 #include "stages/cube_map.h"
 
@@ -59,9 +60,28 @@ std::array<FaceMesh, kCubeFaces> build_depth_meshes(const CubeSample& sample, co
 // its order matters (which face to mesh first). O(pixels).
 std::uint64_t outline_edge_guess(const CubeFace& face, const DepthMeshParams& params);
 
+// Working memory build_depth_mesh_face can keep from one call to the next
+// (per-pixel buffers of one face, ~50 bytes a pixel), so meshing the faces of
+// a cell one by one does not allocate and clear them each time. Holds nothing
+// that changes a result; one per thread of work.
+class DepthMeshScratch {
+ public:
+  DepthMeshScratch();
+  ~DepthMeshScratch();
+  DepthMeshScratch(DepthMeshScratch&&) noexcept;
+  DepthMeshScratch& operator=(DepthMeshScratch&&) noexcept;
+  struct Buffers;
+  Buffers& buffers();
+
+ private:
+  std::unique_ptr<Buffers> buffers_;
+};
+
 // Face `face` alone of build_depth_meshes(sample, params), bit for bit (a
 // face's border corners read its neighbours' pixels, not their meshes), for
-// callers that mesh only the faces they need. Throws as build_depth_meshes.
-FaceMesh build_depth_mesh_face(const CubeSample& sample, const DepthMeshParams& params, int face);
+// callers that mesh only the faces they need, with `scratch`'s memory when
+// given. Throws as build_depth_meshes.
+FaceMesh build_depth_mesh_face(const CubeSample& sample, const DepthMeshParams& params, int face,
+                               DepthMeshScratch* scratch = nullptr);
 
 }  // namespace cellbake

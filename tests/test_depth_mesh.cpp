@@ -175,6 +175,20 @@ TEST(DepthMesh, OneFaceAloneIsBitIdenticalToThatFaceOfTheWholeCube) {
     EXPECT_EQ(one.uvs, all[f].uvs) << f;
     EXPECT_EQ(one.indices, all[f].indices) << f;
   }
+  // One scratch carried across faces, samples of another size and back: the
+  // same bits as fresh memory (nothing left from an earlier call shows).
+  DepthMeshScratch scratch;
+  const CubeSample other = raycast_analytic_scene(scene, {-0.4, 0.3, -0.2}, 24);
+  const auto other_all = build_depth_meshes(other, DepthMeshParams{});
+  for (int round = 0; round < 2; ++round)
+    for (int f : {3, 0, 5, 1, 4, 2}) {
+      const FaceMesh one = build_depth_mesh_face(sample, DepthMeshParams{}, f, &scratch);
+      EXPECT_EQ(one.positions, all[f].positions) << f;
+      EXPECT_EQ(one.indices, all[f].indices) << f;
+      const FaceMesh small = build_depth_mesh_face(other, DepthMeshParams{}, (f + round) % kCubeFaces, &scratch);
+      EXPECT_EQ(small.positions, other_all[(f + round) % kCubeFaces].positions) << f;
+      EXPECT_EQ(small.indices, other_all[(f + round) % kCubeFaces].indices) << f;
+    }
   EXPECT_THROW(build_depth_mesh_face(sample, DepthMeshParams{}, 6), std::invalid_argument);
   CubeSample bad_depth = sample;
   bad_depth.faces[2].depth[5] = std::numeric_limits<float>::quiet_NaN();
