@@ -369,7 +369,8 @@ class TinSimplifier {
     }
   }
 
-  // Calls vote(label, 1, 0) for every pixel whose centre lies in the closed triangle p.
+  // Calls vote(label, count, 0) for the pixels whose centre lies in the closed
+  // triangle p: once per run of equal labels along a row (count: its length).
   template <typename VoteFn>
   void vote_pixel_centres(const std::array<LatticePoint, 3>& p, VoteFn&& vote) const {
     const int ymin = std::min({p[0].y, p[1].y, p[2].y}), ymax = std::max({p[0].y, p[1].y, p[2].y});
@@ -384,7 +385,13 @@ class TinSimplifier {
       }
       if (!(xl <= xr)) continue;
       const int x0 = std::max(0, int(std::ceil(xl - 0.5))), x1 = std::min(n_ - 1, int(std::floor(xr - 0.5)));
-      for (int px = x0; px <= x1; ++px) vote(label(px, py), 1, 0.0);
+      for (int px = x0; px <= x1;) {  // one call per run of equal labels
+        const int l = label(px, py);
+        int end = px + 1;
+        while (end <= x1 && label(end, py) == l) ++end;
+        vote(l, std::size_t(end - px), 0.0);
+        px = end;
+      }
     }
   }
 
