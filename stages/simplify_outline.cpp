@@ -10,6 +10,8 @@
 #include <cstdlib>
 #include <numeric>
 #include <span>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "stages/cell_buckets.h"
@@ -48,15 +50,18 @@ class OutlineEdges {
     horizontal_.assign(std::size_t(n_ + 1) * (n_ + 1), 0);
     vertical_.assign(std::size_t(n_ + 1) * (n_ + 1), 0);
     auto label = [&](int i, int j) { return r.label[std::size_t(j) * n_ + i]; };
+    if (r.joins.size() != std::size_t(n_) * n_ || r.label.size() != r.joins.size())
+      throw std::invalid_argument("simplify: face regions do not match a " + std::to_string(n_) + "^2 face");
+    auto joins = [&](int i, int j, std::uint8_t side) { return (r.joins[std::size_t(j) * n_ + i] & side) != 0; };
     for (int y = 1; y < n_; ++y)
       for (int x = 0; x < n_; ++x) {
         const int a = label(x, y - 1), b = label(x, y);
-        horizontal_[index(x, y)] = (a != b) || (a >= 0 && !share_side(g, x, y - 1, x, y));
+        horizontal_[index(x, y)] = (a != b) || (a >= 0 && !joins(x, y - 1, FaceRegions::kJoinsSouth));
       }
     for (int y = 0; y < n_; ++y)
       for (int x = 1; x < n_; ++x) {
         const int a = label(x - 1, y), b = label(x, y);
-        vertical_[index(x, y)] = (a != b) || (a >= 0 && !share_side(g, x - 1, y, x, y));
+        vertical_[index(x, y)] = (a != b) || (a >= 0 && !joins(x - 1, y, FaceRegions::kJoinsEast));
       }
   }
 
@@ -304,13 +309,14 @@ FaceRegions label_face_regions(const FaceGrid& g) {
     const int ra = find_root(parent, int(a)), rb = find_root(parent, int(b));
     parent[std::max(ra, rb)] = std::min(ra, rb);
   };
+  FaceRegions r;
+  r.joins.assign(count, 0);
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
       const std::size_t p = std::size_t(j) * n + i;
-      if (i + 1 < n && share_side(g, i, j, i + 1, j)) join(p, p + 1);
-      if (j + 1 < n && share_side(g, i, j, i, j + 1)) join(p, p + n);
+      if (i + 1 < n && share_side(g, i, j, i + 1, j)) join(p, p + 1), r.joins[p] |= FaceRegions::kJoinsEast;
+      if (j + 1 < n && share_side(g, i, j, i, j + 1)) join(p, p + n), r.joins[p] |= FaceRegions::kJoinsSouth;
     }
-  FaceRegions r;
   r.label.assign(count, -1);
   std::vector<std::int32_t> root_label(count, -1);
   for (std::size_t p = 0; p < count; ++p) {

@@ -28,6 +28,10 @@ struct LatticePoint {
 struct FaceRegions {
   std::vector<std::int32_t> label;  // per pixel (row-major): region id >= 0, or -1 where not covered
   int count = 0;
+  // Per pixel (row-major): kJoinsEast / kJoinsSouth when it shares the
+  // vertices of that side with its neighbour there (both covered).
+  std::vector<std::uint8_t> joins;
+  static constexpr std::uint8_t kJoinsEast = 1, kJoinsSouth = 2;
 };
 
 // Labels the regions of `g` in row-major order of their first pixel. Deterministic.
