@@ -17,52 +17,50 @@ struct P2 {
   double x, y;
 };
 
-// Whether the square of half-size h centred at (cx, cy) lies at least partly
-// on the triangle's side of edge e (p = t[e], q = t[e + 1], third vertex r);
-// true for a degenerate edge. For fixed cy this is monotone in cx (every
-// floating-point step below is), so along a row it holds on a half-line.
-bool square_meets_edge_side(const std::array<P2, 3>& t, int e, double cx, double cy, double h) {
-  const P2& p = t[std::size_t(e)];
-  const P2& q = t[std::size_t((e + 1) % 3)];
-  const P2& r = t[std::size_t((e + 2) % 3)];
-  const double nx = q.y - p.y, ny = p.x - q.x;  // edge normal
-  if (nx == 0 && ny == 0) return true;
-  const double side = nx * (r.x - p.x) + ny * (r.y - p.y);  // where the third vertex lies
-  // The square's extent along the normal, relative to the edge line.
-  const double centre = nx * (cx - p.x) + ny * (cy - p.y), reach = h * (std::abs(nx) + std::abs(ny));
-  return side >= 0 ? !(centre + reach < 0) : !(centre - reach > 0);
-}
+// Edge e of triangle t (from t[e] to t[e + 1], third vertex t[e + 2]) as a
+// test of squares of half-size h: whether a square lies at least partly on the
+// triangle's side of the edge line (always, for a degenerate edge). For a
+// fixed centre row the test is monotone in the centre column (every
+// floating-point step of meets() is), so along a row it holds on a half-line.
+struct EdgeSide {
+  P2 p;
+  double nx, ny;     // edge normal
+  double reach;      // the square's extent along the normal
+  bool positive;     // the third vertex lies on the normal's side
+  bool degenerate;
 
-// True when the triangle and the square [cx - h, cx + h] x [cy - h, cy + h]
-// overlap (touching counts). The square's axes are tested by the caller
-// (bounding box).
-bool triangle_overlaps_square(const std::array<P2, 3>& t, double cx, double cy, double h) {
-  for (int e = 0; e < 3; ++e)
-    if (!square_meets_edge_side(t, e, cx, cy, h)) return false;
-  return true;
-}
+  EdgeSide(const std::array<P2, 3>& t, int e, double h) : p(t[std::size_t(e)]) {
+    const P2& q = t[std::size_t((e + 1) % 3)];
+    const P2& r = t[std::size_t((e + 2) % 3)];
+    nx = q.y - p.y, ny = p.x - q.x;
+    degenerate = nx == 0 && ny == 0;
+    positive = nx * (r.x - p.x) + ny * (r.y - p.y) >= 0;
+    reach = h * (std::abs(nx) + std::abs(ny));
+  }
+
+  bool meets(double cx, double cy) const {
+    if (degenerate) return true;
+    const double centre = nx * (cx - p.x) + ny * (cy - p.y);  // relative to the edge line
+    return positive ? !(centre + reach < 0) : !(centre - reach > 0);
+  }
+};
 
 // Narrows [lo, hi] (texel columns of row y) to those whose square meets the
-// triangle's side of edge e: the exact answers of square_meets_edge_side,
-// found from an estimate of where the half-line starts and a few exact tests
-// (the test is monotone along the row).
-void clip_row_to_edge(const std::array<P2, 3>& t, int e, int y, double h, int& lo, int& hi) {
-  const P2& p = t[std::size_t(e)];
-  const P2& q = t[std::size_t((e + 1) % 3)];
-  const P2& r = t[std::size_t((e + 2) % 3)];
-  const double nx = q.y - p.y, ny = p.x - q.x;
+// edge's side: the exact answers of EdgeSide::meets, found from an estimate of
+// where the half-line starts and a few exact tests (meets is monotone along
+// the row).
+void clip_row_to_edge(const EdgeSide& edge, int y, int& lo, int& hi) {
   const double cy = y + 0.5;
-  const auto holds = [&](int x) { return square_meets_edge_side(t, e, x + 0.5, cy, h); };
-  if (nx == 0) {  // the same answer along the whole row
+  const auto holds = [&](int x) { return edge.meets(x + 0.5, cy); };
+  if (edge.nx == 0) {  // the same answer along the whole row
     if (!holds(lo)) hi = lo - 1;
     return;
   }
-  const double side = nx * (r.x - p.x) + ny * (r.y - p.y);
-  const double reach = h * (std::abs(nx) + std::abs(ny));
   // Where centre -+ reach crosses 0 along the row, as a column.
-  const double cross = p.x + (-(ny * (cy - p.y)) + (side >= 0 ? -reach : reach)) / nx - 0.5;
+  const double cross =
+      edge.p.x + (-(edge.ny * (cy - edge.p.y)) + (edge.positive ? -edge.reach : edge.reach)) / edge.nx - 0.5;
   // Holds for x >= boundary when the test grows with x, else for x <= boundary.
-  const bool holds_right = (nx > 0) == (side >= 0);
+  const bool holds_right = (edge.nx > 0) == edge.positive;
   const double clamped = std::fmin(std::fmax(cross, double(lo) - 1), double(hi) + 1);
   int k = int(std::floor(clamped));
   if (holds_right) {  // first column that holds: lo..hi + 1
@@ -97,14 +95,20 @@ std::vector<std::uint8_t> texels_read_by(const FaceMesh& mesh, int size) {
     const auto first = [&](double lo) { return std::max(0, int(std::ceil(lo - h - 0.5))); };
     const auto last = [&](double hi) { return std::min(size - 1, int(std::floor(hi + h - 0.5))); };
     const int x0 = first(lo_x), x1 = last(hi_x), y0 = first(lo_y), y1 = last(hi_y);
+    // A texel is read when its square meets the triangle (touching counts):
+    // the bounding box above, and each edge's side (2D separating axes).
+    const std::array<EdgeSide, 3> edges{EdgeSide(p, 0, h), EdgeSide(p, 1, h), EdgeSide(p, 2, h)};
     const bool finite = std::isfinite(lo_x) && std::isfinite(hi_x) && std::isfinite(lo_y) && std::isfinite(hi_y);
     for (int y = y0; y <= y1; ++y) {
       int lo = x0, hi = x1;
       if (finite)  // the texels of the row that pass all three edges: one run
-        for (int e = 0; e < 3 && lo <= hi; ++e) clip_row_to_edge(p, e, y, h, lo, hi);
+        for (int e = 0; e < 3 && lo <= hi; ++e) clip_row_to_edge(edges[std::size_t(e)], y, lo, hi);
       for (int x = lo; x <= hi; ++x) {
         std::uint8_t& r = read[std::size_t(y) * std::size_t(size) + std::size_t(x)];
-        if (!r && (finite || triangle_overlaps_square(p, x + 0.5, y + 0.5, h))) r = 1;
+        if (r) continue;
+        bool meets = true;
+        for (int e = 0; e < 3 && meets && !finite; ++e) meets = edges[std::size_t(e)].meets(x + 0.5, y + 0.5);
+        if (meets) r = 1;
       }
     }
   }
