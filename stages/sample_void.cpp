@@ -68,6 +68,8 @@ int face_of(const double v[3], double& z) {
   return v[2] >= 0 ? 4 : 5;
 }
 
+enum class RayVerdict : std::uint8_t { void_surface, seen, seen_by_shortcut };
+
 struct PreparedSample {
   Vec3d eye;
   int n = 0;
@@ -126,9 +128,10 @@ class Marcher {
     tried_background_.resize(samples.size());
   }
 
-  // True when the ray from the candidate along unit `dir` sees the void surface.
-  bool is_void(const Vec3d& dir) {
-    if (all_void_) return true;
+  // How the ray from the candidate along unit `dir` ends: void, or seen for
+  // good (rules 1, 2 and the march's end), or seen by rule 4's shortcut.
+  RayVerdict march(const Vec3d& dir) {
+    if (all_void_) return RayVerdict::void_surface;
     const double tol = params_.surface_tolerance;
     const double jump = params_.jump;
     const double unknown = std::numeric_limits<double>::quiet_NaN();
@@ -153,12 +156,12 @@ class Marcher {
         const Projection p = project(prepared_[k], x);
         if (p.depth < kInf) {
           all_background = false;
-          if (std::fabs(p.z - p.depth) <= tol * p.z) return false;  // on a sampled surface
+          if (std::fabs(p.z - p.depth) <= tol * p.z) return RayVerdict::seen;  // on a sampled surface
           if (!p.certified && prev_certified_[k]) {
             const double before =
                 std::isnan(prev_depth_[k]) ? project(prepared_[k], prev_x).depth : prev_depth_[k];
             if (std::fabs(p.depth - before) <= jump * std::min(p.depth, before))
-              return false;  // through a surface
+              return RayVerdict::seen;  // through a surface
           }
         } else if (!tried_background_[k] && untried_background < 0) {
           untried_background = static_cast<int>(k);
@@ -167,13 +170,13 @@ class Marcher {
         prev_depth_[k] = p.depth;
         any_certified = any_certified || p.certified;
       }
-      if (!any_certified) return true;
-      if (t >= max_distance_) return false;
+      if (!any_certified) return RayVerdict::void_surface;
+      if (t >= max_distance_) return RayVerdict::seen;
       // Every sample sees background here: if one of them sees only
       // background along the rest of the ray, it certifies all of it.
       if (all_background && untried_background >= 0) {
         tried_background_[untried_background] = 1;
-        if (rest_is_background(prepared_[untried_background], x, dir)) return false;
+        if (rest_is_background(prepared_[untried_background], x, dir)) return RayVerdict::seen_by_shortcut;
       }
       prev_x = x;
     }
@@ -412,19 +415,22 @@ double face_solid_angle(double s0, double s1, double t0, double t1) {
   return f(s1, t1) - f(s0, t1) - f(s1, t0) + f(s0, t0);
 }
 
-}  // namespace
-
-VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> samples,
-                         const VoidParams& params) {
-  validate(candidate, samples, params);
-
+// The march's last distance (see void_fraction's contract).
+double resolved_max_distance(const Vec3d& candidate, std::span<const VoidSample> samples, const VoidParams& params) {
   double max_distance = params.max_distance;
   if (max_distance == 0) {
     for (const VoidSample& s : samples)
       max_distance =
           std::max(max_distance, length(candidate - s.cube->eye) + 2 * largest_finite_depth(*s.cube));
   }
+  return max_distance;
+}
 
+// Marches every ray not in `known_seen` (null: none known) in the fixed ray
+// order; `learned`, when not null, receives per ray whether it is seen for good.
+VoidResult march_rays(const Vec3d& candidate, std::span<const VoidSample> samples, const VoidParams& params,
+                      double max_distance, const std::vector<std::uint8_t>* known_seen,
+                      std::vector<std::uint8_t>* learned) {
   const int n = params.face_size;
   std::vector<double> weight(static_cast<std::size_t>(n) * n);
   for (int j = 0; j < n; ++j)
@@ -437,22 +443,72 @@ VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> sam
   Marcher marcher(candidate, samples, params, max_distance);
   VoidResult result;
   double void_weight = 0, total_weight = 0;
+  std::size_t ray = 0;
   for (int f = 0; f < kCubeFaces; ++f) {
     const FaceBasis basis = cube_face_basis(f);
     for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const double s = 2 * (i + 0.5) / n - 1, t = 1 - 2 * (j + 0.5) / n;
-        const Vec3d d = cube_face_direction(basis, s, t);
+      for (int i = 0; i < n; ++i, ++ray) {
         const double w = weight[static_cast<std::size_t>(j) * n + i];
         total_weight += w;
         ++result.rays;
-        if (marcher.is_void(d * (1 / length(d)))) {
+        if (known_seen && (*known_seen)[ray]) continue;  // stays seen (VoidRayMemory)
+        const double s = 2 * (i + 0.5) / n - 1, t = 1 - 2 * (j + 0.5) / n;
+        const Vec3d d = cube_face_direction(basis, s, t);
+        const RayVerdict verdict = marcher.march(d * (1 / length(d)));
+        ++result.marched_rays;
+        if (learned) (*learned)[ray] = verdict == RayVerdict::seen;
+        if (verdict == RayVerdict::void_surface) {
           ++result.void_rays;
           void_weight += w;
         }
       }
   }
   result.fraction = std::clamp(void_weight / total_weight, 0.0, 1.0);
+  return result;
+}
+
+}  // namespace
+
+VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> samples,
+                         const VoidParams& params) {
+  validate(candidate, samples, params);
+  return march_rays(candidate, samples, params, resolved_max_distance(candidate, samples, params), nullptr,
+                    nullptr);
+}
+
+VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> samples, const VoidParams& params,
+                         VoidRayMemory& memory) {
+  validate(candidate, samples, params);
+  const std::size_t rays = std::size_t(kCubeFaces) * std::size_t(params.face_size) * std::size_t(params.face_size);
+  const double max_distance = resolved_max_distance(candidate, samples, params);
+  const bool empty = memory.eyes.empty() && memory.seen_for_good.empty();
+  if (!empty) {
+    const auto fail = [](const std::string& what) {
+      throw std::invalid_argument("void_fraction: the ray memory " + what);
+    };
+    if (!(memory.candidate == candidate)) fail("belongs to another candidate");
+    const VoidParams& m = memory.params;
+    if (m.face_size != params.face_size || m.step_ratio != params.step_ratio ||
+        m.start_distance != params.start_distance || m.max_distance != params.max_distance ||
+        m.surface_tolerance != params.surface_tolerance || m.jump != params.jump)
+      fail("was learned with other params");
+    if (memory.seen_for_good.size() != rays) fail("holds " + std::to_string(memory.seen_for_good.size()) + " rays, not " + std::to_string(rays));
+    if (memory.eyes.size() > samples.size()) fail("knows more samples than are given");
+    for (std::size_t k = 0; k < memory.eyes.size(); ++k)
+      if (!(memory.eyes[k] == samples[k].cube->eye))
+        fail("was learned with other samples (sample " + std::to_string(k) + ")");
+  }
+  const bool reuse = !empty && memory.max_distance == max_distance;
+  if (!reuse) memory.seen_for_good.assign(rays, 0);
+  std::vector<std::uint8_t> learned = memory.seen_for_good;
+  const VoidResult result =
+      march_rays(candidate, samples, params, max_distance, reuse ? &memory.seen_for_good : nullptr, &learned);
+  memory.candidate = candidate;
+  memory.params = params;
+  memory.max_distance = max_distance;
+  memory.eyes.clear();
+  for (const VoidSample& s : samples) memory.eyes.push_back(s.cube->eye);
+  memory.seen_for_good = std::move(learned);
   return result;
 }
 

@@ -10,7 +10,9 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <span>
+#include <vector>
 
 #include "stages/cube_map.h"
 #include "stages/geometry.h"
@@ -45,6 +47,22 @@ struct VoidParams {
 struct VoidResult {
   double fraction = 0;  // void solid angle / 4 pi, in [0, 1]
   std::size_t void_rays = 0, rays = 0;
+  std::size_t marched_rays = 0;  // rays marched (the rest a VoidRayMemory knew as seen)
+};
+
+// What void_fraction learned at one candidate, for a later call there with
+// more samples (best-next-view scores the same Voronoi vertices again after
+// each new sample). A ray that a sampled surface or the end of the march
+// decided as seen (rules 1, 2 and max_distance below) stays seen when samples
+// are appended: every point before that decision stays certified by the same
+// samples, and the same sample still meets the surface there or earlier. A ray
+// seen by rule 4's shortcut or void is not remembered and is marched again.
+struct VoidRayMemory {
+  Vec3d candidate;
+  VoidParams params;
+  std::vector<Vec3d> eyes;                  // of the samples it was learned with, in order
+  double max_distance = 0;                  // the march's last distance it was learned with
+  std::vector<std::uint8_t> seen_for_good;  // per ray, in void_fraction's ray order
 };
 
 // The fraction of the sphere of view directions at `candidate` that sees the
@@ -94,5 +112,16 @@ struct VoidResult {
 // and > 0, max_distance, surface_tolerance, jump not finite and >= 0).
 VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> samples,
                          const VoidParams& params);
+
+// The same result, bit for bit, marching only the rays `memory` does not know
+// as seen, and updating it. `memory` must be empty (default-constructed) or
+// come from calls at this candidate with these params whose samples were the
+// first memory.eyes.size() of `samples` (the same cubes, appended to since);
+// it is restarted when the march's last distance changed (max_distance = 0
+// and a sample extended it). Throws std::invalid_argument as void_fraction,
+// and for a memory of another candidate, other params or another sample
+// prefix (eyes compared).
+VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> samples,
+                         const VoidParams& params, VoidRayMemory& memory);
 
 }  // namespace cellbake
