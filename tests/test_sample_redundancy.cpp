@@ -2,6 +2,11 @@
 // analytic box scenes with known answers.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <random>
+
 #include "stages/background_fill.h"
 #include "stages/sample_redundancy.h"
 #include "tests/fixture_analytic_cube.h"
@@ -142,6 +147,86 @@ TEST(SampleRedundancy, KeepMarginGrowsKeptPixelsBackOverTheSeam) {
       if (std::isfinite(tight.faces[f].depth[k])) {
         EXPECT_TRUE(std::isfinite(grown.faces[f].depth[k]));
       }
+}
+
+// The one-surface rule written out plainly (every second difference taken,
+// then compared), for points whose 2x2 neighbourhood holds one surface; null
+// for the others (a depth jump: another rule).
+std::optional<bool> one_surface_rule(const CubeSample& a, const Vec3d& point, const RedundancyParams& prm) {
+  const int n = a.faces[0].size;
+  const Vec3d v = point - a.eye;
+  const double ax = std::abs(v.x), ay = std::abs(v.y), az = std::abs(v.z);
+  const int face = ax >= ay && ax >= az ? (v.x >= 0 ? 0 : 1) : ay >= az ? (v.y >= 0 ? 2 : 3) : (v.z >= 0 ? 4 : 5);
+  const FaceBasis b = cube_face_basis(face);
+  const double depth = dot(v, b.forward);
+  if (!(depth > 0)) return std::nullopt;
+  const double x = std::clamp((dot(v, b.right) / depth + 1) * 0.5 * n - 0.5, 0.0, n - 1.0);
+  const double y = std::clamp((1 - dot(v, b.up) / depth) * 0.5 * n - 0.5, 0.0, n - 1.0);
+  const CubeFace& f = a.faces[std::size_t(face)];
+  const auto inv = [&](int i, int j) {
+    const float d = f.depth[std::size_t(j) * n + i];
+    return std::isfinite(d) ? 1.0 / d : 0.0;
+  };
+  const int i0 = std::min(int(x), n - 2), j0 = std::min(int(y), n - 2), i1 = i0 + 1, j1 = j0 + 1;
+  const double fx = x - i0, fy = y - j0, w = 1.0 / depth;
+  const double w00 = inv(i0, j0), w10 = inv(i1, j0), w01 = inv(i0, j1), w11 = inv(i1, j1);
+  const double lo = std::min({w00, w10, w01, w11}), hi = std::max({w00, w10, w01, w11});
+  if (!(lo > 0 && hi <= lo * (1 + prm.jump))) return std::nullopt;
+  const double interpolated = (w00 * (1 - fx) + w10 * fx) * (1 - fy) + (w01 * (1 - fx) + w11 * fx) * fy;
+  double curvature = std::abs(w00 + w11 - w10 - w01);
+  const auto second = [&](int ia, int ja, int ib, int jb, int ic, int jc) {
+    if (ia < 0 || ja < 0 || ic >= n || jc >= n) return;
+    const double a0 = inv(ia, ja), b0 = inv(ib, jb), c0 = inv(ic, jc);
+    if (a0 <= 0 || c0 <= 0 || std::max(a0, c0) > std::min(a0, c0) * (1 + prm.jump)) return;
+    curvature = std::max(curvature, std::abs(a0 - 2 * b0 + c0));
+  };
+  for (int j : {j0, j1}) second(i0 - 1, j, i0, j, i1, j), second(i0, j, i1, j, i1 + 1, j);
+  for (int i : {i0, i1}) second(i, j0 - 1, i, j0, i, j1), second(i, j0, i, j1, i, j1 + 1);
+  return std::abs(interpolated - w) <= prm.tolerance * w + 0.5 * curvature;
+}
+
+// sample_holds_point stops reading neighbours once the allowance covers the
+// miss: on a curved, stepped surface with holes it answers as the plain rule.
+TEST(SampleRedundancy, HeldPointsAnswerAsTheRuleWithEverySecondDifference) {
+  constexpr int n = 24;
+  CubeSample a;
+  a.eye = {0.3, -0.2, 0.1};
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(0, 1);
+  for (int f = 0; f < kCubeFaces; ++f) {
+    CubeFace& face = a.faces[std::size_t(f)];
+    face.size = n;
+    face.depth.resize(std::size_t(n) * n);
+    face.color.assign(face.depth.size(), Rgba8{});
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        double d = 5 + 0.8 * std::sin(0.9 * i + f) * std::cos(0.5 * j) + 0.02 * unit(rng);
+        if (i > 15) d *= 1.3;  // a step
+        face.depth[std::size_t(j) * n + i] = unit(rng) < 0.03 ? kBackgroundDepth : float(d);
+      }
+  }
+  const RedundancyParams prm;
+  std::size_t compared = 0, held = 0;
+  for (int k = 0; k < 40000; ++k) {
+    const int f = int(unit(rng) * kCubeFaces) % kCubeFaces;
+    const FaceBasis b = cube_face_basis(f);
+    const double s = 2 * unit(rng) - 1, t = 2 * unit(rng) - 1;
+    const double col = (s + 1) * 0.5 * n - 0.5, row = (1 - t) * 0.5 * n - 0.5;
+    const int i = std::clamp(int(std::lround(col)), 0, n - 1), j = std::clamp(int(std::lround(row)), 0, n - 1);
+    const float stored = a.faces[std::size_t(f)].depth[std::size_t(j) * n + i];
+    if (!std::isfinite(stored)) continue;
+    // Depths from on the surface to a few per cent off it, most within the allowance's scale.
+    const double off = (unit(rng) - 0.5) * (k % 3 == 0 ? 0.05 : 2e-3);
+    const Vec3d point = a.eye + cube_face_direction(b, s, t) * (double(stored) * (1 + off));
+    const std::optional<bool> want = one_surface_rule(a, point, prm);
+    if (!want) continue;
+    EXPECT_EQ(sample_holds_point(a, point, prm), *want) << "face " << f << " s " << s << " t " << t;
+    ++compared;
+    held += *want ? 1 : 0;
+  }
+  EXPECT_GT(compared, 20000u);
+  EXPECT_GT(held, compared / 10);
+  EXPECT_LT(held, compared - compared / 10);
 }
 
 TEST(SampleRedundancy, RejectsMismatchedSizes) {
