@@ -170,6 +170,7 @@ RedundancyStats remove_redundant_pixels(CubeSample& delta, std::span<const CubeS
     return stats;
   }
   std::vector<std::uint8_t> state;  // 0 background, 1 kept, 2 redundant
+  std::vector<std::uint8_t> across(std::size_t(n) * n);  // per pixel: a kept pixel in its row, one either side
   for (int face = 0; face < kCubeFaces; ++face) {
     CubeFace& f = delta.faces[static_cast<std::size_t>(face)];
     const FaceBasis b = cube_face_basis(face);
@@ -192,22 +193,26 @@ RedundancyStats remove_redundant_pixels(CubeSample& delta, std::span<const CubeS
     // Drop kept specks smaller than min_island pixels (8-connected) that touch
     // no background: noise of the test, not disocclusions worth a mesh.
     if (prm.min_island > 1) drop_specks(state, n, prm.min_island);
-    // Grow the kept pixels back over removed ones by keep_margin rings.
+    // Grow the kept pixels back over removed ones by keep_margin rings: a
+    // removed pixel with a kept one among its 8 neighbours is kept (the 3x3
+    // dilation of the kept pixels, done as a row pass and a column pass).
     for (int ring = 0; ring < prm.keep_margin; ++ring) {
-      std::vector<std::uint8_t> grown = state;
-      for (int j = 0; j < n; ++j)
+      for (int j = 0; j < n; ++j) {
+        const std::uint8_t* row = state.data() + static_cast<std::size_t>(j) * n;
+        std::uint8_t* out = across.data() + static_cast<std::size_t>(j) * n;
+        for (int i = 0; i < n; ++i)
+          out[i] = (row[i] == 1) | (i > 0 && row[i - 1] == 1) | (i + 1 < n && row[i + 1] == 1);
+      }
+      for (int j = 0; j < n; ++j) {
+        std::uint8_t* row = state.data() + static_cast<std::size_t>(j) * n;
+        const std::uint8_t* mid = across.data() + static_cast<std::size_t>(j) * n;
+        const std::uint8_t* up = j > 0 ? mid - n : nullptr;
+        const std::uint8_t* down = j + 1 < n ? mid + n : nullptr;
         for (int i = 0; i < n; ++i) {
-          const std::size_t k = static_cast<std::size_t>(j) * n + i;
-          if (state[k] != 2) continue;
-          bool near_kept = false;
-          for (int dj = -1; dj <= 1 && !near_kept; ++dj)
-            for (int di = -1; di <= 1 && !near_kept; ++di) {
-              const int ii = i + di, jj = j + dj;
-              near_kept = ii >= 0 && jj >= 0 && ii < n && jj < n && state[static_cast<std::size_t>(jj) * n + ii] == 1;
-            }
-          if (near_kept) grown[k] = 1;
+          const bool near_kept = mid[i] | (up && up[i]) | (down && down[i]);
+          if (row[i] == 2 && near_kept) row[i] = 1;
         }
-      state.swap(grown);
+      }
     }
     for (std::size_t k = 0; k < state.size(); ++k)
       if (state[k] == 2) {

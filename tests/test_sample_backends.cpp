@@ -188,6 +188,30 @@ TEST(RaySegments, BoxBehindTheNearPlaneIsIgnored) {
   EXPECT_FLOAT_EQ(s.t0, 0.01f);
 }
 
+// The sampler's per-ray reciprocals come from per-column and per-row ones:
+// the same bits as dividing, so the same segments, on every face.
+TEST(RaySegments, FaceRayInversesAreTheDirectionsReciprocals) {
+  const EyeBox box = eye_relative_box(Box3d{{-0.7, -1.3, -0.4}, {2.1, 0.9, 1.6}}, {0.1, -0.2, 0.3});
+  for (int size : {7, 64, 513}) {
+    for (int face = 0; face < kCubeFaces; ++face) {
+      const FaceBasis b = cube_face_basis(face);
+      for (int col = 0; col < size; col += std::max(1, size / 37))
+        for (int row = 0; row < size; row += std::max(1, size / 41)) {
+          const double s = 2.0 * (col + 0.5) / size - 1.0, c = 2.0 * (row + 0.5) / size - 1.0;
+          const Vec3d dir = cube_face_direction(b, s, -c);
+          const Vec3d inverse = face_ray_inverse(b, 1.0 / s, -(1.0 / c));
+          for (int k = 0; k < 3; ++k)  // a zero component (odd sizes' middle pixel) is not read
+            if (dir[k] != 0) ASSERT_EQ(inverse[k], 1.0 / dir[k]) << face << " " << col << " " << row;
+          const RaySegments a = ray_segments(dir, inverse, box, 0.01), d = ray_segments(dir, box, 0.01);
+          ASSERT_EQ(a.t0, d.t0);
+          ASSERT_EQ(a.t1, d.t1);
+          ASSERT_EQ(a.two, d.two);
+          ASSERT_EQ(a.t2, d.t2);
+        }
+    }
+  }
+}
+
 TEST(BlockOrder, VisitsEveryPixelOnceInFourByFourBlocks) {
   for (int size : {1, 4, 7, 16}) {
     const std::vector<std::uint32_t> order = block_order(size);

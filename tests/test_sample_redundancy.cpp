@@ -147,6 +147,29 @@ TEST(SampleRedundancy, KeepMarginGrowsKeptPixelsBackOverTheSeam) {
       if (std::isfinite(tight.faces[f].depth[k])) {
         EXPECT_TRUE(std::isfinite(grown.faces[f].depth[k]));
       }
+  // Exactly: two rings, each keeping every removed pixel with a kept one among its 8 neighbours.
+  const CubeSample original = test::analytic_colored_cube_sample({1.5, 1.5, 1.7}, scene, 96);
+  const int n = 96;
+  for (int f = 0; f < kCubeFaces; ++f) {
+    std::vector<int> state(std::size_t(n) * n);  // 0 background, 1 kept, 2 removed
+    for (std::size_t k = 0; k < state.size(); ++k)
+      state[k] = !std::isfinite(original.faces[f].depth[k]) ? 0 : std::isfinite(tight.faces[f].depth[k]) ? 1 : 2;
+    for (int ring = 0; ring < 2; ++ring) {
+      std::vector<int> next = state;
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+          for (int dj = -1; dj <= 1; ++dj)
+            for (int di = -1; di <= 1; ++di) {
+              const int ii = i + di, jj = j + dj;
+              if (state[std::size_t(j) * n + i] == 2 && ii >= 0 && jj >= 0 && ii < n && jj < n &&
+                  state[std::size_t(jj) * n + ii] == 1)
+                next[std::size_t(j) * n + i] = 1;
+            }
+      state = next;
+    }
+    for (std::size_t k = 0; k < state.size(); ++k)
+      ASSERT_EQ(state[k] == 1, std::isfinite(grown.faces[f].depth[k])) << "face " << f << " pixel " << k;
+  }
 }
 
 // The one-surface rule written out plainly (every second difference taken,

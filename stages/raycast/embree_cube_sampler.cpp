@@ -157,7 +157,11 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
   if (order_size_ != size) {
     order_ = block_order(size);
     coordinate_.resize(std::size_t(size));
-    for (int i = 0; i < size; ++i) coordinate_[std::size_t(i)] = 2.0 * (i + 0.5) / size - 1.0;
+    inverse_coordinate_.resize(std::size_t(size));
+    for (int i = 0; i < size; ++i) {
+      coordinate_[std::size_t(i)] = 2.0 * (i + 0.5) / size - 1.0;  // 0 (odd sizes): ray_segments skips it
+      inverse_coordinate_[std::size_t(i)] = 1.0 / coordinate_[std::size_t(i)];
+    }
     order_size_ = size;
   }
   const EyeBox box = eye_relative_box(cull_box, eye);
@@ -226,7 +230,8 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
           const std::uint32_t p = order_[start + k];
           const std::uint32_t row = p / std::uint32_t(size), col = p - row * std::uint32_t(size);
           const Vec3d dir = cube_face_direction(b, coordinate_[col], -coordinate_[row]);
-          const RaySegments seg = ray_segments(dir, box, params.near_plane);
+          const Vec3d inverse = face_ray_inverse(b, inverse_coordinate_[col], -inverse_coordinate_[row]);
+          const RaySegments seg = ray_segments(dir, inverse, box, params.near_plane);
           init_ray(rays[k], dir, seg.t0, std::min(seg.t1, out.depth[p]), p);
           second[k] = seg.two && seg.t2 < out.depth[p] ? seg.t2 : std::numeric_limits<float>::infinity();
         }

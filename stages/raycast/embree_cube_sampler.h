@@ -81,6 +81,7 @@ class EmbreeCubeSampler final : public CubeSampler {
   EmbreeSamplerStats stats_;
   std::vector<std::uint32_t> order_;  // pixels of a render_size^2 face in 4 x 4 block order
   std::vector<double> coordinate_;    // s of column i (= -t of row i): 2 (i + 0.5) / size - 1
+  std::vector<double> inverse_coordinate_;  // 1.0 / coordinate_[i]
   int order_size_ = 0;
 };
 

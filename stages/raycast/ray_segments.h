@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "stages/cube_map.h"
 #include "stages/geometry.h"
 
 namespace cellbake {
@@ -38,8 +39,9 @@ EyeBox eye_relative_box(const Box3d& box, const Vec3d& eye);
 // outside the open box `box` and at t >= near. Segment ends on the box
 // boundary are widened by one float step, so surfaces lying on the boundary
 // (kept by the GL path) are not lost to rounding. Inline: the sampler calls it
-// once per ray.
-inline RaySegments ray_segments(const Vec3d& dir, const EyeBox& box, double near) {
+// once per ray. `inverse` holds 1.0 / dir[k] for every non-zero dir[k] (the
+// sampler knows them per pixel column and row: see face_ray_inverse).
+inline RaySegments ray_segments(const Vec3d& dir, const Vec3d& inverse, const EyeBox& box, double near) {
   constexpr double inf = std::numeric_limits<double>::infinity();
   // One float step towards zero / towards infinity, for positive finite floats.
   const auto step_down = [](float f) { return f > 0 ? std::bit_cast<float>(std::bit_cast<std::uint32_t>(f) - 1) : f; };
@@ -56,8 +58,7 @@ inline RaySegments ray_segments(const Vec3d& dir, const EyeBox& box, double near
       if (!(box.lo[k] < 0 && 0 < box.hi[k])) return s;  // never strictly inside this slab
       continue;
     }
-    const double inverse = 1.0 / dir[k];
-    const double a = box.lo[k] * inverse, b = box.hi[k] * inverse;
+    const double a = box.lo[k] * inverse[k], b = box.hi[k] * inverse[k];
     t_in = std::max(t_in, std::min(a, b));
     t_out = std::min(t_out, std::max(a, b));
   }
@@ -71,6 +72,22 @@ inline RaySegments ray_segments(const Vec3d& dir, const EyeBox& box, double near
   s.two = true;
   s.t2 = leave;
   return s;
+}
+
+// The same, dividing by dir's components here.
+inline RaySegments ray_segments(const Vec3d& dir, const EyeBox& box, double near) {
+  const auto inverse = [](double d) { return d != 0 ? 1.0 / d : 0.0; };  // 0 components are not read
+  return ray_segments(dir, Vec3d{inverse(dir.x), inverse(dir.y), inverse(dir.z)}, box, near);
+}
+
+// 1.0 / d per non-zero component of d = cube_face_direction(b, s, t), from
+// 1.0 / s and 1.0 / t: each component of d is exactly one of +-1, +-s, +-t
+// (the basis vectors are signed unit axes), so these are the same bits.
+inline Vec3d face_ray_inverse(const FaceBasis& b, double inverse_s, double inverse_t) {
+  Vec3d out;
+  for (int k = 0; k < 3; ++k)
+    out[k] = b.forward[k] != 0 ? b.forward[k] : b.right[k] != 0 ? b.right[k] * inverse_s : b.up[k] * inverse_t;
+  return out;
 }
 
 }  // namespace cellbake
