@@ -68,7 +68,7 @@ int face_of(const double v[3], double& z) {
   return v[2] >= 0 ? 4 : 5;
 }
 
-enum class RayVerdict : std::uint8_t { void_surface, seen, seen_by_shortcut };
+enum class RayVerdict : std::uint8_t { void_surface, seen };
 
 struct PreparedSample {
   Vec3d eye;
@@ -128,8 +128,7 @@ class Marcher {
     tried_background_.resize(samples.size());
   }
 
-  // How the ray from the candidate along unit `dir` ends: void, or seen for
-  // good (rules 1, 2 and the march's end), or seen by rule 4's shortcut.
+  // How the ray from the candidate along unit `dir` ends: void or seen.
   RayVerdict march(const Vec3d& dir) {
     if (all_void_) return RayVerdict::void_surface;
     const double tol = params_.surface_tolerance;
@@ -176,7 +175,7 @@ class Marcher {
       // background along the rest of the ray, it certifies all of it.
       if (all_background && untried_background >= 0) {
         tried_background_[untried_background] = 1;
-        if (rest_is_background(prepared_[untried_background], x, dir)) return RayVerdict::seen_by_shortcut;
+        if (rest_is_background(prepared_[untried_background], x, dir)) return RayVerdict::seen;
       }
       prev_x = x;
     }
@@ -270,23 +269,30 @@ class Marcher {
     }
   }
 
-  // True when every pixel of sample s that the ray x + u dir (u >= 0) passes
-  // through is background. Per face, the ray clipped to the face's frustum
-  // projects to a segment in pixel coordinates, walked cell by cell
-  // (Amanatides & Woo 1987). A ray passing (nearly) through the eye fails.
+  // True when every pixel of sample s that project() can give for a point
+  // x + u dir (u >= 0) is background, so s certifies every such point. Per
+  // face, the ray clipped to the face's frustum (widened by a hair, as
+  // face_of's choice at a frustum edge may round either way) projects to a
+  // segment in pixel coordinates, walked cell by cell (Amanatides & Woo
+  // 1987) together with the neighbour cells whose border the segment passes
+  // within kWalkMargin pixels of (project() rounds differently from the
+  // walk; its error is many orders of magnitude smaller). A ray passing
+  // near the eye fails (a point there projects anywhere).
   bool rest_is_background(const PreparedSample& s, const Vec3d& x, const Vec3d& dir) const {
     const Vec3d v0 = x - s.eye;
     const double along = dot(v0, dir);
     const double closest = along >= 0 ? length(v0) : length(v0 - dir * along);
-    if (!(closest > 1e-9 * (length(v0) + 1))) return false;
+    const double scale = length(v0) + length(x) + length(s.eye) + 1;  // of the coordinates' rounding
+    if (!(closest > 1e-6 * scale)) return false;
+    const double hair = 1e-12 * scale;
     for (int f = 0; f < kCubeFaces; ++f) {
       const FaceAxes& a = axes_[f];
       const double fw0 = a.fwd_sign * v0[a.fwd_axis], fwd = a.fwd_sign * dir[a.fwd_axis];
       const double r0 = a.right_sign * v0[a.right_axis], rd = a.right_sign * dir[a.right_axis];
       const double u0 = a.up_sign * v0[a.up_axis], ud = a.up_sign * dir[a.up_axis];
-      // Inside the frustum: fw - r >= 0, fw + r >= 0, fw - up >= 0, fw + up >= 0 (so fw >= 0).
+      // Inside the frustum: fw - r >= 0, fw + r >= 0, fw - up >= 0, fw + up >= 0 (so fw >= 0), less a hair.
       double lo = 0, hi = kInf;
-      const double c[4] = {fw0 - r0, fw0 + r0, fw0 - u0, fw0 + u0};
+      const double c[4] = {fw0 - r0 + hair, fw0 + r0 + hair, fw0 - u0 + hair, fw0 + u0 + hair};
       const double g[4] = {fwd - rd, fwd + rd, fwd - ud, fwd + ud};
       for (int h = 0; h < 4 && lo <= hi; ++h) {
         if (g[h] > 0) {
@@ -298,7 +304,7 @@ class Marcher {
         }
       }
       if (!(lo <= hi)) continue;
-      // Pixel coordinates (continuous, [0, n]) of both ends.
+      // Pixel coordinates (continuous, [0, n] up to the hair) of both ends.
       auto pixel_of = [&](double fw, double r, double up, double& pi, double& pj) {
         pi = s.half_n * (1 + r / fw);
         pj = s.half_n * (1 - up / fw);
@@ -319,8 +325,12 @@ class Marcher {
     return true;
   }
 
+  // Pixels (a fraction) a cell's neighbour is also read within.
+  static constexpr double kWalkMargin = 1e-3;
+
   // Walks the pixels of face f crossed by the segment (pi0, pj0)-(pi1, pj1)
-  // in continuous pixel coordinates; false at the first finite depth.
+  // in continuous pixel coordinates, with the neighbours whose border the
+  // segment comes within kWalkMargin of; false at the first finite depth.
   static bool segment_is_background(const PreparedSample& s, int f, double pi0, double pj0, double pi1,
                                     double pj1) {
     const int n = s.n;
@@ -334,12 +344,28 @@ class Marcher {
     double next_i = di != 0 ? (di > 0 ? (i + 1 - pi0) : (pi0 - i)) * inv_i : kInf;
     double next_j = dj != 0 ? (dj > 0 ? (j + 1 - pj0) : (pj0 - j)) * inv_j : kInf;
     const float* depth = s.depth[f];
+    const auto background = [&](int ci, int cj) {
+      return ci < 0 || cj < 0 || ci >= n || cj >= n ||
+             !(depth[static_cast<std::size_t>(cj) * n + ci] < kBackgroundDepth);
+    };
+    double entry = 0;  // the segment's parameter where it enters cell (i, j)
     // At most |i_end - i| + |j_end - j| steps; an axis that has reached its
     // end cell no longer steps (rounding near a pixel corner).
     while (true) {
-      if (depth[static_cast<std::size_t>(j) * n + i] < kBackgroundDepth) return false;
-      if (i == i_end && j == j_end) return true;
-      if (j == j_end || (i != i_end && next_i < next_j)) {
+      if (!background(i, j)) return false;
+      const bool last = i == i_end && j == j_end;
+      const bool along_i = !last && (j == j_end || (i != i_end && next_i < next_j));
+      const double exit = last ? 1.0 : std::min(along_i ? next_i : next_j, 1.0);
+      // The segment's extent within this cell, and the neighbours it nearly touches.
+      const double ia = pi0 + di * entry, ib = pi0 + di * exit, ja = pj0 + dj * entry, jb = pj0 + dj * exit;
+      const int left = std::min(ia, ib) < i + kWalkMargin ? -1 : 0, right = std::max(ia, ib) > i + 1 - kWalkMargin ? 1 : 0;
+      const int top = std::min(ja, jb) < j + kWalkMargin ? -1 : 0, bottom = std::max(ja, jb) > j + 1 - kWalkMargin ? 1 : 0;
+      for (int nj = top; nj <= bottom; ++nj)
+        for (int ni = left; ni <= right; ++ni)
+          if ((ni != 0 || nj != 0) && !background(i + ni, j + nj)) return false;
+      if (last) return true;
+      entry = exit;
+      if (along_i) {
         i += step_i;
         next_i += inv_i;
       } else {
@@ -456,7 +482,7 @@ VoidResult march_rays(const Vec3d& candidate, std::span<const VoidSample> sample
         const Vec3d d = cube_face_direction(basis, s, t);
         const RayVerdict verdict = marcher.march(d * (1 / length(d)));
         ++result.marched_rays;
-        if (learned) (*learned)[ray] = verdict == RayVerdict::seen;
+        if (learned) (*learned)[ray] = verdict != RayVerdict::void_surface;
         if (verdict == RayVerdict::void_surface) {
           ++result.void_rays;
           void_weight += w;

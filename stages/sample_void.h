@@ -52,11 +52,12 @@ struct VoidResult {
 
 // What void_fraction learned at one candidate, for a later call there with
 // more samples (best-next-view scores the same Voronoi vertices again after
-// each new sample). A ray that a sampled surface or the end of the march
-// decided as seen (rules 1, 2 and max_distance below) stays seen when samples
-// are appended: every point before that decision stays certified by the same
-// samples, and the same sample still meets the surface there or earlier. A ray
-// seen by rule 4's shortcut or void is not remembered and is marched again.
+// each new sample): the rays it found seen. A seen ray stays seen when samples
+// are appended: before the step that decided it, the same samples certify
+// every point (so no point is void), and at that step the same sample still
+// meets a surface (rules 1, 2), the march still ends (rule 4), or the sample
+// that sees only background along the rest of the ray still certifies all of
+// it (rule 4's shortcut is exact: see there). Void rays are marched again.
 struct VoidRayMemory {
   Vec3d candidate;
   VoidParams params;
@@ -91,17 +92,20 @@ struct VoidRayMemory {
 //  4. SEEN once X is at max_distance, or when every sample sees background at
 //     X and one of them (each tried at most once per ray) sees only
 //     background along the rest of the ray (its projection, a segment on each
-//     face it crosses, walked pixel by pixel): that sample certifies every
-//     later point, so the ray can no longer become void (a shortcut for rays
-//     into the sky; it does not change the outcome).
+//     face it crosses, walked pixel by pixel with the neighbours whose border
+//     it passes within a thousandth of a pixel, and faces whose frustum it
+//     misses by a hair, so that no rounding of the projection can reach an
+//     unread pixel; rays passing within 1e-6 of the coordinates' magnitude of
+//     that sample's eye are not tried): that sample certifies every later
+//     point, so the ray can no longer become void (a shortcut for rays into
+//     the sky; it does not change the outcome).
 // max_distance = 0 means max_k (|candidate - eye_k| + 2 * largest finite depth
 // of sample k), beyond which no sampled geometry lies (Euclidean distance <=
 // sqrt(3) * planar depth); samples with only background contribute
 // |candidate - eye_k|.
 //
 // Faces of one sample must have one size (samples may differ). Deterministic;
-// the order of `samples` does not matter (up to pixel rounding in the walk of
-// rule 4). O(rays * steps * samples) in
+// the order of `samples` does not matter. O(rays * steps * samples) in
 // time, O(samples + face_size^2) in memory; steps near the candidate that no
 // sample can decide (a ball around it, per sample, seen as wholly free or
 // wholly hidden by that sample's depths) are skipped without changing the
