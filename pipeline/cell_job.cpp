@@ -6,21 +6,21 @@
 #include <tuple>
 #include <unordered_map>
 
+#include "pipeline/sample_backend.h"
+#include "stages/background_fill.h"
+#include "stages/chunk_subset.h"
+#include "stages/cube_sampler.h"
 #include "stages/depth_mesh.h"
 #include "stages/encode.h"
+#include "stages/encode_triangle_list.h"
 #include "stages/hashing.h"
-#include "stages/background_fill.h"
-#include "stages/cube_sampler.h"
-#include "pipeline/sample_backend.h"
 #include "stages/sample.h"
 #include "stages/sample_candidates.h"
 #include "stages/sample_points.h"
 #include "stages/sample_redundancy.h"
 #include "stages/sample_void.h"
 #include "stages/simplify.h"
-#include "stages/chunk_subset.h"
 #include "storage/cell_content_hash.h"
-#include "stages/encode_triangle_list.h"
 
 namespace cellbake {
 namespace {

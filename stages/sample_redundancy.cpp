@@ -106,13 +106,17 @@ bool sample_holds_point(const CubeSample& a, const Vec3d& point, const Redundanc
       curvature = std::max(curvature, std::abs(a0 - 2 * b0 + c0));
       return miss <= base + 0.5 * curvature;
     };
-    if (i0 >= 1 && (second(inverse_at(f, i0 - 1, j0), w00, w10) || second(inverse_at(f, i0 - 1, j1), w01, w11)))
+    if (i0 >= 1 &&
+        (second(inverse_at(f, i0 - 1, j0), w00, w10) || second(inverse_at(f, i0 - 1, j1), w01, w11)))
       return true;
-    if (i1 + 1 < n && (second(w00, w10, inverse_at(f, i1 + 1, j0)) || second(w01, w11, inverse_at(f, i1 + 1, j1))))
+    if (i1 + 1 < n &&
+        (second(w00, w10, inverse_at(f, i1 + 1, j0)) || second(w01, w11, inverse_at(f, i1 + 1, j1))))
       return true;
-    if (j0 >= 1 && (second(inverse_at(f, i0, j0 - 1), w00, w01) || second(inverse_at(f, i1, j0 - 1), w10, w11)))
+    if (j0 >= 1 &&
+        (second(inverse_at(f, i0, j0 - 1), w00, w01) || second(inverse_at(f, i1, j0 - 1), w10, w11)))
       return true;
-    if (j1 + 1 < n && (second(w00, w01, inverse_at(f, i0, j1 + 1)) || second(w10, w11, inverse_at(f, i1, j1 + 1))))
+    if (j1 + 1 < n &&
+        (second(w00, w01, inverse_at(f, i0, j1 + 1)) || second(w10, w11, inverse_at(f, i1, j1 + 1))))
       return true;
     return false;
   }
@@ -170,7 +174,8 @@ RedundancyStats remove_redundant_pixels(CubeSample& delta, std::span<const CubeS
     return stats;
   }
   std::vector<std::uint8_t> state;  // 0 background, 1 kept, 2 redundant
-  std::vector<std::uint8_t> across(std::size_t(n) * n);  // per pixel: a kept pixel in its row, one either side
+  // Per pixel: whether a kept pixel lies in its row, at it or one either side.
+  std::vector<std::uint8_t> across(std::size_t(n) * n);
   for (int face = 0; face < kCubeFaces; ++face) {
     CubeFace& f = delta.faces[static_cast<std::size_t>(face)];
     const FaceBasis b = cube_face_basis(face);

@@ -358,8 +358,10 @@ class Marcher {
       const double exit = last ? 1.0 : std::min(along_i ? next_i : next_j, 1.0);
       // The segment's extent within this cell, and the neighbours it nearly touches.
       const double ia = pi0 + di * entry, ib = pi0 + di * exit, ja = pj0 + dj * entry, jb = pj0 + dj * exit;
-      const int left = std::min(ia, ib) < i + kWalkMargin ? -1 : 0, right = std::max(ia, ib) > i + 1 - kWalkMargin ? 1 : 0;
-      const int top = std::min(ja, jb) < j + kWalkMargin ? -1 : 0, bottom = std::max(ja, jb) > j + 1 - kWalkMargin ? 1 : 0;
+      const int left = std::min(ia, ib) < i + kWalkMargin ? -1 : 0;
+      const int right = std::max(ia, ib) > i + 1 - kWalkMargin ? 1 : 0;
+      const int top = std::min(ja, jb) < j + kWalkMargin ? -1 : 0;
+      const int bottom = std::max(ja, jb) > j + 1 - kWalkMargin ? 1 : 0;
       for (int nj = top; nj <= bottom; ++nj)
         for (int ni = left; ni <= right; ++ni)
           if ((ni != 0 || nj != 0) && !background(i + ni, j + nj)) return false;
@@ -442,7 +444,8 @@ double face_solid_angle(double s0, double s1, double t0, double t1) {
 }
 
 // The march's last distance (see void_fraction's contract).
-double resolved_max_distance(const Vec3d& candidate, std::span<const VoidSample> samples, const VoidParams& params) {
+double resolved_max_distance(const Vec3d& candidate, std::span<const VoidSample> samples,
+                             const VoidParams& params) {
   double max_distance = params.max_distance;
   if (max_distance == 0) {
     for (const VoidSample& s : samples)
@@ -502,10 +505,11 @@ VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> sam
                     nullptr);
 }
 
-VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> samples, const VoidParams& params,
-                         VoidRayMemory& memory) {
+VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> samples,
+                         const VoidParams& params, VoidRayMemory& memory) {
   validate(candidate, samples, params);
-  const std::size_t rays = std::size_t(kCubeFaces) * std::size_t(params.face_size) * std::size_t(params.face_size);
+  const std::size_t rays =
+      std::size_t(kCubeFaces) * std::size_t(params.face_size) * std::size_t(params.face_size);
   const double max_distance = resolved_max_distance(candidate, samples, params);
   const bool empty = memory.eyes.empty() && memory.seen_for_good.empty();
   if (!empty) {
@@ -518,7 +522,8 @@ VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> sam
         m.start_distance != params.start_distance || m.max_distance != params.max_distance ||
         m.surface_tolerance != params.surface_tolerance || m.jump != params.jump)
       fail("was learned with other params");
-    if (memory.seen_for_good.size() != rays) fail("holds " + std::to_string(memory.seen_for_good.size()) + " rays, not " + std::to_string(rays));
+    if (memory.seen_for_good.size() != rays)
+      fail("holds " + std::to_string(memory.seen_for_good.size()) + " rays, not " + std::to_string(rays));
     if (memory.eyes.size() > samples.size()) fail("knows more samples than are given");
     for (std::size_t k = 0; k < memory.eyes.size(); ++k)
       if (!(memory.eyes[k] == samples[k].cube->eye))

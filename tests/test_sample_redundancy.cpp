@@ -153,7 +153,9 @@ TEST(SampleRedundancy, KeepMarginGrowsKeptPixelsBackOverTheSeam) {
   for (int f = 0; f < kCubeFaces; ++f) {
     std::vector<int> state(std::size_t(n) * n);  // 0 background, 1 kept, 2 removed
     for (std::size_t k = 0; k < state.size(); ++k)
-      state[k] = !std::isfinite(original.faces[f].depth[k]) ? 0 : std::isfinite(tight.faces[f].depth[k]) ? 1 : 2;
+      state[k] = !std::isfinite(original.faces[f].depth[k]) ? 0
+                 : std::isfinite(tight.faces[f].depth[k])   ? 1
+                                                            : 2;
     for (int ring = 0; ring < 2; ++ring) {
       std::vector<int> next = state;
       for (int j = 0; j < n; ++j)
@@ -179,7 +181,9 @@ std::optional<bool> one_surface_rule(const CubeSample& a, const Vec3d& point, co
   const int n = a.faces[0].size;
   const Vec3d v = point - a.eye;
   const double ax = std::abs(v.x), ay = std::abs(v.y), az = std::abs(v.z);
-  const int face = ax >= ay && ax >= az ? (v.x >= 0 ? 0 : 1) : ay >= az ? (v.y >= 0 ? 2 : 3) : (v.z >= 0 ? 4 : 5);
+  const int face = ax >= ay && ax >= az ? (v.x >= 0 ? 0 : 1)
+                   : ay >= az           ? (v.y >= 0 ? 2 : 3)
+                                        : (v.z >= 0 ? 4 : 5);
   const FaceBasis b = cube_face_basis(face);
   const double depth = dot(v, b.forward);
   if (!(depth > 0)) return std::nullopt;
@@ -235,7 +239,8 @@ TEST(SampleRedundancy, HeldPointsAnswerAsTheRuleWithEverySecondDifference) {
     const FaceBasis b = cube_face_basis(f);
     const double s = 2 * unit(rng) - 1, t = 2 * unit(rng) - 1;
     const double col = (s + 1) * 0.5 * n - 0.5, row = (1 - t) * 0.5 * n - 0.5;
-    const int i = std::clamp(int(std::lround(col)), 0, n - 1), j = std::clamp(int(std::lround(row)), 0, n - 1);
+    const int i = std::clamp(int(std::lround(col)), 0, n - 1),
+              j = std::clamp(int(std::lround(row)), 0, n - 1);
     const float stored = a.faces[std::size_t(f)].depth[std::size_t(j) * n + i];
     if (!std::isfinite(stored)) continue;
     // Depths from on the surface to a few per cent off it, most within the allowance's scale.

@@ -86,7 +86,9 @@ inline RaySegments ray_segments(const Vec3d& dir, const EyeBox& box, double near
 inline Vec3d face_ray_inverse(const FaceBasis& b, double inverse_s, double inverse_t) {
   Vec3d out;
   for (int k = 0; k < 3; ++k)
-    out[k] = b.forward[k] != 0 ? b.forward[k] : b.right[k] != 0 ? b.right[k] * inverse_s : b.up[k] * inverse_t;
+    out[k] = b.forward[k] != 0 ? b.forward[k]
+             : b.right[k] != 0 ? b.right[k] * inverse_s
+                               : b.up[k] * inverse_t;
   return out;
 }
 
