@@ -455,11 +455,10 @@ double resolved_max_distance(const Vec3d& candidate, std::span<const VoidSample>
   return max_distance;
 }
 
-// Marches every ray not in `known_seen` (null: none known) in the fixed ray
-// order; `learned`, when not null, receives per ray whether it is seen for good.
+// Marches, in the fixed ray order, every ray that `seen` (null: none) does
+// not mark as seen, and marks those it finds seen.
 VoidResult march_rays(const Vec3d& candidate, std::span<const VoidSample> samples, const VoidParams& params,
-                      double max_distance, const std::vector<std::uint8_t>* known_seen,
-                      std::vector<std::uint8_t>* learned) {
+                      double max_distance, std::vector<std::uint8_t>* seen) {
   const int n = params.face_size;
   std::vector<double> weight(static_cast<std::size_t>(n) * n);
   for (int j = 0; j < n; ++j)
@@ -480,12 +479,12 @@ VoidResult march_rays(const Vec3d& candidate, std::span<const VoidSample> sample
         const double w = weight[static_cast<std::size_t>(j) * n + i];
         total_weight += w;
         ++result.rays;
-        if (known_seen && (*known_seen)[ray]) continue;  // stays seen (VoidRayMemory)
+        if (seen && (*seen)[ray]) continue;  // stays seen (VoidRayMemory)
         const double s = 2 * (i + 0.5) / n - 1, t = 1 - 2 * (j + 0.5) / n;
         const Vec3d d = cube_face_direction(basis, s, t);
         const RayVerdict verdict = marcher.march(d * (1 / length(d)));
         ++result.marched_rays;
-        if (learned) (*learned)[ray] = verdict != RayVerdict::void_surface;
+        if (seen) (*seen)[ray] = verdict != RayVerdict::void_surface;
         if (verdict == RayVerdict::void_surface) {
           ++result.void_rays;
           void_weight += w;
@@ -501,8 +500,7 @@ VoidResult march_rays(const Vec3d& candidate, std::span<const VoidSample> sample
 VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> samples,
                          const VoidParams& params) {
   validate(candidate, samples, params);
-  return march_rays(candidate, samples, params, resolved_max_distance(candidate, samples, params), nullptr,
-                    nullptr);
+  return march_rays(candidate, samples, params, resolved_max_distance(candidate, samples, params), nullptr);
 }
 
 VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> samples,
@@ -531,15 +529,12 @@ VoidResult void_fraction(const Vec3d& candidate, std::span<const VoidSample> sam
   }
   const bool reuse = !empty && memory.max_distance == max_distance;
   if (!reuse) memory.seen_for_good.assign(rays, 0);
-  std::vector<std::uint8_t> learned = memory.seen_for_good;
-  const VoidResult result =
-      march_rays(candidate, samples, params, max_distance, reuse ? &memory.seen_for_good : nullptr, &learned);
+  const VoidResult result = march_rays(candidate, samples, params, max_distance, &memory.seen_for_good);
   memory.candidate = candidate;
   memory.params = params;
   memory.max_distance = max_distance;
   memory.eyes.clear();
   for (const VoidSample& s : samples) memory.eyes.push_back(s.cube->eye);
-  memory.seen_for_good = std::move(learned);
   return result;
 }
 
