@@ -6,17 +6,60 @@
 
 namespace cellbake {
 
-SqliteDb::SqliteDb(const std::filesystem::path& file, Mode mode) : file_(file) {
-  int flags = mode == Mode::read_only ? SQLITE_OPEN_READONLY : (SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
-  flags |= SQLITE_OPEN_NOMUTEX;
-  if (sqlite3_open_v2(file.c_str(), &db_, flags, nullptr) != SQLITE_OK) {
-    std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
-    sqlite3_close(db_);
-    db_ = nullptr;
+namespace {
+
+// Opens `file` with `flags` (and no mutex: one thread per connection); throws naming the file.
+sqlite3* open_connection(const std::filesystem::path& file, int flags) {
+  sqlite3* db = nullptr;
+  if (sqlite3_open_v2(file.c_str(), &db, flags | SQLITE_OPEN_NOMUTEX, nullptr) != SQLITE_OK) {
+    std::string msg = db ? sqlite3_errmsg(db) : "out of memory";
+    sqlite3_close(db);
     throw std::runtime_error(file.string() + ": cannot open database: " + msg);
   }
-  sqlite3_busy_timeout(db_, 60000);
-  sqlite3_extended_result_codes(db_, 1);
+  sqlite3_busy_timeout(db, 60000);
+  sqlite3_extended_result_codes(db, 1);
+  return db;
+}
+
+// Reads the schema (the first read of a connection, where SQLite finds a hot
+// journal or a WAL needing recovery); SQLite's extended result code.
+int read_schema(sqlite3* db) { return sqlite3_exec(db, "PRAGMA schema_version", nullptr, nullptr, nullptr); }
+
+bool needs_writable_recovery(int rc) {
+  return rc == SQLITE_READONLY_ROLLBACK || rc == SQLITE_READONLY_RECOVERY || rc == SQLITE_READONLY_CANTINIT;
+}
+
+}  // namespace
+
+SqliteDb::SqliteDb(const std::filesystem::path& file, Mode mode) : file_(file) {
+  if (mode == Mode::read_write_create) {
+    db_ = open_connection(file, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+    return;
+  }
+  db_ = open_connection(file, SQLITE_OPEN_READONLY);
+  const int rc = read_schema(db_);
+  if (!needs_writable_recovery(rc)) return;
+  // A writer killed inside a transaction left a hot rollback journal (or a WAL
+  // index to rebuild) that only a writable connection may apply. Apply it as
+  // SQLite does on any writable open, which restores the last committed state
+  // and changes nothing else, then read through a read-only connection again.
+  sqlite3_close_v2(db_);
+  db_ = nullptr;
+  sqlite3* writer = nullptr;
+  try {
+    writer = open_connection(file, SQLITE_OPEN_READWRITE);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(file.string() +
+                             ": a process writing it was killed mid-transaction and recovering the last committed "
+                             "state needs write access, which this user lacks (" +
+                             e.what() + ")");
+  }
+  const int recovered = read_schema(writer);
+  const std::string msg = sqlite3_errmsg(writer);
+  sqlite3_close_v2(writer);
+  if (recovered != SQLITE_OK)
+    throw std::runtime_error(file.string() + ": recovering after a killed writer: " + msg);
+  db_ = open_connection(file, SQLITE_OPEN_READONLY);
 }
 
 SqliteDb::~SqliteDb() { sqlite3_close_v2(db_); }

@@ -51,6 +51,10 @@ class SqliteStatement {
 class SqliteDb {
  public:
   enum class Mode { read_only, read_write_create };
+  // Opens `file`; throws naming it. A read-only open of a database whose writer
+  // was killed mid-transaction (a hot journal) first lets SQLite roll that
+  // transaction back through a short writable connection, as any writable open
+  // would; it throws when the file is not writable then.
   SqliteDb(const std::filesystem::path& file, Mode mode);
   ~SqliteDb();
   SqliteDb(const SqliteDb&) = delete;

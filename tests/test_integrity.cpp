@@ -395,5 +395,37 @@ TEST_F(Integrity, ConcurrentOpensOfANewDatabaseCreateTheSchemaOnce) {
   }
 }
 
+// A writer killed inside a rollback-journal transaction (a bake killed while its
+// new database switched to WAL, or any other tool) leaves a hot journal; a
+// read-only open rolls it back as a writable one would, instead of failing
+// with "attempt to write a readonly database".
+TEST_F(Integrity, AReadOnlyOpenRecoversTheHotJournalOfAKilledWriter) {
+  ASSERT_EQ(bake("cells.db").exit_code, 0);
+  const std::string before = CellDb(db("cells.db"), CellDb::Mode::read_only).totals().content_hash;
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    SqliteDb writer(db("cells.db"), SqliteDb::Mode::read_write_create);
+    writer.exec("PRAGMA journal_mode=DELETE; PRAGMA cache_size=1; BEGIN; DELETE FROM cells; "
+                "CREATE TABLE junk(x); WITH RECURSIVE n(i) AS (SELECT 1 UNION ALL SELECT i + 1 FROM n WHERE i < 500) "
+                "INSERT INTO junk SELECT randomblob(4000) FROM n;");
+    _exit(0);  // killed mid-transaction: no commit, no rollback, no close
+  }
+  int status = 0;
+  waitpid(child, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  ASSERT_GT(std::filesystem::file_size(db("cells.db-journal")), 0u) << "the child left no hot journal";
+
+  const auto st = test::run_cellbake("status " + db("cells.db"));
+  EXPECT_EQ(st.exit_code, 0) << st.output;
+  EXPECT_EQ(st.output.find("readonly"), std::string::npos) << st.output;
+  CellDb reopened(db("cells.db"), CellDb::Mode::read_only);
+  EXPECT_EQ(reopened.totals().content_hash, before);
+  EXPECT_EQ(reopened.totals().cells_done, 4u);
+  EXPECT_TRUE(reopened.integrity_ok());
+  EXPECT_FALSE(std::filesystem::exists(db("cells.db-journal")) &&
+               std::filesystem::file_size(db("cells.db-journal")) > 0);
+}
+
 }  // namespace
 }  // namespace cellbake
