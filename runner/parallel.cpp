@@ -16,13 +16,16 @@ const char fork_token = 0, join_token = 0;
 ParallelFor tbb_parallel_for() {
   return [](std::size_t n, const std::function<void(std::size_t)>& fn) {
     // fork: the caller's writes happen before every fn(i); join: every fn(i)
-    // happens before parallel_for returns (stages/tsan_handoff.h).
-    tsan::before(&fork_token);
-    tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
+    // happens before parallel_for returns (stages/tsan_handoff.h). TBB keeps a
+    // reference to `body`, on this stack, and workers read its captures: build
+    // it before the fork, or its construction is a write TSan sees racing them.
+    const auto body = [&](std::size_t i) {
       tsan::after(&fork_token);
       fn(i);
       tsan::before(&join_token);
-    });
+    };
+    tsan::before(&fork_token);
+    tbb::parallel_for(std::size_t(0), n, body);
     tsan::after(&join_token);
   };
 }
