@@ -10,6 +10,7 @@
 #include "pipeline/bake_config.h"
 #include "pipeline/bake_estimate.h"
 #include "pipeline/cell_grid.h"
+#include "runner/number_text.h"
 #include "runner/store_status.h"
 #include "stages/floor_finder.h"
 #include "stages/up_axis_from_geometry.h"
@@ -20,6 +21,7 @@ namespace {
 constexpr double kEyeHeight = 1.7;  // above the floor, model units taken as metres
 constexpr int kTargetCellsPerFloor = 64;
 constexpr std::uint64_t kMinChunks = 16;  // fewer: re-ingest with smaller chunks for a far field
+constexpr std::uint64_t kManyCells = 4096;  // more in a suggested bake: say that units may not be metres
 
 struct UpUsed {
   std::string axis;  // "z" or "y"
@@ -45,6 +47,7 @@ struct Suggestion {
   bool found = false;
   std::size_t floor = 0;  // index into the floors
   double eye = 0;
+  bool above_top = false;  // the model is lower than eye height above its floor: eyes just above its top
   Box3d region;
   double cell_size = 0;
   std::uint64_t cells = 0;
@@ -68,10 +71,13 @@ double suggest_cell_size(double side_a, double side_b) {
   return std::round(c * 2) / 2;
 }
 
-std::string number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", std::round(v * 100) / 100 + 0.0);  // + 0.0: no "-0"
-  return buf;
+// `v` to hundredths, or to `step` (runner/number_text.h).
+std::string number(double v, double step = 0.01) { return decimal_text(v, step); }
+
+// The rounding step for a region's corners: hundredths, or finer for cells
+// under a metre (three significant digits of the cell size).
+double region_step(double cell_size) {
+  return std::min(0.01, std::pow(10.0, std::floor(std::log10(cell_size)) - 2));
 }
 
 std::string shell_word(const std::string& path) {
@@ -93,10 +99,16 @@ Suggestion suggest_bake(const std::string& store_name, const GeometryStore& stor
   const Floor& floor = found.floors[best];
   s.found = true;
   s.floor = best;
-  s.eye = floor.height + kEyeHeight;
   s.region = floor.covered_extent.empty() ? floor.extent : floor.covered_extent;  // indoors, else all of it
-  s.region.lo[u] = s.region.hi[u] = s.eye;
   s.cell_size = suggest_cell_size(s.region.hi[ha] - s.region.lo[ha], s.region.hi[hb] - s.region.lo[hb]);
+  s.eye = floor.height + kEyeHeight;
+  // A model lower than eye height above its main floor (an object, whose
+  // "floor" is its top): eyes half a cell above its top, where the bake
+  // accepts them (a region must meet the model's bounds grown by one cell).
+  const double top = store.summary().bounds.hi[u];
+  s.above_top = s.eye > top + s.cell_size;
+  if (s.above_top) s.eye = top + 0.5 * s.cell_size;
+  s.region.lo[u] = s.region.hi[u] = s.eye;
   s.cells = enumerate_cells({s.region}, s.cell_size).size();
   const std::uint64_t triangles = store.summary().triangles;
   s.near_budget = effective_near_budget(BakeConfig{}, triangles);
@@ -111,10 +123,12 @@ Suggestion suggest_bake(const std::string& store_name, const GeometryStore& stor
       break;
     }
   const Box3d& r = s.region;
+  const double step = region_step(s.cell_size);
   s.command = "cellbake bake --store " + shell_word(store_name) + " --up " + up + " --region " +
-              number(r.lo.x) + "," + number(r.lo.y) + "," + number(r.lo.z) + "," + number(r.hi.x) + "," +
-              number(r.hi.y) + "," + number(r.hi.z) + " --cell-size " + number(s.cell_size) +
-              " --near-budget " + std::to_string(s.near_budget) + " --out " + shell_word(out + ".cells.db");
+              number(r.lo.x, step) + "," + number(r.lo.y, step) + "," + number(r.lo.z, step) + "," +
+              number(r.hi.x, step) + "," + number(r.hi.y, step) + "," + number(r.hi.z, step) + " --cell-size " +
+              number(s.cell_size, step) + " --near-budget " + std::to_string(s.near_budget) + " --out " +
+              shell_word(out + ".cells.db");
   return s;
 }
 
@@ -219,24 +233,35 @@ void print_info(const GeometryStore& store, const InfoModelFile* model, const st
   for (std::size_t f = 0; f < found.floors.size(); ++f) {
     const Floor& fl = found.floors[f];
     std::printf("  %s = %s: %llu rays (%.0f %% of them covered above)%s\n", up.axis.c_str(),
-                number(fl.height).c_str(), (unsigned long long)fl.rays,
+                number(fl.height, s.found ? region_step(s.cell_size) : 0.01).c_str(), (unsigned long long)fl.rays,
                 fl.rays ? 100.0 * double(fl.covered_rays) / double(fl.rays) : 0.0,
                 s.found && f == s.floor ? "  <- main floor" : "");
   }
   if (!s.found) {
     if (model) std::printf("no suggested bake; ingest it:\n  %s\n", ingest.c_str());
-    std::printf("then choose a region with `cellbake render %s` (a look at the model)\n",
+    std::printf("then choose a region with `cellbake render %s --out look.png` (a look at the model)\n",
                 shell_word(store_name).c_str());
     return;
   }
   const Box3d& r = s.region;
+  const double step = region_step(s.cell_size);
   std::printf("suggested bake (model units taken as metres):\n");
-  std::printf("  eye height: %s = %s (floor %s + %.1f)\n", up.axis.c_str(), number(s.eye).c_str(),
-              number(found.floors[s.floor].height).c_str(), kEyeHeight);
+  if (s.above_top)
+    std::printf("  eye height: %s = %s (half a cell above the model's top: it is lower than %.1f above its "
+                "floor %s, an object rather than a place to walk through)\n",
+                up.axis.c_str(), number(s.eye, step).c_str(), kEyeHeight,
+                number(found.floors[s.floor].height, step).c_str());
+  else
+    std::printf("  eye height: %s = %s (floor %s + %.1f)\n", up.axis.c_str(), number(s.eye, step).c_str(),
+                number(found.floors[s.floor].height, step).c_str(), kEyeHeight);
   std::printf("  region: (%s, %s, %s) .. (%s, %s, %s), the floor's extent (under a roof if any)\n",
-              number(r.lo.x).c_str(), number(r.lo.y).c_str(), number(r.lo.z).c_str(), number(r.hi.x).c_str(),
-              number(r.hi.y).c_str(), number(r.hi.z).c_str());
-  std::printf("  cell size: %s -> %llu cells\n", number(s.cell_size).c_str(), (unsigned long long)s.cells);
+              number(r.lo.x, step).c_str(), number(r.lo.y, step).c_str(), number(r.lo.z, step).c_str(),
+              number(r.hi.x, step).c_str(), number(r.hi.y, step).c_str(), number(r.hi.z, step).c_str());
+  std::printf("  cell size: %s -> %llu cells\n", number(s.cell_size, step).c_str(), (unsigned long long)s.cells);
+  if (s.cells > kManyCells)
+    std::printf("  note: %llu cells is a large bake: cells are sized for a model in metres; if its units are "
+                "smaller (centimetres, millimetres), give a larger --cell-size, or bake part of it with --cells\n",
+                (unsigned long long)s.cells);
   std::printf("  near budget: %llu triangles per cell (of %llu: the rest is far field)\n",
               (unsigned long long)s.near_budget, (unsigned long long)summary.triangles);
   if (model && model->chunk_triangles > 0)

@@ -1,5 +1,9 @@
 #include "runner/store_status.h"
 
+#include <algorithm>
+
+#include "runner/number_text.h"
+
 namespace cellbake {
 
 nlohmann::json store_status_json(const GeometryStore& store) {
@@ -44,8 +48,11 @@ void print_store_facts(const GeometryStore& store, std::FILE* out) {
   const Box3d& b = s.bounds;
   const nlohmann::json j = store_status_json(store);
   if (s.triangles > 0) {
-    std::fprintf(out, "bounds: (%.6g, %.6g, %.6g) .. (%.6g, %.6g, %.6g) %s\n", b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y,
-                 b.hi.z, s.units.c_str());
+    // Six significant digits of the model's size, whatever its distance from the origin.
+    const double step = six_digit_step(std::max({b.hi.x - b.lo.x, b.hi.y - b.lo.y, b.hi.z - b.lo.z}));
+    const auto t = [&](double v) { return decimal_text(v, step); };
+    std::fprintf(out, "bounds: (%s, %s, %s) .. (%s, %s, %s) %s\n", t(b.lo.x).c_str(), t(b.lo.y).c_str(),
+                 t(b.lo.z).c_str(), t(b.hi.x).c_str(), t(b.hi.y).c_str(), t(b.hi.z).c_str(), s.units.c_str());
     std::fprintf(out, "size: %.6g x %.6g x %.6g %s\n", b.hi.x - b.lo.x, b.hi.y - b.lo.y, b.hi.z - b.lo.z,
                  s.units.c_str());
   } else {

@@ -267,6 +267,70 @@ TEST(Info, OnAModelWithoutAClearAxisAssumesZAndPutsItInTheIngestLine) {
   EXPECT_NE(doc["ingest"].get<std::string>().find(" --up z"), std::string::npos) << doc.dump();
 }
 
+// A model lower than eye height above its floor (an object: its "floor" is
+// its top): the eyes go half a cell above its top, and the printed bake line
+// is one bake accepts (a region 1.7 above the top was refused: it must meet
+// the model's bounds grown by one cell).
+TEST(Info, ASmallObjectGetsEyesJustAboveItsTopAndABakeLineBakeAccepts) {
+  TempDir dir;
+  const auto obj = dir / "crate.obj";
+  std::vector<test::HouseTriangle> crate;
+  test::add_box(crate, {0, 0, 0}, {1.2, 0.8, 0.5}, 8);
+  test::add_box(crate, {0.2, 0.2, 0.5}, {0.6, 0.5, 0.7}, 4);
+  std::ofstream(obj, std::ios::binary) << test::triangles_obj(crate);
+  const auto doc = json_of(run_cellbake("info --json " + q(obj) + " --up z"));
+  const auto& s = doc["suggested"];
+  ASSERT_TRUE(s.is_object()) << doc.dump();
+  const double cell = s["cell_size"].get<double>(), eye = s["eye_height"].get<double>();
+  EXPECT_LT(cell, 1.0);
+  EXPECT_GT(eye, 0.7);  // above the top
+  EXPECT_LE(eye, 0.7 + cell);
+  const auto text = run_cellbake("info " + q(obj) + " --up z");
+  EXPECT_NE(text.output.find("half a cell above the model's top"), std::string::npos) << text.output;
+
+  const auto ingested = run_printed(dir, doc["ingest"].get<std::string>());
+  ASSERT_EQ(ingested.exit_code, 0) << ingested.output;
+  const auto dry = run_printed(dir, s["command"].get<std::string>(), " --dry-run");
+  EXPECT_EQ(dry.exit_code, 0) << dry.output;
+}
+
+// Far from the origin the printed region keeps its hundredths: the house moved
+// by 1e7 gets the same suggestion moved by 1e7, and as many cells (printed as
+// "%.6g" it read 1e+07,...: a region of zero width, 5 cells instead of 42).
+TEST(Info, FarFromTheOriginThePrintedRegionKeepsItsFractions) {
+  TempDir dir;
+  const auto near_store = house_store(dir), far_store = dir / "far.store.db";
+  const auto ingest = run_cellbake("ingest " + q(dir / "house.ply") + " --store " + q(far_store) +
+                                   " --up z --translate 1e7,-2e7,0");
+  ASSERT_EQ(ingest.exit_code, 0) << ingest.output;
+  const auto near = json_of(run_cellbake("info --json " + q(near_store)))["suggested"];
+  const auto far = json_of(run_cellbake("info --json " + q(far_store)))["suggested"];
+  ASSERT_TRUE(near.is_object() && far.is_object());
+  EXPECT_EQ(far["cells"], near["cells"]);
+  // The region in the printed command, parsed back.
+  const std::string command = far["command"];
+  const auto at = command.find("--region ") + 9;
+  std::istringstream region(command.substr(at, command.find(' ', at) - at));
+  const double shift[3] = {1e7, -2e7, 0};
+  for (int i = 0; i < 6; ++i) {
+    double v = 0;
+    char comma = 0;
+    region >> v;
+    if (i < 5) region >> comma;
+    EXPECT_NEAR(v, near["region"][i].get<double>() + shift[i % 3], 0.006) << command;
+  }
+  EXPECT_EQ(command.find("e+"), std::string::npos) << command;
+  const auto dry = run_printed(dir, command, " --dry-run --json");
+  ASSERT_EQ(dry.exit_code, 0) << dry.output;
+  EXPECT_EQ(json_of(dry)["cells_selected"], near["cells"]) << dry.output;
+  const auto status = run_cellbake("status " + q(far_store));
+  const auto bounds = status.output.find("bounds: (");
+  ASSERT_NE(bounds, std::string::npos) << status.output;
+  const std::string line = status.output.substr(bounds, status.output.find('\n', bounds) - bounds);
+  EXPECT_EQ(line.find("e+"), std::string::npos) << line;  // all digits, as the region
+  EXPECT_NE(line.find(" -2000000"), std::string::npos) << line;
+}
+
 TEST(BakeDryRun, PrintsCellsBudgetAndEstimateAndCreatesNoFile) {
   TempDir dir;
   const auto store = house_store(dir);
