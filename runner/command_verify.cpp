@@ -36,7 +36,7 @@ void add_verify_command(CLI::App& app) {
   cmd->add_option("database", opt->database, "Cell database")->required();
   cmd->add_option("--report", opt->report, "Report folder (report.html, report.json, plots, resume file)")->required();
   cmd->add_option("--views-per-cell", opt->verify.views_per_cell,
-                  "Views per cell: centre, corners, then seeded interior points")
+                  "Views per cell: centre, corners, then seeded interior points; each sample point of the cell adds one more")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   cmd->add_option("--cells", opt->verify.cells, "Cell selection, e.g. 1-10,15 (default: all done cells)");
@@ -70,6 +70,7 @@ void add_verify_command(CLI::App& app) {
                              {"views", s.views},
                              {"views_rendered", s.views_rendered},
                              {"truth_blank_views", s.truth_blank_views},
+                             {"identical_views", s.identical_views},
                              {"psnr_median_db", number(s.psnr_median_db)},
                              {"psnr_median_infinite", std::isinf(s.psnr_median_db)},
                              {"seconds", s.seconds},
@@ -79,10 +80,14 @@ void add_verify_command(CLI::App& app) {
       if (s.cells_failed > 0) throw std::runtime_error(std::to_string(s.cells_failed) + " cell(s) could not be verified");
       return;
     }
-    const std::string blank =
-        s.truth_blank_views == 0 ? std::string()
-                                 : " (" + std::to_string(s.truth_blank_views) + " of " + std::to_string(s.views) +
-                                       " truth views blank: single colour or empty, PSNR says nothing there)";
+    std::string blank;  // " (what the median does not say)"
+    if (s.truth_blank_views > 0)
+      blank = std::to_string(s.truth_blank_views) + " of " + std::to_string(s.views) +
+              " truth views blank: single colour or empty, PSNR says nothing there";
+    if (s.identical_views > 0)
+      blank += (blank.empty() ? "" : "; ") + std::to_string(s.identical_views) + " of " + std::to_string(s.views) +
+               " views identical to the truth: drawn as exact geometry";
+    if (!blank.empty()) blank = " (" + blank + ")";
     std::printf("verified %llu cells (%llu rendered, %llu reused, %llu failed), %llu views in %.1f s; median PSNR %.2f dB%s\n",
                 (unsigned long long)s.cells_selected, (unsigned long long)s.cells_rendered,
                 (unsigned long long)s.cells_reused, (unsigned long long)s.cells_failed,

@@ -266,6 +266,44 @@ TEST(VerifyRun, BlackModelReportsBlankTruthViews) {
   EXPECT_NE(cli.output.find("warning: 1 of 1 truth views are blank"), std::string::npos) << cli.output;
 }
 
+// A far field drawn wholly as exact geometry draws the truth itself: PSNR is
+// +infinity because nothing was approximated, and verify says so (counted,
+// summed up, and a note) instead of letting "inf dB" read as a perfect bake.
+TEST(VerifyRun, ViewsDrawnAsExactGeometryAreCountedAsIdentical) {
+  test::TempDir dir;
+  test::ingest_room_store(dir.path());
+  BakeConfig c;
+  c.store = dir / "room.store.db";
+  c.regions = {Box3d{{1, 1, 1.6}, {3, 3, 1.6}}};
+  c.cell_size = 2.0;
+  c.near_budget = 600;
+  c.face_size = 32;
+  c.far_choice = "geometry";
+  c.database = dir / "cells.db";
+  BakeOptions bo;
+  bo.threads = 1;
+  bo.quiet = true;
+  ASSERT_EQ(run_bake(c, bo).cells_baked, 1u);
+  VerifyOptions vo;
+  vo.views_per_cell = 2;
+  vo.width = 64;
+  vo.height = 48;
+  vo.threads = 1;
+  vo.quiet = true;
+  vo.sample_views = false;
+  const VerifySummary s = run_verify(c.database, dir / "report", vo);
+  EXPECT_EQ(s.views, 2u);
+  EXPECT_EQ(s.truth_blank_views, 0u);
+  EXPECT_EQ(s.identical_views, 2u);
+  EXPECT_TRUE(std::isinf(s.psnr_median_db));
+
+  const auto cli = test::run_cellbake("verify " + c.database.string() + " --report " + (dir / "cli").string() +
+                                      " --views-per-cell 2 --size 64x48 --threads 1");
+  EXPECT_EQ(cli.exit_code, 0) << cli.output;
+  EXPECT_NE(cli.output.find("2 of 2 views identical to the truth"), std::string::npos) << cli.output;
+  EXPECT_NE(cli.output.find("note: every view the cells drew equals the truth"), std::string::npos) << cli.output;
+}
+
 TEST(VerifyRun, TinyBakeReportIsCompleteAndResumable) {
   test::TempDir dir;
   test::ingest_room_store(dir.path());
