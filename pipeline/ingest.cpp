@@ -133,7 +133,7 @@ void attach_texture(Material& material, std::uint32_t index, const ModelInfo& in
     input = found->second;
   } else {
     const std::filesystem::path path(material.texture);
-    input.file = path.is_absolute() ? path : (model.parent_path() / path).lexically_normal();
+    input.file = path.is_absolute() ? path : locate_referenced_file(model.parent_path(), material.texture);
   }
   const bool embedded = input.file.empty();
   if (!embedded && !params.allow_outside_paths && !path_inside_folder(model.parent_path(), input.file)) {

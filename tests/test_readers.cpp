@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "pipeline/input_error.h"
+#include "pipeline/readers/contained_paths.h"
 #include "pipeline/readers/model_reader.h"
 #include "tests/test_support.h"
 
@@ -118,6 +119,30 @@ TEST(ObjReader, MaterialQuadAndNegativeIndices) {
   // An unknown material name falls back to the default.
   EXPECT_EQ(r.triangles[3].material, 0u);
   EXPECT_EQ(r.triangles[3].color[1], kGrey);
+}
+
+// Texture paths from the exporter's machine ("D:\\maps\\Wood.JPG") or with
+// another case than the file: the file of that name beside the model is used.
+TEST(ObjReader, TexturePathsFromAnotherMachineFallBackToTheFileBesideTheModel) {
+  TempDir dir;
+  write_text(dir / "wood.jpg", "");
+  write_text(dir / "Stone.png", "");
+  fs::create_directories(dir / "tex");
+  write_text(dir / "tex" / "exact.png", "");
+  write_text(dir / "m.mtl",
+             "newmtl a\nmap_Kd D:\\projects\\maps\\Wood.JPG\n"  // drive path, other case
+             "newmtl b\nmap_Kd /home/artist/stone.png\n"          // absolute elsewhere, other case
+             "newmtl c\nmap_Kd tex\\exact.png\n"                 // found as written
+             "newmtl d\nmap_Kd C:missing.png\n");                // nowhere: as written
+  write_text(dir / "m.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n");
+  const ReadResult r = read_all(dir / "m.obj");
+  ASSERT_EQ(r.info.materials.size(), 5u);
+  EXPECT_EQ(r.info.materials[1].texture, (dir / "wood.jpg").string());
+  EXPECT_EQ(r.info.materials[2].texture, (dir / "Stone.png").string());
+  EXPECT_EQ(r.info.materials[3].texture, (dir / "tex" / "exact.png").string());
+  EXPECT_EQ(r.info.materials[4].texture, (dir / "C:missing.png").string());
+  // Never outside the folder: ".." is not a file name to look for.
+  EXPECT_EQ(locate_referenced_file(dir / "tex", "../../etc/.."), (dir.path().parent_path() / "etc/..").lexically_normal());
 }
 
 TEST(ObjReader, VertexColoursTexcoordsAndCornerForms) {

@@ -143,9 +143,7 @@ TextureInput texture_input(const aiScene& scene, const aiMaterial& material, aiT
     }
     return input;
   }
-  std::string path = reference;
-  std::replace(path.begin(), path.end(), '\\', '/');  // Windows exporters
-  input.file = (file.parent_path() / path).lexically_normal();
+  input.file = locate_referenced_file(file.parent_path(), reference);
   return input;
 }
 

@@ -18,6 +18,16 @@ namespace cellbake {
 // An empty `folder` is the current directory.
 bool path_inside_folder(const std::filesystem::path& folder, const std::filesystem::path& reference);
 
+// The file a texture reference in a model names, as exporters write them:
+// relative to `folder` (the folder of the file holding the reference) or
+// absolute, with '\\' or '/' separators. When that file does not exist (a
+// path on the exporter's machine, "D:\\maps\\wood.jpg", or a name whose case
+// differs from the file's), the file of that name in `folder` itself, matched
+// exactly, else ignoring ASCII case (the first in name order). Returns the
+// reference as written, joined to `folder`, when neither exists (the caller
+// reports it missing). Never looks outside `folder`.
+std::filesystem::path locate_referenced_file(const std::filesystem::path& folder, std::string reference);
+
 // The words every refusal uses, e.g. "mtllib '../a.mtl': " + kOutsideFolder.
 inline const std::string kOutsideFolder =
     "outside the model's folder, not read (--allow-outside-paths allows it)";

@@ -6,6 +6,7 @@
 #include "pipeline/input_error.h"
 #include "pipeline/readers/buffered_input.h"
 #include "pipeline/readers/colour_math.h"
+#include "pipeline/readers/contained_paths.h"
 #include "pipeline/readers/text_scan.h"
 
 namespace cellbake {
@@ -70,9 +71,7 @@ bool read_mtl(const std::filesystem::path& mtl_file, std::vector<Material>& mate
       current->color.a = unit_to_byte(key == "d" ? value : 1.0 - value);
     } else if (key == "map_Kd") {
       const std::string texture = texture_operand(scan);
-      std::string path = texture;
-      std::replace(path.begin(), path.end(), '\\', '/');  // Windows exporters
-      if (!path.empty()) current->texture = (mtl_file.parent_path() / path).lexically_normal().string();
+      if (!texture.empty()) current->texture = locate_referenced_file(mtl_file.parent_path(), texture).string();
     }
   }
   for (Material& material : parsed) {
