@@ -125,6 +125,14 @@ struct StoredTexture {
 // Imports the texture `material` (index `index` of `info`, read from `model`)
 // names, once per distinct image, and sets its texture_id and alpha_test; an
 // image that cannot be read becomes a warning and the material stays untextured.
+// Adds `warning` to the report's texture warnings unless it is there already
+// (materials of the same name and texture, e.g. assimp's "DefaultMaterial").
+void warn_texture(IngestReport& report, std::string warning) {
+  if (std::find(report.texture_warnings.begin(), report.texture_warnings.end(), warning) ==
+      report.texture_warnings.end())
+    report.texture_warnings.push_back(std::move(warning));
+}
+
 void attach_texture(Material& material, std::uint32_t index, const ModelInfo& info,
                     const std::filesystem::path& model, const IngestParams& params, GeometryStoreWriter& writer,
                     std::map<std::string, StoredTexture>& texture_ids, IngestReport& report) {
@@ -137,8 +145,8 @@ void attach_texture(Material& material, std::uint32_t index, const ModelInfo& in
   }
   const bool embedded = input.file.empty();
   if (!embedded && !params.allow_outside_paths && !path_inside_folder(model.parent_path(), input.file)) {
-    report.texture_warnings.push_back(model.filename().string() + ": material '" + material.name + "': texture '" +
-                                      input.file.string() + "': " + kOutsideFolder + ": material colour used");
+    warn_texture(report, model.filename().string() + ": material '" + material.name + "': texture '" +
+                             input.file.string() + "': " + kOutsideFolder + ": material colour used");
     material.texture_id = 0;
     return;
   }
@@ -158,8 +166,8 @@ void attach_texture(Material& material, std::uint32_t index, const ModelInfo& in
       texture_ids[key] = {material.texture_id, image.has_alpha};
       has_alpha = image.has_alpha;
     } catch (const std::exception& e) {
-      report.texture_warnings.push_back(model.filename().string() + ": material '" + material.name + "': " +
-                                        e.what() + ": material colour used");
+      warn_texture(report, model.filename().string() + ": material '" + material.name + "': " + e.what() +
+                               ": material colour used");
       material.texture_id = 0;
       return;
     }
