@@ -1,9 +1,10 @@
 // Rough bake cost before baking (`cellbake info`, `bake --dry-run`): seconds
 // and bytes per cell from one measured bake, scaled by face size and threads.
 // Measured: the demo (2 M-triangle plant, 63 cells of 4 m, 512² faces, default
-// samples, 2 threads on a 2-core x86 VM): 318 s wall → 10.1 core-seconds per
-// cell; ~150 KB stored per cell since far geometry is stored as triangle
-// numbers (docs/benchmarks.md). A model's cost per cell depends on what a cell
+// samples, 2 threads on a 2-core x86 VM): 197 s wall → 6.3 core-seconds per
+// cell (fresh-clone scripts/demo.sh, December 2026; 318 s and 10.1 before
+// the sample-choice speed-ups); ~150 KB stored per cell since far geometry
+// is stored as triangle numbers (docs/benchmarks.md). A model's cost per cell depends on what a cell
 // sees, so treat the figures as a factor-of-two guide.
 #pragma once
 
@@ -12,7 +13,7 @@
 
 namespace cellbake {
 
-inline constexpr double kMeasuredCoreSecondsPerCell = 10.1;  // at 512² faces
+inline constexpr double kMeasuredCoreSecondsPerCell = 6.3;  // at 512² faces
 inline constexpr double kMeasuredBytesPerCell = 150e3;       // at 512² faces
 
 struct BakeEstimate {
