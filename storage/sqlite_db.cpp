@@ -50,8 +50,8 @@ SqliteDb::SqliteDb(const std::filesystem::path& file, Mode mode) : file_(file) {
     writer = open_connection(file, SQLITE_OPEN_READWRITE);
   } catch (const std::exception& e) {
     throw std::runtime_error(file.string() +
-                             ": a process writing it was killed mid-transaction and recovering the last committed "
-                             "state needs write access, which this user lacks (" +
+                             ": needs recovering with write access, which this user lacks (a process writing it "
+                             "was killed mid-transaction, or its WAL index cannot be read without writing) (" +
                              e.what() + ")");
   }
   const int recovered = read_schema(writer);
