@@ -88,10 +88,15 @@ void add_verify_command(CLI::App& app) {
       blank += (blank.empty() ? "" : "; ") + std::to_string(s.identical_views) + " of " + std::to_string(s.views) +
                " views identical to the truth: drawn as exact geometry";
     if (!blank.empty()) blank = " (" + blank + ")";
-    std::printf("verified %llu cells (%llu rendered, %llu reused, %llu failed), %llu views in %.1f s; median PSNR %.2f dB%s\n",
+    char median[64];
+    if (std::isnan(s.psnr_median_db))
+      std::snprintf(median, sizeof median, "none (no view with the model in it)");
+    else
+      std::snprintf(median, sizeof median, "%.2f dB", s.psnr_median_db);
+    std::printf("verified %llu cells (%llu rendered, %llu reused, %llu failed), %llu views in %.1f s; median PSNR %s%s\n",
                 (unsigned long long)s.cells_selected, (unsigned long long)s.cells_rendered,
                 (unsigned long long)s.cells_reused, (unsigned long long)s.cells_failed,
-                (unsigned long long)s.views_rendered, s.seconds, s.psnr_median_db, blank.c_str());
+                (unsigned long long)s.views_rendered, s.seconds, median, blank.c_str());
     std::printf("report: %s\n", s.report_html.c_str());
     if (s.cells_failed > 0) throw std::runtime_error(std::to_string(s.cells_failed) + " cell(s) could not be verified");
   });

@@ -47,7 +47,7 @@ struct Suggestion {
   bool found = false;
   std::size_t floor = 0;  // index into the floors
   double eye = 0;
-  bool above_top = false;  // the model is lower than eye height above its floor: eyes just above its top
+  bool object = false;  // lower than eye height above its floor: cells around it at its mid-height
   Box3d region;
   double cell_size = 0;
   std::uint64_t cells = 0;
@@ -103,11 +103,19 @@ Suggestion suggest_bake(const std::string& store_name, const GeometryStore& stor
   s.cell_size = suggest_cell_size(s.region.hi[ha] - s.region.lo[ha], s.region.hi[hb] - s.region.lo[hb]);
   s.eye = floor.height + kEyeHeight;
   // A model lower than eye height above its main floor (an object, whose
-  // "floor" is its top): eyes half a cell above its top, where the bake
-  // accepts them (a region must meet the model's bounds grown by one cell).
-  const double top = store.summary().bounds.hi[u];
-  s.above_top = s.eye > top + s.cell_size;
-  if (s.above_top) s.eye = top + 0.5 * s.cell_size;
+  // "floor" is its top; the bake refuses eyes that far above it): cells
+  // around it at its mid-height, over its footprint grown by one cell, so
+  // that level views from them see it.
+  const Box3d& bounds = store.summary().bounds;
+  s.object = s.eye > bounds.hi[u] + s.cell_size;
+  if (s.object) {
+    s.eye = 0.5 * (bounds.lo[u] + bounds.hi[u]);
+    s.region = bounds;
+    for (int a : {ha, hb}) {
+      s.region.lo[a] -= s.cell_size;
+      s.region.hi[a] += s.cell_size;
+    }
+  }
   s.region.lo[u] = s.region.hi[u] = s.eye;
   s.cells = enumerate_cells({s.region}, s.cell_size).size();
   const std::uint64_t triangles = store.summary().triangles;
@@ -246,17 +254,19 @@ void print_info(const GeometryStore& store, const InfoModelFile* model, const st
   const Box3d& r = s.region;
   const double step = region_step(s.cell_size);
   std::printf("suggested bake (model units taken as metres):\n");
-  if (s.above_top)
-    std::printf("  eye height: %s = %s (half a cell above the model's top: it is lower than %.1f above its "
-                "floor %s, an object rather than a place to walk through)\n",
+  if (s.object)
+    std::printf("  eye height: %s = %s (the model's mid-height: it is lower than %.1f above its floor %s, an "
+                "object rather than a place to walk through)\n",
                 up.axis.c_str(), number(s.eye, step).c_str(), kEyeHeight,
                 number(found.floors[s.floor].height, step).c_str());
   else
     std::printf("  eye height: %s = %s (floor %s + %.1f)\n", up.axis.c_str(), number(s.eye, step).c_str(),
                 number(found.floors[s.floor].height, step).c_str(), kEyeHeight);
-  std::printf("  region: (%s, %s, %s) .. (%s, %s, %s), the floor's extent (under a roof if any)\n",
-              number(r.lo.x, step).c_str(), number(r.lo.y, step).c_str(), number(r.lo.z, step).c_str(),
-              number(r.hi.x, step).c_str(), number(r.hi.y, step).c_str(), number(r.hi.z, step).c_str());
+  std::printf("  region: (%s, %s, %s) .. (%s, %s, %s), %s\n", number(r.lo.x, step).c_str(),
+              number(r.lo.y, step).c_str(), number(r.lo.z, step).c_str(), number(r.hi.x, step).c_str(),
+              number(r.hi.y, step).c_str(), number(r.hi.z, step).c_str(),
+              s.object ? "the model's footprint grown by one cell (cells around it)"
+                       : "the floor's extent (under a roof if any)");
   std::printf("  cell size: %s -> %llu cells\n", number(s.cell_size, step).c_str(), (unsigned long long)s.cells);
   if (s.cells > kManyCells)
     std::printf("  note: %llu cells is a large bake: cells are sized for a model in metres; if its units are "

@@ -268,10 +268,10 @@ TEST(Info, OnAModelWithoutAClearAxisAssumesZAndPutsItInTheIngestLine) {
 }
 
 // A model lower than eye height above its floor (an object: its "floor" is
-// its top): the eyes go half a cell above its top, and the printed bake line
-// is one bake accepts (a region 1.7 above the top was refused: it must meet
-// the model's bounds grown by one cell).
-TEST(Info, ASmallObjectGetsEyesJustAboveItsTopAndABakeLineBakeAccepts) {
+// its top): cells around it at its mid-height, over its footprint grown by one
+// cell, and the printed bake line is one bake accepts (a region 1.7 above the
+// top was refused: it must meet the model's bounds grown by one cell).
+TEST(Info, ASmallObjectGetsCellsAroundItAtItsMidHeightAndABakeLineBakeAccepts) {
   TempDir dir;
   const auto obj = dir / "crate.obj";
   std::vector<test::HouseTriangle> crate;
@@ -281,12 +281,14 @@ TEST(Info, ASmallObjectGetsEyesJustAboveItsTopAndABakeLineBakeAccepts) {
   const auto doc = json_of(run_cellbake("info --json " + q(obj) + " --up z"));
   const auto& s = doc["suggested"];
   ASSERT_TRUE(s.is_object()) << doc.dump();
-  const double cell = s["cell_size"].get<double>(), eye = s["eye_height"].get<double>();
+  const double cell = s["cell_size"].get<double>();
   EXPECT_LT(cell, 1.0);
-  EXPECT_GT(eye, 0.7);  // above the top
-  EXPECT_LE(eye, 0.7 + cell);
+  EXPECT_DOUBLE_EQ(s["eye_height"].get<double>(), 0.35);  // mid-height of 0 .. 0.7
+  EXPECT_DOUBLE_EQ(s["region"][0].get<double>(), -cell);  // around the 1.2 x 0.8 footprint
+  EXPECT_DOUBLE_EQ(s["region"][4].get<double>(), 0.8 + cell);
   const auto text = run_cellbake("info " + q(obj) + " --up z");
-  EXPECT_NE(text.output.find("half a cell above the model's top"), std::string::npos) << text.output;
+  EXPECT_NE(text.output.find("the model's mid-height"), std::string::npos) << text.output;
+  EXPECT_NE(text.output.find("cells around it"), std::string::npos) << text.output;
 
   const auto ingested = run_printed(dir, doc["ingest"].get<std::string>());
   ASSERT_EQ(ingested.exit_code, 0) << ingested.output;

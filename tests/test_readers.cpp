@@ -669,6 +669,21 @@ TEST(AssimpReader, UniformBlackVertexColoursGiveWayToTheMaterial) {
   EXPECT_EQ(varied.info.vertex_colours, VertexColourUse::varying);
 }
 
+// A zipped COLLADA file (.zae) is COLLADA: assimp hands it over Y-up, as a
+// .dae (a standing figure was baked lying down when z was assumed).
+TEST(AssimpReader, ZippedColladaIsYUpLikeCollada) {
+  const fs::path zae = "/usr/share/assimp/models/Collada/human.zae";
+  if (!fs::exists(zae)) GTEST_SKIP() << zae << " is missing (package assimp-testmodels)";
+  const ReadResult r = read_all(zae);
+  EXPECT_EQ(r.info.up, "y");
+  EXPECT_NE(r.info.up_source.find("COLLADA"), std::string::npos) << r.info.up_source;
+  ASSERT_FALSE(r.triangles.empty());
+  Box3d b;
+  for (const Triangle& t : r.triangles)
+    for (const Vec3d& p : t.p) b.expand(p);
+  EXPECT_GT(b.hi.y - b.lo.y, b.hi.z - b.lo.z);  // standing along y
+}
+
 TEST(AssimpReader, GltfWithEmbeddedBuffer) {
   TempDir dir;
   write_text(dir / "t.gltf", one_triangle_gltf());

@@ -91,6 +91,32 @@ TEST(VerifyStats, MediansWorstAndCentreVersusCorner) {
   EXPECT_TRUE(s["psnr_db"]["median_centre"].is_null());  // infinite
 }
 
+// A view whose truth is blank (the model out of view) says nothing: it counts
+// in no statistic and is never a cell's worst while another view shows the
+// model, however low its PSNR (three stray impostor pixels on black: 3 dB).
+TEST(VerifyStats, BlankTruthViewsCountInNoStatisticAndAreNeverTheWorst) {
+  VerifyCellResult a;
+  a.id = 3;
+  a.views = {view(VerifyViewKind::centre, 30, 0.01), view(VerifyViewKind::corner, 3.2, 0.0),
+             view(VerifyViewKind::interior, 24, 0.02)};
+  a.views[1].truth_blank = true;
+  const MetricStats psnr = metric_stats({a}, verify_metrics()[0]);
+  EXPECT_EQ(psnr.count, 2u);
+  EXPECT_DOUBLE_EQ(psnr.median, 27);  // 24, 30
+  EXPECT_DOUBLE_EQ(psnr.worst, 24);
+  EXPECT_EQ(psnr.worst_view, 2);
+  EXPECT_EQ(worst_view_index(a.views), 2);
+  EXPECT_TRUE(worse_view(a.views[2], a.views[1]));
+  EXPECT_FALSE(worse_view(a.views[1], a.views[2]));
+  // Only blank views: no statistic, and the worst is the lowest of them.
+  VerifyCellResult b;
+  b.views = {view(VerifyViewKind::centre, 9, 0), view(VerifyViewKind::corner, 5, 0)};
+  for (auto& v : b.views) v.truth_blank = true;
+  EXPECT_EQ(metric_stats({b}, verify_metrics()[0]).count, 0u);
+  EXPECT_TRUE(std::isnan(metric_stats({b}, verify_metrics()[0]).median));
+  EXPECT_EQ(worst_view_index(b.views), 1);
+}
+
 TEST(VerifyStats, CellJsonRoundTripsIncludingInfinitePsnr) {
   VerifyCellResult c;
   c.id = 3;

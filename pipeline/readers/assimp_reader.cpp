@@ -230,7 +230,7 @@ void detect_up_axis(const aiScene& scene, const std::string& extension, ModelInf
     info.up = "y", info.up_source = "glTF is Y-up by specification";
   } else if (extension == "ifc" || extension == "ifczip") {
     info.up = "y", info.up_source = "assimp turns IFC's Z-up into Y-up";
-  } else if (extension == "dae") {
+  } else if (extension == "dae" || extension == "zae") {  // .zae: zipped COLLADA
     info.up = "y", info.up_source = "assimp turns COLLADA files into Y-up";
   } else if (scene.mMetaData) {
     std::int32_t axis = -1, sign = 1;

@@ -52,9 +52,11 @@ std::string void_curve_text(const VerifyCellResult& c) {
   return out.empty() ? "&ndash;" : out;
 }
 
+// Over the cell's views whose truth is not blank (NaN when none is).
 double cell_median(const VerifyCellResult& c, double VerifyViewResult::*field) {
   std::vector<double> v;
-  for (const auto& view : c.views) v.push_back(view.*field);
+  for (const auto& view : c.views)
+    if (!view.truth_blank) v.push_back(view.*field);
   return median_of(v);
 }
 
@@ -167,7 +169,7 @@ MetricStats metric_stats(const std::vector<VerifyCellResult>& cells, const Metri
   for (const auto& c : cells)
     for (std::size_t i = 0; i < c.views.size(); ++i) {
       const double v = c.views[i].*metric.field;
-      if (std::isnan(v)) continue;
+      if (std::isnan(v) || c.views[i].truth_blank) continue;
       all.push_back(v);
       if (c.views[i].kind == VerifyViewKind::centre) centre.push_back(v);
       if (c.views[i].kind == VerifyViewKind::corner) corner.push_back(v);
@@ -187,16 +189,15 @@ MetricStats metric_stats(const std::vector<VerifyCellResult>& cells, const Metri
   return s;
 }
 
+bool worse_view(const VerifyViewResult& a, const VerifyViewResult& b) {
+  if (a.truth_blank != b.truth_blank) return b.truth_blank;
+  return a.psnr_db < b.psnr_db || (a.psnr_db == b.psnr_db && a.hole_fraction > b.hole_fraction);
+}
+
 int worst_view_index(const std::vector<VerifyViewResult>& views) {
   int worst = -1;
-  for (int i = 0; i < int(views.size()); ++i) {
-    if (worst < 0) {
-      worst = i;
-      continue;
-    }
-    const auto &v = views[i], &w = views[worst];
-    if (v.psnr_db < w.psnr_db || (v.psnr_db == w.psnr_db && v.hole_fraction > w.hole_fraction)) worst = i;
-  }
+  for (int i = 0; i < int(views.size()); ++i)
+    if (worst < 0 || worse_view(views[i], views[worst])) worst = i;
   return worst;
 }
 

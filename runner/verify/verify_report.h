@@ -81,12 +81,18 @@ struct MetricInfo {
 };
 const std::vector<MetricInfo>& verify_metrics();
 
-// Statistics of one metric over every view of every cell (cells in the given
-// order, views in order: ties for the worst go to the first). Deterministic.
+// Statistics of one metric over every view of every cell whose truth is not
+// blank (a blank truth, the model out of view or one colour, says nothing;
+// VerifySummary counts those views), cells in the given order, views in
+// order: ties for the worst go to the first. Deterministic.
 MetricStats metric_stats(const std::vector<VerifyCellResult>& cells, const MetricInfo& metric);
 
-// The view of a cell that counts as its worst: lowest PSNR, ties broken by the
-// larger hole fraction, then the lower index; -1 when the cell has no views.
+// Whether view `a` counts as worse than `b`: a view whose truth is not blank
+// before one whose truth is, then the lower PSNR, then the larger hole fraction.
+bool worse_view(const VerifyViewResult& a, const VerifyViewResult& b);
+
+// The view of a cell that counts as its worst (worse_view; ties go to the
+// lower index); -1 when the cell has no views.
 int worst_view_index(const std::vector<VerifyViewResult>& views);
 
 // JSON forms (non-finite numbers as null, read back as +infinity for psnr_db

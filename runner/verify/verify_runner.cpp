@@ -96,10 +96,6 @@ std::vector<Rgba8> triptych(const ViewFrame& truth, const ViewFrame& impostor, c
   return out;
 }
 
-bool worse(const VerifyViewResult& a, const VerifyViewResult& b) {
-  return a.psnr_db < b.psnr_db || (a.psnr_db == b.psnr_db && a.hole_fraction > b.hole_fraction);
-}
-
 }  // namespace
 
 VerifySummary run_verify(const std::filesystem::path& database, const std::filesystem::path& report_dir,
@@ -265,7 +261,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
         v.extra_fraction = m.extra_fraction;
         v.depth_error_median = m.depth_error_median;
         v.truth_blank = is_blank(truth);
-        if (result.views.empty() || worse(v, result.views[result.worst_view])) {
+        if (result.views.empty() || worse_view(v, result.views[result.worst_view])) {
           result.worst_view = int(result.views.size());
           worst_truth = std::move(truth);
           worst_impostor = std::move(impostor);
@@ -292,7 +288,8 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
       progress.line("warning: " + result.error);
     } else if (options.verbose) {
       std::vector<double> psnr;
-      for (const VerifyViewResult& v : result.views) psnr.push_back(v.psnr_db);
+      for (const VerifyViewResult& v : result.views)
+        if (!v.truth_blank) psnr.push_back(v.psnr_db);
       char line[160];
       std::snprintf(line, sizeof line, "cell %lld: %zu views, median PSNR %.2f dB, worst %.2f dB (view %d)",
                     (long long)result.id, result.views.size(), median_of(psnr),

@@ -42,7 +42,7 @@ struct VerifySummary {
   std::uint64_t views = 0;              // in the report (rendered + reused)
   std::uint64_t truth_blank_views = 0;  // of those, truth views that were blank (image_metrics.h is_blank): PSNR says nothing
   std::uint64_t identical_views = 0;    // of those, views (truth not blank) the cells drew exactly: nothing approximated
-  double psnr_median_db = 0;         // over every view (+inf when all are identical; NaN without views)
+  double psnr_median_db = 0;         // over views whose truth is not blank (+inf when all are identical; NaN without any)
   std::filesystem::path report_html, report_json;
   double seconds = 0;
 };
