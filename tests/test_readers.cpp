@@ -366,6 +366,24 @@ TEST(PlyReader, BinaryBigEndianIntIndices) {
   expect_tricky_ply_triangles(read_all(dir / "be16.ply"));
 }
 
+// Old exporters wrote free text in the header without "comment" (Blender
+// 2.47: "Created by Blender3D 247 - www.blender.org, source file: ..."): the
+// line is read as a comment, with a warning naming it, not a refusal.
+TEST(PlyReader, AHeaderLineWithoutAKeywordIsReadAsACommentWithAWarning) {
+  TempDir dir;
+  write_text(dir / "old.ply",
+             "ply\nformat ascii 1.0\nCreated by Blender3D 247 - www.blender.org, source file: 'x.blend'\n"
+             "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+             "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+             "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  const ReadResult r = read_all(dir / "old.ply");
+  EXPECT_EQ(r.triangles.size(), 1u);
+  ASSERT_EQ(r.info.warnings.size(), 1u);
+  EXPECT_NE(r.info.warnings[0].find("line 3: header line 'Created by Blender3D 247"), std::string::npos)
+      << r.info.warnings[0];
+  EXPECT_NE(r.info.warnings[0].find("read as a comment"), std::string::npos) << r.info.warnings[0];
+}
+
 TEST(PlyReader, FacesBeforeVerticesFloatColoursAndTexcoords) {
   TempDir dir;
   write_text(dir / "f.ply",

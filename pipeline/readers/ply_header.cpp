@@ -92,7 +92,9 @@ PlyHeader read_ply_header(BufferedInput& in) {
       if (property.name.empty() || !scan.at_end()) fail("expected 'property <type> <name>'");
       header.elements.back().properties.push_back(std::move(property));
     } else {
-      fail("unknown keyword '" + std::string(key) + "'");
+      const std::string text(line.substr(0, 60));
+      header.warnings.push_back(" " + at_line(in.line_number()) + ": header line '" + text +
+                                (line.size() > 60 ? "...'" : "'") + " has no PLY keyword: read as a comment");
     }
   }
   throw InputError(in.name(), at_line(in.line_number()), "malformed PLY header: no end_header line");

@@ -33,6 +33,9 @@ struct PlyElement {
 struct PlyHeader {
   PlyFormat format = PlyFormat::ascii;
   std::vector<PlyElement> elements;
+  // " line N: ..." for header lines read as comments: an unknown keyword (old
+  // exporters wrote e.g. "Created by Blender3D 247" without "comment").
+  std::vector<std::string> warnings;
 };
 
 // Size in bytes of one binary value of `type`.
@@ -43,8 +46,10 @@ inline std::size_t ply_type_size(PlyType type) {
 inline bool ply_type_is_float(PlyType type) { return type == PlyType::float32 || type == PlyType::float64; }
 
 // Reads the header lines of `in` through "end_header", leaving `in` at the
-// first byte of the body. Throws InputError (file and line) when the magic,
-// format, an element/property line or the end_header line is missing or malformed.
+// first byte of the body. A line with an unknown keyword is read as a comment
+// (it cannot change the body's layout) and noted in PlyHeader::warnings.
+// Throws InputError (file and line) when the magic, format, an
+// element/property line or the end_header line is missing or malformed.
 PlyHeader read_ply_header(BufferedInput& in);
 
 }  // namespace cellbake

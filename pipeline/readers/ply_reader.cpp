@@ -271,6 +271,7 @@ class PlyReader {
   ModelInfo run() {
     BufferedInput in(file_);
     const PlyHeader header = read_ply_header(in);
+    info_.warnings.insert(info_.warnings.end(), header.warnings.begin(), header.warnings.end());
     std::optional<std::size_t> vertex_element, face_element;
     for (std::size_t e = 0; e < header.elements.size(); ++e) {
       if (header.elements[e].name == "vertex" && !vertex_element) vertex_element = e;
