@@ -13,7 +13,7 @@
 
 namespace cellbake {
 
-inline constexpr double kMeasuredCoreSecondsPerCell = 6.3;  // at 512² faces
+inline constexpr double kMeasuredCoreSecondsPerCell = 6.3;   // at 512² faces
 inline constexpr double kMeasuredBytesPerCell = 150e3;       // at 512² faces
 
 struct BakeEstimate {

@@ -112,7 +112,8 @@ void check_regions_meet_model(const std::vector<Box3d>& regions, const Box3d& mo
   const Box3d grown = Box3d{model.lo - Vec3d{cell_size, cell_size, cell_size}, model.hi + Vec3d{cell_size, cell_size, cell_size}};
   auto box_text = [](const Box3d& b) {
     char buf[256];
-    std::snprintf(buf, sizeof buf, "%.10g,%.10g,%.10g .. %.10g,%.10g,%.10g", b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z);
+    std::snprintf(buf, sizeof buf, "%.10g,%.10g,%.10g .. %.10g,%.10g,%.10g", b.lo.x, b.lo.y, b.lo.z, b.hi.x,
+                  b.hi.y, b.hi.z);
     return std::string(buf);
   };
   for (std::size_t i = 0; i < regions.size(); ++i)

@@ -36,7 +36,8 @@ void add_verify_command(CLI::App& app) {
   cmd->add_option("database", opt->database, "Cell database")->required();
   cmd->add_option("--report", opt->report, "Report folder (report.html, report.json, plots, resume file)")->required();
   cmd->add_option("--views-per-cell", opt->verify.views_per_cell,
-                  "Views per cell: centre, corners, then seeded interior points; each sample point of the cell adds one more")
+                  "Views per cell: centre, corners, then seeded interior points; each sample point of the "
+                  "cell adds one more")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   cmd->add_option("--cells", opt->verify.cells, "Cell selection, e.g. 1-10,15 (default: all done cells)");
@@ -85,18 +86,20 @@ void add_verify_command(CLI::App& app) {
       blank = std::to_string(s.truth_blank_views) + " of " + std::to_string(s.views) +
               " truth views blank: single colour or empty, PSNR says nothing there";
     if (s.identical_views > 0)
-      blank += (blank.empty() ? "" : "; ") + std::to_string(s.identical_views) + " of " + std::to_string(s.views) +
-               " views identical to the truth: drawn as exact geometry";
+      blank += (blank.empty() ? "" : "; ") + std::to_string(s.identical_views) + " of " +
+               std::to_string(s.views) + " views identical to the truth: drawn as exact geometry";
     if (!blank.empty()) blank = " (" + blank + ")";
     char median[64];
     if (std::isnan(s.psnr_median_db))
       std::snprintf(median, sizeof median, "none (no view with the model in it)");
     else
       std::snprintf(median, sizeof median, "%.2f dB", s.psnr_median_db);
-    std::printf("verified %llu cells (%llu rendered, %llu reused, %llu failed), %llu views in %.1f s; median PSNR %s%s\n",
-                (unsigned long long)s.cells_selected, (unsigned long long)s.cells_rendered,
-                (unsigned long long)s.cells_reused, (unsigned long long)s.cells_failed,
-                (unsigned long long)s.views_rendered, s.seconds, median, blank.c_str());
+    std::printf(
+        "verified %llu cells (%llu rendered, %llu reused, %llu failed), %llu views in %.1f s; median PSNR "
+        "%s%s\n",
+        (unsigned long long)s.cells_selected, (unsigned long long)s.cells_rendered,
+        (unsigned long long)s.cells_reused, (unsigned long long)s.cells_failed,
+        (unsigned long long)s.views_rendered, s.seconds, median, blank.c_str());
     std::printf("report: %s\n", s.report_html.c_str());
     if (s.cells_failed > 0) throw std::runtime_error(std::to_string(s.cells_failed) + " cell(s) could not be verified");
   });

@@ -134,9 +134,9 @@ Suggestion suggest_bake(const std::string& store_name, const GeometryStore& stor
   const double step = region_step(s.cell_size);
   s.command = "cellbake bake --store " + shell_word(store_name) + " --up " + up + " --region " +
               number(r.lo.x, step) + "," + number(r.lo.y, step) + "," + number(r.lo.z, step) + "," +
-              number(r.hi.x, step) + "," + number(r.hi.y, step) + "," + number(r.hi.z, step) + " --cell-size " +
-              number(s.cell_size, step) + " --near-budget " + std::to_string(s.near_budget) + " --out " +
-              shell_word(out + ".cells.db");
+              number(r.hi.x, step) + "," + number(r.hi.y, step) + "," + number(r.hi.z, step) +
+              " --cell-size " + number(s.cell_size, step) + " --near-budget " +
+              std::to_string(s.near_budget) + " --out " + shell_word(out + ".cells.db");
   return s;
 }
 
@@ -241,7 +241,8 @@ void print_info(const GeometryStore& store, const InfoModelFile* model, const st
   for (std::size_t f = 0; f < found.floors.size(); ++f) {
     const Floor& fl = found.floors[f];
     std::printf("  %s = %s: %llu rays (%.0f %% of them covered above)%s\n", up.axis.c_str(),
-                number(fl.height, s.found ? region_step(s.cell_size) : 0.01).c_str(), (unsigned long long)fl.rays,
+                number(fl.height, s.found ? region_step(s.cell_size) : 0.01).c_str(),
+                (unsigned long long)fl.rays,
                 fl.rays ? 100.0 * double(fl.covered_rays) / double(fl.rays) : 0.0,
                 s.found && f == s.floor ? "  <- main floor" : "");
   }
@@ -255,10 +256,11 @@ void print_info(const GeometryStore& store, const InfoModelFile* model, const st
   const double step = region_step(s.cell_size);
   std::printf("suggested bake (model units taken as metres):\n");
   if (s.object)
-    std::printf("  eye height: %s = %s (the model's mid-height: it is lower than %.1f above its floor %s, an "
-                "object rather than a place to walk through)\n",
-                up.axis.c_str(), number(s.eye, step).c_str(), kEyeHeight,
-                number(found.floors[s.floor].height, step).c_str());
+    std::printf(
+        "  eye height: %s = %s (the model's mid-height: it is lower than %.1f above its floor %s, an "
+        "object rather than a place to walk through)\n",
+        up.axis.c_str(), number(s.eye, step).c_str(), kEyeHeight,
+        number(found.floors[s.floor].height, step).c_str());
   else
     std::printf("  eye height: %s = %s (floor %s + %.1f)\n", up.axis.c_str(), number(s.eye, step).c_str(),
                 number(found.floors[s.floor].height, step).c_str(), kEyeHeight);
@@ -267,11 +269,13 @@ void print_info(const GeometryStore& store, const InfoModelFile* model, const st
               number(r.hi.y, step).c_str(), number(r.hi.z, step).c_str(),
               s.object ? "the model's footprint grown by one cell (cells around it)"
                        : "the floor's extent (under a roof if any)");
-  std::printf("  cell size: %s -> %llu cells\n", number(s.cell_size, step).c_str(), (unsigned long long)s.cells);
+  std::printf("  cell size: %s -> %llu cells\n", number(s.cell_size, step).c_str(),
+              (unsigned long long)s.cells);
   if (s.cells > kManyCells)
-    std::printf("  note: %llu cells is a large bake: cells are sized for a model in metres; if its units are "
-                "smaller (centimetres, millimetres), give a larger --cell-size, or bake part of it with --cells\n",
-                (unsigned long long)s.cells);
+    std::printf(
+        "  note: %llu cells is a large bake: cells are sized for a model in metres; if its units are "
+        "smaller (centimetres, millimetres), give a larger --cell-size, or bake part of it with --cells\n",
+        (unsigned long long)s.cells);
   std::printf("  near budget: %llu triangles per cell (of %llu: the rest is far field)\n",
               (unsigned long long)s.near_budget, (unsigned long long)summary.triangles);
   if (model && model->chunk_triangles > 0)

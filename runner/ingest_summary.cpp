@@ -81,7 +81,8 @@ void print_ingest_summary(const IngestReport& r, const std::string& store, bool 
     for (const std::string& w : r.texture_warnings) std::printf("    %s\n", w.c_str());
   }
   if (!r.input_warnings.empty()) {
-    std::printf("  warning: %zu thing(s) in the model files skipped or read leniently:\n", r.input_warnings.size());
+    std::printf("  warning: %zu thing(s) in the model files skipped or read leniently:\n",
+                r.input_warnings.size());
     for (const std::string& w : r.input_warnings) std::printf("    %s\n", w.c_str());
   }
   std::printf("  content hash %s\n", r.content_hash.c_str());

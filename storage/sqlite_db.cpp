@@ -49,10 +49,11 @@ SqliteDb::SqliteDb(const std::filesystem::path& file, Mode mode) : file_(file) {
   try {
     writer = open_connection(file, SQLITE_OPEN_READWRITE);
   } catch (const std::exception& e) {
-    throw std::runtime_error(file.string() +
-                             ": needs recovering with write access, which this user lacks (a process writing it "
-                             "was killed mid-transaction, or its WAL index cannot be read without writing) (" +
-                             e.what() + ")");
+    throw std::runtime_error(
+        file.string() +
+        ": needs recovering with write access, which this user lacks (a process writing it "
+        "was killed mid-transaction, or its WAL index cannot be read without writing) (" +
+        e.what() + ")");
   }
   const int recovered = read_schema(writer);
   const std::string msg = sqlite3_errmsg(writer);

@@ -86,7 +86,9 @@ TEST(InputChecks, AMissingMtllibIsACountedWarning) {
   EXPECT_EQ(r.input_warnings[0], "m.obj:line 1: mtllib 'absent.mtl': missing or unreadable; its materials are default grey");
   const auto cli = test::run_cellbake("ingest " + (dir / "m.obj").string() + " --store " + (dir / "t.db").string());
   EXPECT_EQ(cli.exit_code, 0) << cli.output;
-  EXPECT_NE(cli.output.find("warning: 1 thing(s) in the model files skipped or read leniently"), std::string::npos) << cli.output;
+  EXPECT_NE(cli.output.find("warning: 1 thing(s) in the model files skipped or read leniently"),
+            std::string::npos)
+      << cli.output;
 }
 
 TEST(InputChecks, AGlbClaimingAHugeChunkIsRefusedBeforeAssimpReadsIt) {
@@ -159,7 +161,9 @@ TEST(ContainedPaths, AnMtllibOutsideTheModelsFolderIsACountedWarningUnlessAllowe
   const auto cli = test::run_cellbake("ingest " + (dir / "model" / "m.obj").string() + " --store " +
                                       (dir / "t.db").string());
   EXPECT_EQ(cli.exit_code, 0) << cli.output;
-  EXPECT_NE(cli.output.find("warning: 1 thing(s) in the model files skipped or read leniently"), std::string::npos) << cli.output;
+  EXPECT_NE(cli.output.find("warning: 1 thing(s) in the model files skipped or read leniently"),
+            std::string::npos)
+      << cli.output;
   EXPECT_NE(cli.output.find("m.obj:line 1: mtllib '../outside.mtl': outside the model's folder"), std::string::npos)
       << cli.output;
   const auto allowed = test::run_cellbake("ingest " + (dir / "model" / "m.obj").string() + " --store " +

@@ -406,9 +406,10 @@ TEST_F(Integrity, AReadOnlyOpenRecoversTheHotJournalOfAKilledWriter) {
   ASSERT_GE(child, 0);
   if (child == 0) {
     SqliteDb writer(db("cells.db"), SqliteDb::Mode::read_write_create);
-    writer.exec("PRAGMA journal_mode=DELETE; PRAGMA cache_size=1; BEGIN; DELETE FROM cells; "
-                "CREATE TABLE junk(x); WITH RECURSIVE n(i) AS (SELECT 1 UNION ALL SELECT i + 1 FROM n WHERE i < 500) "
-                "INSERT INTO junk SELECT randomblob(4000) FROM n;");
+    writer.exec(
+        "PRAGMA journal_mode=DELETE; PRAGMA cache_size=1; BEGIN; DELETE FROM cells; "
+        "CREATE TABLE junk(x); WITH RECURSIVE n(i) AS (SELECT 1 UNION ALL SELECT i + 1 FROM n WHERE i < 500) "
+        "INSERT INTO junk SELECT randomblob(4000) FROM n;");
     _exit(0);  // killed mid-transaction: no commit, no rollback, no close
   }
   int status = 0;

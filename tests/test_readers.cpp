@@ -131,9 +131,9 @@ TEST(ObjReader, TexturePathsFromAnotherMachineFallBackToTheFileBesideTheModel) {
   write_text(dir / "tex" / "exact.png", "");
   write_text(dir / "m.mtl",
              "newmtl a\nmap_Kd D:\\projects\\maps\\Wood.JPG\n"  // drive path, other case
-             "newmtl b\nmap_Kd /home/artist/stone.png\n"          // absolute elsewhere, other case
-             "newmtl c\nmap_Kd tex\\exact.png\n"                 // found as written
-             "newmtl d\nmap_Kd C:missing.png\n");                // nowhere: as written
+             "newmtl b\nmap_Kd /home/artist/stone.png\n"        // absolute elsewhere, other case
+             "newmtl c\nmap_Kd tex\\exact.png\n"                // found as written
+             "newmtl d\nmap_Kd C:missing.png\n");               // nowhere: as written
   write_text(dir / "m.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n");
   const ReadResult r = read_all(dir / "m.obj");
   ASSERT_EQ(r.info.materials.size(), 5u);
@@ -142,7 +142,8 @@ TEST(ObjReader, TexturePathsFromAnotherMachineFallBackToTheFileBesideTheModel) {
   EXPECT_EQ(r.info.materials[3].texture, (dir / "tex" / "exact.png").string());
   EXPECT_EQ(r.info.materials[4].texture, (dir / "C:missing.png").string());
   // Never outside the folder: ".." is not a file name to look for.
-  EXPECT_EQ(locate_referenced_file(dir / "tex", "../../etc/.."), (dir.path().parent_path() / "etc/..").lexically_normal());
+  EXPECT_EQ(locate_referenced_file(dir / "tex", "../../etc/.."),
+            (dir.path().parent_path() / "etc/..").lexically_normal());
 }
 
 TEST(ObjReader, VertexColoursTexcoordsAndCornerForms) {

@@ -323,11 +323,13 @@ TEST(VerifyRun, ViewsDrawnAsExactGeometryAreCountedAsIdentical) {
   EXPECT_EQ(s.identical_views, 2u);
   EXPECT_TRUE(std::isinf(s.psnr_median_db));
 
-  const auto cli = test::run_cellbake("verify " + c.database.string() + " --report " + (dir / "cli").string() +
-                                      " --views-per-cell 2 --size 64x48 --threads 1");
+  const auto cli =
+      test::run_cellbake("verify " + c.database.string() + " --report " + (dir / "cli").string() +
+                         " --views-per-cell 2 --size 64x48 --threads 1");
   EXPECT_EQ(cli.exit_code, 0) << cli.output;
   EXPECT_NE(cli.output.find("2 of 2 views identical to the truth"), std::string::npos) << cli.output;
-  EXPECT_NE(cli.output.find("note: every view the cells drew equals the truth"), std::string::npos) << cli.output;
+  EXPECT_NE(cli.output.find("note: every view the cells drew equals the truth"), std::string::npos)
+      << cli.output;
 }
 
 TEST(VerifyRun, TinyBakeReportIsCompleteAndResumable) {

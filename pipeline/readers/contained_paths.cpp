@@ -38,7 +38,8 @@ std::filesystem::path locate_referenced_file(const std::filesystem::path& folder
   if (reference.empty() || std::filesystem::is_regular_file(written, ec)) return written;
   // The last component, after any drive letter ("C:name.png" has no slash).
   std::string name = reference.substr(reference.find_last_of('/') + 1);
-  if (name.size() > 2 && name[1] == ':' && std::isalpha(static_cast<unsigned char>(name[0]))) name.erase(0, 2);
+  if (name.size() > 2 && name[1] == ':' && std::isalpha(static_cast<unsigned char>(name[0])))
+    name.erase(0, 2);
   if (name.empty() || name == "." || name == "..") return written;
   const std::filesystem::path beside = folder / name;
   if (std::filesystem::is_regular_file(beside, ec)) return beside.lexically_normal();

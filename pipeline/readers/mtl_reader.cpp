@@ -71,7 +71,8 @@ bool read_mtl(const std::filesystem::path& mtl_file, std::vector<Material>& mate
       current->color.a = unit_to_byte(key == "d" ? value : 1.0 - value);
     } else if (key == "map_Kd") {
       const std::string texture = texture_operand(scan);
-      if (!texture.empty()) current->texture = locate_referenced_file(mtl_file.parent_path(), texture).string();
+      if (!texture.empty())
+        current->texture = locate_referenced_file(mtl_file.parent_path(), texture).string();
     }
   }
   for (Material& material : parsed) {

@@ -334,15 +334,17 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
     }
   }
   if (summary.truth_blank_views > 0)
-    std::fprintf(stderr,
-                 "warning: %llu of %llu truth views are blank (nothing of the model in view, or one colour over "
-                 "every covered pixel: a black, unlit or untextured model?): PSNR/SSIM say nothing there\n",
-                 (unsigned long long)summary.truth_blank_views, (unsigned long long)summary.views);
+    std::fprintf(
+        stderr,
+        "warning: %llu of %llu truth views are blank (nothing of the model in view, or one colour over "
+        "every covered pixel: a black, unlit or untextured model?): PSNR/SSIM say nothing there\n",
+        (unsigned long long)summary.truth_blank_views, (unsigned long long)summary.views);
   if (summary.identical_views > 0 && summary.identical_views + summary.truth_blank_views == summary.views)
-    std::fprintf(stderr,
-                 "note: every view the cells drew equals the truth: what they see is drawn as exact geometry "
-                 "(far.choice \"cheapest\" took geometry where it costs no more triangles), so nothing was "
-                 "approximated and PSNR is infinite; bake with --set far.choice=tdm to measure the depth meshes\n");
+    std::fprintf(
+        stderr,
+        "note: every view the cells drew equals the truth: what they see is drawn as exact geometry "
+        "(far.choice \"cheapest\" took geometry where it costs no more triangles), so nothing was "
+        "approximated and PSNR is infinite; bake with --set far.choice=tdm to measure the depth meshes\n");
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return summary;
 }

@@ -41,8 +41,10 @@ struct VerifySummary {
   std::uint64_t views_rendered = 0;
   std::uint64_t views = 0;              // in the report (rendered + reused)
   std::uint64_t truth_blank_views = 0;  // of those, truth views that were blank (image_metrics.h is_blank): PSNR says nothing
-  std::uint64_t identical_views = 0;    // of those, views (truth not blank) the cells drew exactly: nothing approximated
-  double psnr_median_db = 0;         // over views whose truth is not blank (+inf when all are identical; NaN without any)
+  // Of those, views (truth not blank) the cells drew exactly: nothing approximated.
+  std::uint64_t identical_views = 0;
+  // Over the views whose truth is not blank (+inf when all are identical; NaN without any).
+  double psnr_median_db = 0;
   std::filesystem::path report_html, report_json;
   double seconds = 0;
 };
