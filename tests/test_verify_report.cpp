@@ -292,32 +292,43 @@ TEST(VerifyRun, BlackModelReportsBlankTruthViews) {
   EXPECT_NE(cli.output.find("warning: 1 of 1 truth views are blank"), std::string::npos) << cli.output;
 }
 
+// The room store's cells of 2 m over `region` (near budget 600, 32² faces) into DIR/cells.db.
+BakeConfig room_cells(const test::TempDir& dir, const Box3d& region) {
+  BakeConfig c;
+  c.store = dir / "room.store.db";
+  c.regions = {region};
+  c.cell_size = 2.0;
+  c.near_budget = 600;
+  c.face_size = 32;
+  c.database = dir / "cells.db";
+  return c;
+}
+
+// Two planned 64x48 views per cell (no views at the sample points), quiet.
+VerifyOptions two_small_views(int threads) {
+  VerifyOptions vo;
+  vo.views_per_cell = 2;
+  vo.width = 64;
+  vo.height = 48;
+  vo.threads = threads;
+  vo.quiet = true;
+  vo.sample_views = false;
+  return vo;
+}
+
 // A far field drawn wholly as exact geometry draws the truth itself: PSNR is
 // +infinity because nothing was approximated, and verify says so (counted,
 // summed up, and a note) instead of letting "inf dB" read as a perfect bake.
 TEST(VerifyRun, ViewsDrawnAsExactGeometryAreCountedAsIdentical) {
   test::TempDir dir;
   test::ingest_room_store(dir.path());
-  BakeConfig c;
-  c.store = dir / "room.store.db";
-  c.regions = {Box3d{{1, 1, 1.6}, {3, 3, 1.6}}};
-  c.cell_size = 2.0;
-  c.near_budget = 600;
-  c.face_size = 32;
+  BakeConfig c = room_cells(dir, Box3d{{1, 1, 1.6}, {3, 3, 1.6}});
   c.far_choice = "geometry";
-  c.database = dir / "cells.db";
   BakeOptions bo;
   bo.threads = 1;
   bo.quiet = true;
   ASSERT_EQ(run_bake(c, bo).cells_baked, 1u);
-  VerifyOptions vo;
-  vo.views_per_cell = 2;
-  vo.width = 64;
-  vo.height = 48;
-  vo.threads = 1;
-  vo.quiet = true;
-  vo.sample_views = false;
-  const VerifySummary s = run_verify(c.database, dir / "report", vo);
+  const VerifySummary s = run_verify(c.database, dir / "report", two_small_views(1));
   EXPECT_EQ(s.views, 2u);
   EXPECT_EQ(s.truth_blank_views, 0u);
   EXPECT_EQ(s.identical_views, 2u);
@@ -335,26 +346,14 @@ TEST(VerifyRun, ViewsDrawnAsExactGeometryAreCountedAsIdentical) {
 TEST(VerifyRun, TinyBakeReportIsCompleteAndResumable) {
   test::TempDir dir;
   test::ingest_room_store(dir.path());
-  BakeConfig c;
-  c.store = dir / "room.store.db";
-  c.regions = {Box3d{{1, 1, 1.6}, {5, 3, 1.6}}};  // 2 x 1 cells of 2 m
-  c.cell_size = 2.0;
-  c.near_budget = 600;
-  c.face_size = 32;
+  BakeConfig c = room_cells(dir, Box3d{{1, 1, 1.6}, {5, 3, 1.6}});  // 2 x 1 cells of 2 m
   c.image_format = "png";
-  c.database = dir / "cells.db";
   BakeOptions bo;
   bo.threads = 2;
   bo.quiet = true;
   ASSERT_EQ(run_bake(c, bo).cells_baked, 2u);
 
-  VerifyOptions vo;
-  vo.views_per_cell = 2;
-  vo.width = 64;
-  vo.height = 48;
-  vo.threads = 2;
-  vo.quiet = true;
-  vo.sample_views = false;  // planned views only here; views at the sample points are checked below
+  VerifyOptions vo = two_small_views(2);  // planned views only here; views at the sample points are checked below
   const std::filesystem::path report = dir / "report";
   const VerifySummary s = run_verify(c.database, report, vo);
   EXPECT_EQ(s.cells_selected, 2u);
