@@ -14,9 +14,9 @@
 // (CELLBAKE_BENCH_EYES="x,y,z;..." picks the eyes, as for bench_sample). The
 // third and fourth arguments pick the chunk scenes' flags and build quality
 // (default: fast = not robust, medium, as the sampler), the fifth the triangles per chunk
-// group (default 1048576, as the sampler; 1: one instance per chunk); `flat` also traces a one-level
-// scene per cell holding every needed chunk's triangles directly (the cost of
-// instancing).
+// group (default 0, as the sampler: one group when the model fits one batch of the cache, else
+// 1 M; 1: one instance per chunk; 1048576 was the sampler's default before 2026-12-03); `flat` also traces a
+// one-level scene per cell holding every needed chunk's triangles directly (the cost of instancing).
 //
 // Single-threaded tracing; times are per cube map, medians over repetitions.
 #include <embree3/rtcore.h>

@@ -192,7 +192,9 @@ void BM_SampleStoreEmbree(benchmark::State& state) {
   const auto cells = store_cells(store);
   SampleParams params;
   params.face_size = static_cast<int>(state.range(0));
-  auto sampler = make_embree();
+  ChunkBvhCacheParams cache_params;
+  cache_params.group_triangles = static_cast<std::size_t>(state.range(1));  // 0: the bake's default
+  auto sampler = make_embree(cache_params);
   for (const auto& [eye, cull_box] : cells) sampler->sample(eye, cull_box, params, store);  // build BVHs
   const EmbreeSamplerStats before = sampler->stats();
   for (auto _ : state)
@@ -200,7 +202,16 @@ void BM_SampleStoreEmbree(benchmark::State& state) {
   state.counters["cells"] = static_cast<double>(cells.size());
   report_embree(state, *sampler, before);
 }
-BENCHMARK(BM_SampleStoreEmbree)->Arg(512)->Arg(128)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime()->Iterations(2);
+// Args: face size, triangles per chunk group (0: the default, one group when
+// the model fits one batch; 1 << 20 was the default before 2026-12-03).
+BENCHMARK(BM_SampleStoreEmbree)
+    ->Args({512, 0})
+    ->Args({512, 1 << 20})
+    ->Args({128, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime()
+    ->Iterations(2);
 
 void BM_SampleStore(benchmark::State& state) {
   const char* path = std::getenv("CELLBAKE_BENCH_STORE");

@@ -489,6 +489,28 @@ Vec3d plant_floor_eye(const ChunkSource& source) {
   return {model.center().x, model.center().y, model.lo.z + 1.7};
 }
 
+TEST(ChunkBvhCache, AModelThatFitsOneBatchIsOneGroupElseGroupsOfAMillionTriangles) {
+  constexpr std::size_t kGiB = std::size_t{1} << 30;
+  // The 12.7 M plant under the default 4 GiB cap: one group.
+  EXPECT_EQ(default_group_triangles(12'700'000, 4 * kGiB), 12'700'000u);
+  // Exactly half the cap at 112 B per triangle fits; one triangle more does not.
+  const std::uint64_t fits = 2 * kGiB / kEstimatedBvhBytesPerTriangle;
+  EXPECT_EQ(default_group_triangles(fits, 4 * kGiB), fits);
+  EXPECT_EQ(default_group_triangles(fits + 1, 4 * kGiB), std::size_t{1} << 20);
+  // The 82 M plant under a 2 GiB cap, the 2 M plant under 64 MiB: batches.
+  EXPECT_EQ(default_group_triangles(82'000'000, 2 * kGiB), std::size_t{1} << 20);
+  EXPECT_EQ(default_group_triangles(2'000'000, std::size_t{64} << 20), std::size_t{1} << 20);
+  EXPECT_EQ(default_group_triangles(0, 4 * kGiB), 1u);
+
+  const auto owned = generated_plant();
+  const Vec3d eye = plant_floor_eye(*owned);
+  EmbreeCubeSampler sampler(std::make_shared<ChunkBvhCache>(ChunkBvhCacheParams{}));
+  sampler.sample(eye, Box3d::cube(eye, 3.0), params(32), *owned);
+  EXPECT_GT(owned->query(owned->model_bounds()).size(), 1u);
+  EXPECT_EQ(sampler.cache().stats().groups, 1u);
+  EXPECT_EQ(sampler.stats().instances, 1u);
+}
+
 TEST(ChunkBvhCache, GroupSizeChangesNoPixel) {
   const auto owned = generated_plant();
   const InMemoryChunkSource& source = *owned;

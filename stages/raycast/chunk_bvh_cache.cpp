@@ -119,7 +119,12 @@ void ChunkBvhCache::partition(const ChunkSource& source) {
     std::vector<ChunkRef> refs = source.query(source.model_bounds());
     std::erase_if(refs, [](const ChunkRef& r) { return r.bounds.empty(); });
     std::vector<std::vector<std::int64_t>> groups;
-    if (!refs.empty()) split_groups(refs, 0, refs.size(), std::max<std::size_t>(1, params_.group_triangles), groups);
+    std::uint64_t model_triangles = 0;
+    for (const ChunkRef& r : refs) model_triangles += r.triangle_count;
+    const std::size_t limit = params_.group_triangles > 0
+                                  ? params_.group_triangles
+                                  : default_group_triangles(model_triangles, params_.cache_bytes);
+    if (!refs.empty()) split_groups(refs, 0, refs.size(), limit, groups);
     std::unordered_map<std::int64_t, std::size_t> group_of;
     for (std::size_t g = 0; g < groups.size(); ++g)
       for (std::int64_t id : groups[g]) group_of[id] = g;

@@ -1,19 +1,22 @@
 // Bottom-level BVHs of chunk groups for the Embree sampler, shared by every
 // sampling thread of a bake ("one BVH per bake worker set, not per cell").
 // The model's chunks are partitioned once into spatially compact groups of up
-// to `group_triangles` triangles (median kd-splits of the chunk centres on the
-// longest axis, as chunking.h splits triangles); a group becomes one Embree
-// scene with one triangle geometry per chunk (float positions relative to the
-// group's double origin), built the first time some cube map needs one of its
-// chunks and kept under a byte cap with least-recently-used eviction. Cube
-// maps instance these scenes with eye-relative translations
-// (stages/raycast/instance_scene.h), so float precision is that of positions
-// relative to a nearby origin, wherever the model lies. Groups rather than
-// single chunks, because every instance a ray enters costs a transform and a
-// second BVH descent, and chunk bounds overlap: on the 2 M plant (512 chunks,
-// 512^2 x 6 rays) one instance per chunk traced in 209 ms, groups of <= 256 k
-// triangles in 164 ms, <= 1 M in 121 ms, one flat BVH in 91 ms
-// (bench_raycast_raw, docs/benchmarks.md "Sampling backends (issue #12)").
+// to `group_triangles` triangles (by default one group when the model fits
+// one batch of the cap, else 1 M triangles; median kd-splits of the chunk
+// centres on the longest axis, as chunking.h splits triangles); a group
+// becomes one Embree scene with one triangle geometry per chunk (float
+// positions relative to the group's double origin), built the first time some
+// cube map needs one of its chunks and kept under a byte cap with
+// least-recently-used eviction. Cube maps instance these
+// scenes with eye-relative translations (stages/raycast/instance_scene.h), so
+// float precision is that of positions relative to the group's centre,
+// wherever the model lies (a 10 km group: 0.3 mm). Groups rather than single
+// chunks, because every instance a ray enters costs a transform and a second
+// BVH descent, and chunk bounds overlap: on the 2 M plant (512 chunks, 512^2
+// x 6 rays) one instance per chunk traced in 209 ms, groups of <= 256 k
+// triangles in 164 ms, <= 1 M in 121 ms, one flat BVH in 91 ms; on the 12.7 M
+// plant 16 groups 163 ms, one 94 ms (bench_raycast_raw, docs/benchmarks.md
+// "Sampling backends (issue #12)").
 //
 // Embree 3: Wald et al. 2014, "Embree: a kernel framework for efficient CPU ray
 // tracing", ACM TOG 33(4); API reference https://www.embree.org/api.html
@@ -23,6 +26,7 @@
 
 #include <embree3/rtcore.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -64,8 +68,12 @@ struct ChunkBvhCacheParams {
   // when needed again.
   std::size_t cache_bytes = std::size_t{4} << 30;
   // Triangles per chunk group at most (a single larger chunk is a group of
-  // its own); 1 makes every chunk its own group.
-  std::size_t group_triangles = std::size_t{1} << 20;
+  // its own); 1 makes every chunk its own group. 0 (the default):
+  // default_group_triangles(), one group when the whole model fits one batch,
+  // else groups of <= 1 M triangles. Fewer, larger groups trace faster (on the
+  // 12.7 M plant 16 groups of <= 1 M triangles took 163 ms per cube map, one
+  // group 94 ms, built as fast); small ones let batches skip hidden groups.
+  std::size_t group_triangles = 0;
   RTCBuildQuality build_quality = RTC_BUILD_QUALITY_MEDIUM;
   // Quality of the BVHs a cube map traced in batches acquires. Batches exist
   // because the model does not fit the cap, so their groups are dropped and
@@ -94,6 +102,18 @@ constexpr std::size_t kEstimatedLowQualityBvhBytesPerTriangle = 140;
 // kEstimatedBvhBytesPerTriangle, or the low-quality figure for RTC_BUILD_QUALITY_LOW.
 constexpr std::size_t estimated_bvh_bytes_per_triangle(RTCBuildQuality quality) {
   return quality == RTC_BUILD_QUALITY_LOW ? kEstimatedLowQualityBvhBytesPerTriangle : kEstimatedBvhBytesPerTriangle;
+}
+
+// The group size ChunkBvhCacheParams::group_triangles = 0 stands for, for a
+// model of `model_triangles` under a cap of `cache_bytes`: the whole model
+// when its BVH fits one batch (half the cap at kEstimatedBvhBytesPerTriangle:
+// up to 19 M triangles for the default 4 GiB), so every cube map traces one
+// instance; else 1 M triangles, so batches of nearest groups can skip groups
+// hidden behind earlier hits (docs/benchmarks.md, "82 M triangles").
+constexpr std::size_t default_group_triangles(std::uint64_t model_triangles, std::size_t cache_bytes) {
+  constexpr std::size_t kBatchedGroupTriangles = std::size_t{1} << 20;
+  const bool one_batch = model_triangles * kEstimatedBvhBytesPerTriangle <= cache_bytes / 2;
+  return one_batch ? std::max<std::size_t>(1, std::size_t(model_triangles)) : kBatchedGroupTriangles;
 }
 
 // Some chunks of a cube map, by the group whose BVH holds them.
