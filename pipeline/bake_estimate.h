@@ -1,11 +1,19 @@
 // Rough bake cost before baking (`cellbake info`, `bake --dry-run`): seconds
-// and bytes per cell from one measured bake, scaled by face size and threads.
+// and bytes per cell from one measured bake, scaled by face size, threads and
+// the model's triangle count.
 // Measured: the demo (2 M-triangle plant, 63 cells of 4 m, 512² faces, default
 // samples, 2 threads on a 2-core x86 VM): 197 s wall → 6.3 core-seconds per
-// cell (fresh-clone scripts/demo.sh, December 2026; 318 s and 10.1 before
-// the sample-choice speed-ups); ~150 KB stored per cell since far geometry
-// is stored as triangle numbers (docs/benchmarks.md). A model's cost per cell depends on what a cell
-// sees, so treat the figures as a factor-of-two guide.
+// cell (fresh-clone scripts/demo.sh, December 2026); ~150 KB stored per cell.
+// Other models cost less or more per cell, roughly with a power of their
+// triangle count T (16 cells each of info's suggested bake, one thread, user +
+// system CPU relative to the demo's cells at the same time; docs/benchmarks.md
+// "The bake estimate"): duck.dae 4 k triangles 0.26, the IFC house 36 k 0.29,
+// a generated house 100 k 0.52, plant 100 k 0.67, plant 500 k 0.75, the
+// 12.7 M plant 2.6 (its BVH build included); bytes per cell 0.06, 0.05, 0.08,
+// 0.15, 0.37 and 5.3. Hence time × (T / 2 M)^0.25 below 2 M and ^0.5 above,
+// bytes × (T / 2 M)^0.5 below (at least 0.05) and ^0.9 above. Open scenes with
+// much sky cost less (a generated city of 300 k: 0.23 where 0.62 is
+// estimated). A guide within about a factor of two, not a promise.
 #pragma once
 
 #include <cstdint>
@@ -13,8 +21,9 @@
 
 namespace cellbake {
 
-inline constexpr double kMeasuredCoreSecondsPerCell = 6.3;   // at 512² faces
-inline constexpr double kMeasuredBytesPerCell = 150e3;       // at 512² faces
+inline constexpr double kMeasuredCoreSecondsPerCell = 6.3;   // the demo, at 512² faces
+inline constexpr double kMeasuredBytesPerCell = 150e3;       // the demo, at 512² faces
+inline constexpr double kMeasuredModelTriangles = 2e6;       // the demo plant's
 
 struct BakeEstimate {
   double core_seconds_per_cell = 0;
@@ -23,9 +32,10 @@ struct BakeEstimate {
   double bytes = 0;
 };
 
-// Cost scales with the face's pixel count (face_size / 512)²; the wall time
-// divides the core-seconds by `threads` (≥ 1).
-BakeEstimate estimate_bake(std::uint64_t cells, int face_size, int threads);
+// Cost scales with the face's pixel count (face_size / 512)² and with the
+// model's size as above (`model_triangles` 0: taken as the demo's); the wall
+// time divides the core-seconds by `threads` (≥ 1).
+BakeEstimate estimate_bake(std::uint64_t cells, int face_size, int threads, std::uint64_t model_triangles);
 
 // "45 s", "12 min", "3.1 h".
 std::string duration_text(double seconds);

@@ -42,7 +42,7 @@ void print_dry_run(const BakeConfig& given, const BakeOptions& options, bool jso
   const BakePlan plan = plan_bake(given, options, store);
   const BakeConfig& c = plan.config;
   const int threads = options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
-  const BakeEstimate e = estimate_bake(plan.cells.size(), c.face_size, threads);
+  const BakeEstimate e = estimate_bake(plan.cells.size(), c.face_size, threads, plan.model_triangles);
   const bool no_far_field = plan.model_triangles <= c.near_budget;
   if (json) {
     nlohmann::json j{{"dry_run", true},
@@ -81,7 +81,7 @@ void print_dry_run(const BakeConfig& given, const BakeOptions& options, bool jso
   std::printf("\nnear budget: %llu triangles per cell%s\n", (unsigned long long)c.near_budget,
               no_far_field ? " (the whole model fits: no far field; lower it with --near-budget)" : "");
   std::printf("estimate: ~%s on %d threads (%.1f core-seconds per cell at %d² faces), ~%.0f KB per cell, ~%.1f MB "
-              "in all (measured on the demo plant; a guide, not a promise)\n",
+              "in all (the demo plant's figures scaled to this model's size; a guide, not a promise)\n",
               duration_text(e.seconds).c_str(), threads, e.core_seconds_per_cell, c.face_size, e.bytes_per_cell / 1e3,
               e.bytes / 1e6);
 }

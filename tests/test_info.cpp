@@ -16,6 +16,7 @@
 #include <sstream>
 #include <string>
 
+#include "pipeline/bake_estimate.h"
 #include "stages/floor_finder.h"
 #include "tests/fixture_house_model.h"
 #include "tests/fixture_memory_chunk_source.h"
@@ -394,6 +395,36 @@ TEST(FloorFinder, FindsFloorsWithHeadroomAsHistogramPeaks) {
 
   p.up_axis = 1;  // seen as Y-up the quads are walls: no floors
   EXPECT_TRUE(find_floors(source, p).floors.empty());
+}
+
+TEST(BakeEstimate, ScalesTheDemosFiguresByFaceSizeAndModelSize) {
+  // The demo itself (and an unknown size) gets the measured figures.
+  for (std::uint64_t triangles : {std::uint64_t{2'000'000}, std::uint64_t{0}}) {
+    const BakeEstimate demo = estimate_bake(63, 512, 2, triangles);
+    EXPECT_DOUBLE_EQ(demo.core_seconds_per_cell, kMeasuredCoreSecondsPerCell);
+    EXPECT_DOUBLE_EQ(demo.seconds, kMeasuredCoreSecondsPerCell * 63 / 2);
+    EXPECT_DOUBLE_EQ(demo.bytes_per_cell, kMeasuredBytesPerCell);
+    EXPECT_DOUBLE_EQ(demo.bytes, kMeasuredBytesPerCell * 63);
+  }
+  // duck.dae (4212 triangles): 0.26 of the demo's time measured, 0.21 estimated;
+  // bytes at the 0.05 floor.
+  const BakeEstimate duck = estimate_bake(63, 512, 2, 4212);
+  EXPECT_NEAR(duck.core_seconds_per_cell / kMeasuredCoreSecondsPerCell, 0.214, 0.001);
+  EXPECT_DOUBLE_EQ(duck.bytes_per_cell, 0.05 * kMeasuredBytesPerCell);
+  // The 12.7 M plant: 2.6 measured, 2.52 estimated; bytes 5.3 measured, 5.3 estimated.
+  const BakeEstimate big = estimate_bake(63, 512, 2, 12'700'000);
+  EXPECT_NEAR(big.core_seconds_per_cell / kMeasuredCoreSecondsPerCell, 2.52, 0.01);
+  EXPECT_NEAR(big.bytes_per_cell / kMeasuredBytesPerCell, 5.28, 0.01);
+  // Larger models never cost less; smaller faces cost their pixel share.
+  double previous = 0;
+  for (std::uint64_t t = 1000; t < 1'000'000'000; t *= 3) {
+    const double per_cell = estimate_bake(1, 512, 1, t).core_seconds_per_cell;
+    EXPECT_GT(per_cell, previous) << t;
+    previous = per_cell;
+  }
+  EXPECT_DOUBLE_EQ(estimate_bake(10, 256, 1, 500'000).core_seconds_per_cell,
+                   estimate_bake(10, 512, 1, 500'000).core_seconds_per_cell / 4);
+  EXPECT_DOUBLE_EQ(estimate_bake(10, 512, 4, 500'000).seconds, estimate_bake(10, 512, 1, 500'000).seconds / 4);
 }
 
 }  // namespace

@@ -24,6 +24,10 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 constexpr unsigned kStream = 1024;  // rays per rtcIntersect1M call
+// How many hits ahead shading asks for a triangle's indices, and for its
+// corners' attributes (prefetch_triangle_indices, prefetch_corner_attributes).
+constexpr unsigned kPrefetchIndicesAhead = 16;
+constexpr unsigned kPrefetchAttributesAhead = 8;
 
 void init_ray(RTCRayHit& r, const Vec3d& dir, float tnear, float tfar, unsigned id) {
   r.ray.org_x = r.ray.org_y = r.ray.org_z = 0;
@@ -253,7 +257,23 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
           stats_.second_rays += missed;
           for (unsigned m = 0; m < missed; ++m) rays[again[m].ray.id] = again[m];
         }
+        // Hits ahead: their triangles' indices, then (nearer) their corners'
+        // attributes, so shading does not wait on each dependent load in turn.
+        const auto hit_chunk = [&](const RTCRayHit& r) -> const Chunk* {
+          if (r.hit.geomID == RTC_INVALID_GEOMETRY_ID) return nullptr;
+          return scene.instance(r.hit.instID[0]).chunks[r.hit.geomID].get();
+        };
+        for (unsigned k = 0; k < std::min(count, kPrefetchIndicesAhead); ++k)
+          if (const Chunk* c = hit_chunk(rays[k])) prefetch_triangle_indices(*c, rays[k].hit.primID);
+        for (unsigned k = 0; k < std::min(count, kPrefetchAttributesAhead); ++k)
+          if (const Chunk* c = hit_chunk(rays[k])) prefetch_corner_attributes(*c, rays[k].hit.primID);
         for (unsigned k = 0; k < count; ++k) {
+          if (k + kPrefetchIndicesAhead < count)
+            if (const Chunk* c = hit_chunk(rays[k + kPrefetchIndicesAhead]))
+              prefetch_triangle_indices(*c, rays[k + kPrefetchIndicesAhead].hit.primID);
+          if (k + kPrefetchAttributesAhead < count)
+            if (const Chunk* c = hit_chunk(rays[k + kPrefetchAttributesAhead]))
+              prefetch_corner_attributes(*c, rays[k + kPrefetchAttributesAhead].hit.primID);
           const RTCRayHit& r = rays[k];
           if (r.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
           const std::uint32_t p = order_[start + k];

@@ -30,6 +30,14 @@ struct SurfaceHit {
   Vec3f geometric_normal;  // any length and orientation (Embree's Ng)
 };
 
+// Cache hints for shading hits in a stream (no effect on any result): the
+// vertex indices of `triangle`, and the colours, normals and uvs of its
+// corners that HitShader::shade and the texturer read. A shading loop asks for
+// the indices some hits ahead and the attributes fewer hits ahead, so the
+// dependent loads (index, then attribute) overlap with shading earlier hits.
+void prefetch_triangle_indices(const Chunk& chunk, std::uint32_t triangle);
+void prefetch_corner_attributes(const Chunk& chunk, std::uint32_t triangle);
+
 class HitShader {
  public:
   // Throws std::invalid_argument for non-unit directions or negative or
