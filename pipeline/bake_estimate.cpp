@@ -20,7 +20,8 @@ double model_size_factor(std::uint64_t model_triangles, double below, double abo
 BakeEstimate estimate_bake(std::uint64_t cells, int face_size, int threads, std::uint64_t model_triangles) {
   const double pixels = (double(face_size) / 512.0) * (double(face_size) / 512.0);
   BakeEstimate e;
-  e.core_seconds_per_cell = kMeasuredCoreSecondsPerCell * pixels * model_size_factor(model_triangles, 0.25, 0.5);
+  e.core_seconds_per_cell =
+      kMeasuredCoreSecondsPerCell * pixels * model_size_factor(model_triangles, 0.25, 0.5);
   e.seconds = e.core_seconds_per_cell * double(cells) / double(std::max(1, threads));
   e.bytes_per_cell =
       kMeasuredBytesPerCell * pixels * std::max(0.05, model_size_factor(model_triangles, 0.5, 0.9));

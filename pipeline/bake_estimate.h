@@ -21,9 +21,9 @@
 
 namespace cellbake {
 
-inline constexpr double kMeasuredCoreSecondsPerCell = 6.3;   // the demo, at 512² faces
-inline constexpr double kMeasuredBytesPerCell = 150e3;       // the demo, at 512² faces
-inline constexpr double kMeasuredModelTriangles = 2e6;       // the demo plant's
+inline constexpr double kMeasuredCoreSecondsPerCell = 6.3;  // the demo, at 512² faces
+inline constexpr double kMeasuredBytesPerCell = 150e3;      // the demo, at 512² faces
+inline constexpr double kMeasuredModelTriangles = 2e6;      // the demo plant's
 
 struct BakeEstimate {
   double core_seconds_per_cell = 0;

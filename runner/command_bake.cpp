@@ -80,10 +80,11 @@ void print_dry_run(const BakeConfig& given, const BakeOptions& options, bool jso
     std::printf(", ids %lld..%lld", (long long)plan.cells.front().id, (long long)plan.cells.back().id);
   std::printf("\nnear budget: %llu triangles per cell%s\n", (unsigned long long)c.near_budget,
               no_far_field ? " (the whole model fits: no far field; lower it with --near-budget)" : "");
-  std::printf("estimate: ~%s on %d threads (%.1f core-seconds per cell at %d² faces), ~%.0f KB per cell, ~%.1f MB "
-              "in all (the demo plant's figures scaled to this model's size; a guide, not a promise)\n",
-              duration_text(e.seconds).c_str(), threads, e.core_seconds_per_cell, c.face_size, e.bytes_per_cell / 1e3,
-              e.bytes / 1e6);
+  std::printf(
+      "estimate: ~%s on %d threads (%.1f core-seconds per cell at %d² faces), ~%.0f KB per cell, ~%.1f MB "
+      "in all (the demo plant's figures scaled to this model's size; a guide, not a promise)\n",
+      duration_text(e.seconds).c_str(), threads, e.core_seconds_per_cell, c.face_size, e.bytes_per_cell / 1e3,
+      e.bytes / 1e6);
 }
 
 }  // namespace

@@ -424,7 +424,8 @@ TEST(BakeEstimate, ScalesTheDemosFiguresByFaceSizeAndModelSize) {
   }
   EXPECT_DOUBLE_EQ(estimate_bake(10, 256, 1, 500'000).core_seconds_per_cell,
                    estimate_bake(10, 512, 1, 500'000).core_seconds_per_cell / 4);
-  EXPECT_DOUBLE_EQ(estimate_bake(10, 512, 4, 500'000).seconds, estimate_bake(10, 512, 1, 500'000).seconds / 4);
+  EXPECT_DOUBLE_EQ(estimate_bake(10, 512, 4, 500'000).seconds,
+                   estimate_bake(10, 512, 1, 500'000).seconds / 4);
 }
 
 }  // namespace
