@@ -26,8 +26,8 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 constexpr unsigned kStream = 1024;  // rays per rtcIntersect1M call
 // How many hits ahead shading asks for a triangle's indices, and for its
 // corners' attributes (prefetch_triangle_indices, prefetch_corner_attributes).
-constexpr unsigned kPrefetchIndicesAhead = 16;
-constexpr unsigned kPrefetchAttributesAhead = 8;
+constexpr unsigned kPrefetchIndicesAhead = 32;
+constexpr unsigned kPrefetchAttributesAhead = 16;
 
 void init_ray(RTCRayHit& r, const Vec3d& dir, float tnear, float tfar, unsigned id) {
   r.ray.org_x = r.ray.org_y = r.ray.org_z = 0;
