@@ -7,9 +7,9 @@
 // becomes one Embree scene with one triangle geometry per chunk (float
 // positions relative to the group's double origin), built the first time some
 // cube map needs one of its chunks and kept under a byte cap with
-// least-recently-used eviction. Cube maps instance these
-// scenes with eye-relative translations (stages/raycast/instance_scene.h), so
-// float precision is that of positions relative to the group's centre,
+// least-recently-used eviction. Cube maps instance these scenes with
+// eye-relative translations (stages/raycast/instance_scene.h), so float
+// precision is that of positions relative to the group's centre,
 // wherever the model lies (a 10 km group: 0.3 mm). Groups rather than single
 // chunks, because every instance a ray enters costs a transform and a second
 // BVH descent, and chunk bounds overlap: on the 2 M plant (512 chunks, 512^2
@@ -70,9 +70,7 @@ struct ChunkBvhCacheParams {
   // Triangles per chunk group at most (a single larger chunk is a group of
   // its own); 1 makes every chunk its own group. 0 (the default):
   // default_group_triangles(), one group when the whole model fits one batch,
-  // else groups of <= 1 M triangles. Fewer, larger groups trace faster (on the
-  // 12.7 M plant 16 groups of <= 1 M triangles took 163 ms per cube map, one
-  // group 94 ms, built as fast); small ones let batches skip hidden groups.
+  // else groups of <= 1 M triangles.
   std::size_t group_triangles = 0;
   RTCBuildQuality build_quality = RTC_BUILD_QUALITY_MEDIUM;
   // Quality of the BVHs a cube map traced in batches acquires. Batches exist

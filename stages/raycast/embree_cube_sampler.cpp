@@ -48,11 +48,16 @@ void init_ray(RTCRayHit& r, const Vec3d& dir, float tnear, float tfar, unsigned 
 // Alpha-tested layers a ray passes through before it gives up (background).
 constexpr int kMaxAlphaLayers = 64;
 
+// The chunk a ray hit in `scene` (null: a miss).
+const Chunk* hit_chunk(const InstanceScene& scene, const RTCRayHit& r) {
+  if (r.hit.geomID == RTC_INVALID_GEOMETRY_ID) return nullptr;
+  return scene.instance(r.hit.instID[0]).chunks[r.hit.geomID].get();
+}
+
 // The chunk triangle and barycentrics of a ray's hit in `scene`.
 SurfaceHit surface_hit(const InstanceScene& scene, const RTCRayHit& r) {
-  const ChunkGroupBvh& group = scene.instance(r.hit.instID[0]);
   SurfaceHit hit;
-  hit.chunk = group.chunks[r.hit.geomID].get();
+  hit.chunk = hit_chunk(scene, r);
   hit.triangle = r.hit.primID;
   hit.u = r.hit.u;
   hit.v = r.hit.v;
@@ -259,20 +264,12 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
         }
         // Hits ahead: their triangles' indices, then (nearer) their corners'
         // attributes, so shading does not wait on each dependent load in turn.
-        const auto hit_chunk = [&](const RTCRayHit& r) -> const Chunk* {
-          if (r.hit.geomID == RTC_INVALID_GEOMETRY_ID) return nullptr;
-          return scene.instance(r.hit.instID[0]).chunks[r.hit.geomID].get();
-        };
-        for (unsigned k = 0; k < std::min(count, kPrefetchIndicesAhead); ++k)
-          if (const Chunk* c = hit_chunk(rays[k])) prefetch_triangle_indices(*c, rays[k].hit.primID);
-        for (unsigned k = 0; k < std::min(count, kPrefetchAttributesAhead); ++k)
-          if (const Chunk* c = hit_chunk(rays[k])) prefetch_corner_attributes(*c, rays[k].hit.primID);
         for (unsigned k = 0; k < count; ++k) {
           if (k + kPrefetchIndicesAhead < count)
-            if (const Chunk* c = hit_chunk(rays[k + kPrefetchIndicesAhead]))
+            if (const Chunk* c = hit_chunk(scene, rays[k + kPrefetchIndicesAhead]))
               prefetch_triangle_indices(*c, rays[k + kPrefetchIndicesAhead].hit.primID);
           if (k + kPrefetchAttributesAhead < count)
-            if (const Chunk* c = hit_chunk(rays[k + kPrefetchAttributesAhead]))
+            if (const Chunk* c = hit_chunk(scene, rays[k + kPrefetchAttributesAhead]))
               prefetch_corner_attributes(*c, rays[k + kPrefetchAttributesAhead].hit.primID);
           const RTCRayHit& r = rays[k];
           if (r.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
