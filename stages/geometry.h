@@ -58,6 +58,11 @@ struct Box3d {
     return b.lo.x >= lo.x && b.lo.y >= lo.y && b.lo.z >= lo.z && b.hi.x <= hi.x && b.hi.y <= hi.y &&
            b.hi.z <= hi.z;
   }
+  // b lies in this box's open interior (false when either is empty).
+  bool strictly_contains(const Box3d& b) const {
+    return !empty() && !b.empty() && b.lo.x > lo.x && b.lo.y > lo.y && b.lo.z > lo.z && b.hi.x < hi.x &&
+           b.hi.y < hi.y && b.hi.z < hi.z;
+  }
   bool overlaps(const Box3d& b) const {
     return !(b.hi.x < lo.x || b.lo.x > hi.x || b.hi.y < lo.y || b.lo.y > hi.y || b.hi.z < lo.z || b.lo.z > hi.z);
   }

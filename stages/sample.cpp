@@ -25,13 +25,6 @@ double max_dot(const Vec3d& n, const Vec3d& lo, const Vec3d& hi) {
   return s;
 }
 
-bool strictly_inside(const Box3d& inner, const Box3d& outer) {
-  if (outer.empty()) return false;
-  for (int k = 0; k < 3; ++k)
-    if (!(inner.lo[k] > outer.lo[k] && inner.hi[k] < outer.hi[k])) return false;
-  return true;
-}
-
 }  // namespace
 
 void validate_sample_inputs(const Vec3d& eye, const SampleParams& p) {
@@ -72,7 +65,7 @@ std::vector<ChunkRef> chunks_in_face(int face, const Vec3d& eye, const Box3d& cu
   const std::array<Vec3d, 4> sides = {b.forward - b.right, b.forward + b.right, b.forward - b.up, b.forward + b.up};
   std::vector<ChunkRef> result;
   for (const ChunkRef& ref : source.query(frustum_box)) {
-    if (ref.bounds.empty() || strictly_inside(ref.bounds, cull_box)) continue;
+    if (ref.bounds.empty() || cull_box.strictly_contains(ref.bounds)) continue;
     const Vec3d lo = ref.bounds.lo - eye, hi = ref.bounds.hi - eye;
     if (max_dot(b.forward, lo, hi) < near_plane) continue;
     bool outside = false;

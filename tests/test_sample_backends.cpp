@@ -188,26 +188,40 @@ TEST(RaySegments, BoxBehindTheNearPlaneIsIgnored) {
   EXPECT_FLOAT_EQ(s.t0, 0.01f);
 }
 
-// The sampler's per-ray reciprocals come from per-column and per-row ones:
-// the same bits as dividing, so the same segments, on every face.
-TEST(RaySegments, FaceRayInversesAreTheDirectionsReciprocals) {
-  const EyeBox box = eye_relative_box(Box3d{{-0.7, -1.3, -0.4}, {2.1, 0.9, 1.6}}, {0.1, -0.2, 0.3});
-  for (int size : {7, 64, 513}) {
-    for (int face = 0; face < kCubeFaces; ++face) {
-      const FaceBasis b = cube_face_basis(face);
-      for (int col = 0; col < size; col += std::max(1, size / 37))
-        for (int row = 0; row < size; row += std::max(1, size / 41)) {
-          const double s = 2.0 * (col + 0.5) / size - 1.0, c = 2.0 * (row + 0.5) / size - 1.0;
-          const Vec3d dir = cube_face_direction(b, s, -c);
-          const Vec3d inverse = face_ray_inverse(b, 1.0 / s, -(1.0 / c));
-          for (int k = 0; k < 3; ++k)  // a zero component (odd sizes' middle pixel) is not read
-            if (dir[k] != 0) ASSERT_EQ(inverse[k], 1.0 / dir[k]) << face << " " << col << " " << row;
-          const RaySegments a = ray_segments(dir, inverse, box, 0.01), d = ray_segments(dir, box, 0.01);
-          ASSERT_EQ(a.t0, d.t0);
-          ASSERT_EQ(a.t1, d.t1);
-          ASSERT_EQ(a.two, d.two);
-          ASSERT_EQ(a.t2, d.t2);
-        }
+// The sampler's segments come from per-face, per-column and per-row slabs:
+// the same bits as the slab test per ray, on every face, for boxes around,
+// beside and behind the eye, flat ones and none.
+TEST(RaySegments, FaceSlabsGiveEachRaysOwnSegments) {
+  const std::vector<std::pair<Box3d, Vec3d>> boxes = {
+      {Box3d{{-0.7, -1.3, -0.4}, {2.1, 0.9, 1.6}}, {0.1, -0.2, 0.3}},  // eye inside
+      {Box3d{{2, -1, -1}, {4, 1, 1}}, {0, 0, 0}},                      // ahead on +x
+      {Box3d{{-3, -0.5, 0.2}, {-0.2, 0.5, 3}}, {0, 0, 0}},             // beside, off-axis
+      {Box3d{{-1, -1, 0}, {1, 1, 0}}, {0, 0, 0}},                      // flat: none
+      {Box3d{}, {0, 0, 0}}};                                           // empty: none
+  for (const auto& [world, eye] : boxes) {
+    const EyeBox box = eye_relative_box(world, eye);
+    for (int size : {7, 64, 513}) {
+      std::vector<double> coordinate(static_cast<std::size_t>(size)), inverse(coordinate.size());
+      for (int i = 0; i < size; ++i) {
+        coordinate[std::size_t(i)] = 2.0 * (i + 0.5) / size - 1.0;  // 0 in the middle of odd sizes
+        inverse[std::size_t(i)] = 1.0 / coordinate[std::size_t(i)];
+      }
+      FaceSlabs slabs;
+      for (int face = 0; face < kCubeFaces; ++face) {
+        const FaceBasis b = cube_face_basis(face);
+        slabs.set(b, box, coordinate, inverse);
+        for (int col = 0; col < size; col += std::max(1, size / 37))
+          for (int row = 0; row < size; row += std::max(1, size / 41)) {
+            const Vec3d dir =
+                cube_face_direction(b, coordinate[std::size_t(col)], -coordinate[std::size_t(row)]);
+            const RaySegments a = slabs.segments(std::size_t(col), std::size_t(row), 0.01);
+            const RaySegments d = ray_segments(dir, box, 0.01);
+            ASSERT_EQ(a.t0, d.t0) << face << " " << col << " " << row;
+            ASSERT_EQ(a.t1, d.t1);
+            ASSERT_EQ(a.two, d.two);
+            ASSERT_EQ(a.t2, d.t2);
+          }
+      }
     }
   }
 }

@@ -149,6 +149,17 @@ std::size_t ChunkBvhCache::group_of(std::int64_t chunk_id) const {
   return it->second;
 }
 
+ChunkGroupRefs ChunkBvhCache::described_group(std::size_t group) const {
+  ChunkGroupRefs g;
+  g.group = group;
+  g.bounds = group_bounds_[group];
+  g.estimated_bytes =
+      std::size_t(group_triangles_[group]) * estimated_bvh_bytes_per_triangle(params_.build_quality);
+  g.estimated_batch_bytes =
+      std::size_t(group_triangles_[group]) * estimated_bvh_bytes_per_triangle(params_.batch_build_quality);
+  return g;
+}
+
 std::vector<ChunkGroupRefs> ChunkBvhCache::groups_of(std::span<const ChunkRef> refs, const ChunkSource& source) {
   partition(source);
   std::vector<std::pair<std::size_t, std::size_t>> by_group;  // (group, index into refs)
@@ -157,17 +168,16 @@ std::vector<ChunkGroupRefs> ChunkBvhCache::groups_of(std::span<const ChunkRef> r
   std::sort(by_group.begin(), by_group.end());
   std::vector<ChunkGroupRefs> out;
   for (const auto& [group, index] : by_group) {
-    if (out.empty() || out.back().group != group) {
-      ChunkGroupRefs g;
-      g.group = group;
-      g.bounds = group_bounds_[group];
-      g.estimated_bytes = std::size_t(group_triangles_[group]) * estimated_bvh_bytes_per_triangle(params_.build_quality);
-      g.estimated_batch_bytes =
-          std::size_t(group_triangles_[group]) * estimated_bvh_bytes_per_triangle(params_.batch_build_quality);
-      out.push_back(std::move(g));
-    }
+    if (out.empty() || out.back().group != group) out.push_back(described_group(group));
     out.back().refs.push_back(refs[index]);
   }
+  return out;
+}
+
+std::vector<ChunkGroupRefs> ChunkBvhCache::all_groups(const ChunkSource& source) {
+  partition(source);
+  std::vector<ChunkGroupRefs> out;
+  for (std::size_t group = 0; group < members_.size(); ++group) out.push_back(described_group(group));
   return out;
 }
 
@@ -242,13 +252,23 @@ std::shared_ptr<const ChunkGroupBvh> ChunkBvhCache::build(std::size_t group, RTC
 }
 
 std::vector<std::shared_ptr<const ChunkGroupBvh>> ChunkBvhCache::acquire(std::span<const ChunkRef> refs,
-                                                                         const ChunkSource& source, bool batched) {
-  const RTCBuildQuality quality = batched ? params_.batch_build_quality : params_.build_quality;
+                                                                         const ChunkSource& source,
+                                                                         bool batched) {
   partition(source);
-  trim();
   std::vector<std::size_t> groups;
   groups.reserve(refs.size());
   for (const ChunkRef& r : refs) groups.push_back(group_of(r.id));
+  return acquire_groups(std::move(groups), source, batched);
+}
+
+std::vector<std::shared_ptr<const ChunkGroupBvh>> ChunkBvhCache::acquire_groups(
+    std::vector<std::size_t> groups, const ChunkSource& source, bool batched) {
+  const RTCBuildQuality quality = batched ? params_.batch_build_quality : params_.build_quality;
+  partition(source);
+  trim();
+  for (std::size_t group : groups)
+    if (group >= members_.size())
+      throw std::invalid_argument("embree: chunk group " + std::to_string(group) + " out of range");
   std::sort(groups.begin(), groups.end());
   groups.erase(std::unique(groups.begin(), groups.end()), groups.end());
   std::vector<Result> results(groups.size());

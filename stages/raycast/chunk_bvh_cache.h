@@ -161,6 +161,11 @@ class ChunkBvhCache {
   // in batches (built at batch_build_quality, cached apart).
   std::vector<std::shared_ptr<const ChunkGroupBvh>> acquire(std::span<const ChunkRef> refs,
                                                             const ChunkSource& source, bool batched = false);
+  // The same for groups given by number (ChunkGroupRefs::group); throws
+  // std::invalid_argument for a number out of range.
+  std::vector<std::shared_ptr<const ChunkGroupBvh>> acquire_groups(std::vector<std::size_t> groups,
+                                                                   const ChunkSource& source,
+                                                                   bool batched = false);
 
   // The groups holding the chunks `refs`, in ascending group order, each
   // with the world bounds and estimated bytes of its whole BVH
@@ -168,6 +173,10 @@ class ChunkBvhCache {
   // triangles) and the refs among `refs` it holds. Partitions the model like acquire(); throws
   // std::runtime_error for a chunk not in the model.
   std::vector<ChunkGroupRefs> groups_of(std::span<const ChunkRef> refs, const ChunkSource& source);
+  // Every group of the model (partitioning it like acquire()), as groups_of()
+  // describes them but with no refs: a sampler whose model is one group
+  // traces it without asking the source which chunks a cube map sees.
+  std::vector<ChunkGroupRefs> all_groups(const ChunkSource& source);
   // What one cube map may hold at once: half the cap, so two threads' cube
   // maps fit in it. A cube map whose groups exceed it acquires them in batches.
   std::size_t batch_bytes() const { return params_.cache_bytes / 2; }
@@ -193,6 +202,7 @@ class ChunkBvhCache {
 
   void partition(const ChunkSource& source);  // fills group_of_, members_, group_triangles_ and group_bounds_ once
   std::size_t group_of(std::int64_t chunk_id) const;  // throws for a chunk not in the model
+  ChunkGroupRefs described_group(std::size_t group) const;  // bounds and estimates, no refs
   // A cached BVH: its group and whether it was built for batches.
   static std::size_t slot_key(std::size_t group, bool batched) { return group * 2 + (batched ? 1 : 0); }
   std::shared_ptr<const ChunkGroupBvh> build(std::size_t group, RTCBuildQuality quality, const ChunkSource& source,

@@ -74,6 +74,76 @@ struct FaceHits {
   std::vector<std::uint32_t> triangle;
 };
 
+// Reused buffers of seen_chunks().
+struct SeenScratch {
+  struct Range {
+    std::uint32_t lo, hi;    // of the chunk's triangles hit
+    std::size_t offset = 0;  // of its masks in `masks`
+  };
+  std::unordered_map<std::int64_t, Range> ranges;
+  std::vector<std::pair<std::int64_t, Range*>> by_id;
+  std::vector<std::uint16_t> masks;  // per triangle in each range: tiles it was hit in
+};
+
+// What a face saw, sorted by chunk id: per chunk, the triangles of the
+// nearest hits (ascending) with the tiles they were hit in. Only the span of
+// triangle indices a chunk was hit in is cleared and scanned (a chunk a face
+// sees only in part), and coherent rays hit the same chunk in runs, so the
+// chunk lookups are few.
+std::vector<SeenChunk> seen_chunks(const FaceHits& hits, const std::vector<std::uint32_t>& tile_of,
+                                   SeenScratch& scratch) {
+  scratch.ranges.clear();
+  const std::size_t pixels = hits.chunk.size();
+  std::int64_t last = -1;
+  SeenScratch::Range* range = nullptr;
+  for (std::size_t p = 0; p < pixels; ++p) {
+    const std::int64_t id = hits.chunk[p];
+    if (id < 0) continue;
+    const std::uint32_t t = hits.triangle[p];
+    if (id != last) {
+      range = &scratch.ranges.try_emplace(id, SeenScratch::Range{t, t}).first->second;
+      last = id;
+    }
+    range->lo = std::min(range->lo, t);
+    range->hi = std::max(range->hi, t);
+  }
+  scratch.by_id.clear();
+  for (auto& [id, r] : scratch.ranges) scratch.by_id.emplace_back(id, &r);
+  std::sort(scratch.by_id.begin(), scratch.by_id.end());
+  std::size_t total = 0;
+  for (auto& [id, r] : scratch.by_id) {
+    r->offset = total;
+    total += std::size_t(r->hi - r->lo) + 1;
+  }
+  scratch.masks.assign(total, 0);
+  last = -1;
+  for (std::size_t p = 0; p < pixels; ++p) {
+    const std::int64_t id = hits.chunk[p];
+    if (id < 0) continue;
+    if (id != last) {
+      range = &scratch.ranges.find(id)->second;
+      last = id;
+    }
+    scratch.masks[range->offset + (hits.triangle[p] - range->lo)] |= std::uint16_t(1u << tile_of[p]);
+  }
+  std::vector<SeenChunk> seen(scratch.by_id.size());
+  for (std::size_t c = 0; c < seen.size(); ++c) {
+    const auto& [id, r] = scratch.by_id[c];
+    SeenChunk& out = seen[c];
+    out.id = id;
+    const std::uint16_t* masks = scratch.masks.data() + r->offset;
+    for (std::uint32_t t = r->lo;; ++t) {
+      if (const std::uint16_t m = masks[t - r->lo]) {
+        out.triangles.push_back(t);
+        out.triangle_tiles.push_back(m);
+        out.tiles |= m;
+      }
+      if (t == r->hi) break;
+    }
+  }
+  return seen;
+}
+
 // True when no ray of the size x size faces can hit anything inside `box`
 // (world) nearer than what it already hit. Per face, in the face's frame
 // (right r, up u, forward f; the box's extents there bound it): a ray of the
@@ -140,8 +210,14 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
   validate_sample_inputs(eye, params);
   const HitTexturer texturer(source, *textures_);
   auto t0 = Clock::now();
-  const std::vector<ChunkRef> refs = cube_chunks(eye, cull_box, params.near_plane, source);
-  std::vector<ChunkGroupRefs> groups = cache_->groups_of(refs, source);
+  // A model that is one group is traced whole: a cube map sees it unless it
+  // lies inside the cull box, and the same BVH answers whichever of its
+  // chunks the faces see, so the source's chunk query (~5 % of a cube map on
+  // the 12.7 M plant) is skipped.
+  std::vector<ChunkGroupRefs> groups = cache_->all_groups(source);
+  if (groups.size() == 1 && cull_box.strictly_contains(groups.front().bounds)) groups.clear();
+  if (groups.size() > 1)
+    groups = cache_->groups_of(cube_chunks(eye, cull_box, params.near_plane, source), source);
   std::size_t estimated_bytes = 0;
   for (const ChunkGroupRefs& g : groups) estimated_bytes += g.estimated_bytes;
   const bool one_batch = estimated_bytes <= cache_->batch_bytes();
@@ -168,9 +244,12 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
     coordinate_.resize(std::size_t(size));
     inverse_coordinate_.resize(std::size_t(size));
     for (int i = 0; i < size; ++i) {
-      coordinate_[std::size_t(i)] = 2.0 * (i + 0.5) / size - 1.0;  // 0 (odd sizes): ray_segments skips it
+      coordinate_[std::size_t(i)] = 2.0 * (i + 0.5) / size - 1.0;  // 0 (odd sizes): slab_interval handles it
       inverse_coordinate_[std::size_t(i)] = 1.0 / coordinate_[std::size_t(i)];
     }
+    tile_of_.resize(std::size_t(size) * std::size_t(size));
+    for (std::size_t p = 0; p < tile_of_.size(); ++p)
+      tile_of_[p] = std::uint32_t(pixel_tile(int(p % std::size_t(size)), int(p / std::size_t(size)), size));
     order_size_ = size;
   }
   const EyeBox box = eye_relative_box(cull_box, eye);
@@ -182,8 +261,6 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
     f.chunk.assign(pixels, -1);
     f.triangle.assign(pixels, 0);
   }
-  std::unordered_map<std::int64_t, std::size_t> triangles_of;  // chunks hit: triangle counts
-  std::int64_t last_counted = -1;                               // the chunk last added to it
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -193,7 +270,7 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
     // The next batch: every group when all fit (as one scene); else groups in
     // order up to the batch bytes, skipping those hidden behind earlier hits.
     t0 = Clock::now();
-    std::vector<ChunkRef> batch;
+    std::vector<std::size_t> batch;  // groups
     std::size_t bytes = 0;
     for (; next < groups.size(); ++next) {
       const ChunkGroupRefs& g = groups[next];
@@ -202,11 +279,12 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
         continue;
       }
       if (!one_batch && !batch.empty() && bytes + g.estimated_batch_bytes > cache_->batch_bytes()) break;
-      batch.insert(batch.end(), g.refs.begin(), g.refs.end());
+      batch.push_back(g.group);
       bytes += g.estimated_batch_bytes;
     }
     if (batch.empty()) break;
-    std::vector<std::shared_ptr<const ChunkGroupBvh>> bvhs = cache_->acquire(batch, source, !one_batch);
+    std::vector<std::shared_ptr<const ChunkGroupBvh>> bvhs =
+        cache_->acquire_groups(std::move(batch), source, !one_batch);
     stats_.gather_seconds += seconds_since(t0);
     t0 = Clock::now();
     const InstanceScene scene(*cache_, std::move(bvhs), eye);
@@ -227,20 +305,16 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
         out.depth[p] = t;
         out.chunk[p] = hit.chunk->id;
         out.triangle[p] = hit.triangle;
-        if (hit.chunk->id != last_counted) {  // coherent rays hit the same chunk in runs
-          triangles_of.try_emplace(hit.chunk->id, hit.chunk->triangle_count());
-          last_counted = hit.chunk->id;
-        }
         ++stats_.hits;
       };
+      face_slabs_.set(b, box, coordinate_, inverse_coordinate_);
       for (std::size_t start = 0; start < pixels; start += kStream) {
         const unsigned count = unsigned(std::min<std::size_t>(kStream, pixels - start));
         for (unsigned k = 0; k < count; ++k) {
           const std::uint32_t p = order_[start + k];
           const std::uint32_t row = p / std::uint32_t(size), col = p - row * std::uint32_t(size);
           const Vec3d dir = cube_face_direction(b, coordinate_[col], -coordinate_[row]);
-          const Vec3d inverse = face_ray_inverse(b, inverse_coordinate_[col], -inverse_coordinate_[row]);
-          const RaySegments seg = ray_segments(dir, inverse, box, params.near_plane);
+          const RaySegments seg = face_slabs_.segments(col, row, params.near_plane);
           init_ray(rays[k], dir, seg.t0, std::min(seg.t1, out.depth[p]), p);
           second[k] = seg.two && seg.t2 < out.depth[p] ? seg.t2 : std::numeric_limits<float>::infinity();
         }
@@ -324,41 +398,12 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
   t0 = Clock::now();
   CubeSample sample;
   sample.eye = eye;
-  std::vector<std::uint32_t> tile_of(pixels);
-  for (std::size_t p = 0; p < pixels; ++p) tile_of[p] = std::uint32_t(pixel_tile(int(p % std::size_t(size)), int(p / std::size_t(size)), size));
-  // What each face saw: chunk -> per-triangle tile masks of the nearest hits.
-  std::unordered_map<std::int64_t, std::vector<std::uint16_t>> masks;
+  SeenScratch scratch;
   for (int face = 0; face < kCubeFaces; ++face) {
     FaceHits& hits = faces[std::size_t(face)];
-    masks.clear();
-    std::int64_t last_chunk = -1;
-    std::vector<std::uint16_t>* last_masks = nullptr;
-    for (std::size_t p = 0; p < pixels; ++p) {
-      const std::int64_t id = hits.chunk[p];
-      if (id < 0) continue;
-      if (id != last_chunk) {
-        auto [it, added] = masks.try_emplace(id);
-        if (added) it->second.assign(triangles_of.at(id), 0);
-        last_chunk = id;
-        last_masks = &it->second;
-      }
-      (*last_masks)[hits.triangle[p]] |= std::uint16_t(1u << tile_of[p]);
-    }
     CubeFace& out = sample.faces[std::size_t(face)];
     out = finish_face(hits.color, hits.depth, params);
-    out.seen.reserve(masks.size());
-    for (const auto& [id, tiles] : masks) {
-      SeenChunk seen;
-      seen.id = id;
-      for (std::size_t t = 0; t < tiles.size(); ++t)
-        if (tiles[t]) {
-          seen.triangles.push_back(std::uint32_t(t));
-          seen.triangle_tiles.push_back(tiles[t]);
-          seen.tiles |= tiles[t];
-        }
-      out.seen.push_back(std::move(seen));
-    }
-    std::sort(out.seen.begin(), out.seen.end(), [](const SeenChunk& a, const SeenChunk& b) { return a.id < b.id; });
+    out.seen = seen_chunks(hits, tile_of_, scratch);
   }
   stats_.trace_seconds += seconds_since(t0);
   ++stats_.cube_maps;

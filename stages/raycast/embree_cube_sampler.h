@@ -1,7 +1,8 @@
 // The Embree sampling backend (issue #12): the cube map of everything outside
 // the cull box by ray casting instead of rasterising. Per cube map: the groups
-// of the chunks some face can see (cube_chunks) get their bottom-level BVHs
-// from a cache shared by all sampling threads (stages/raycast/chunk_bvh_cache.h),
+// of the chunks some face can see (cube_chunks; a model that is one group,
+// the default up to ~19 M triangles, is taken whole without that query) get
+// their bottom-level BVHs from a cache shared by all sampling threads (stages/raycast/chunk_bvh_cache.h),
 // a top-level scene instances them in the eye's frame (instance_scene.h), and
 // one ray per (sub)pixel centre, in the directions of stages/cube_map.h at the
 // supersampled resolution, is traced in coherent streams (rtcIntersect1M with
@@ -38,6 +39,7 @@
 #include "stages/raycast/chunk_bvh_cache.h"
 #include "stages/raycast/hit_shading.h"
 #include "stages/raycast/hit_texturing.h"
+#include "stages/raycast/ray_segments.h"
 
 namespace cellbake {
 
@@ -82,6 +84,8 @@ class EmbreeCubeSampler final : public CubeSampler {
   std::vector<std::uint32_t> order_;  // pixels of a render_size^2 face in 4 x 4 block order
   std::vector<double> coordinate_;    // s of column i (= -t of row i): 2 (i + 0.5) / size - 1
   std::vector<double> inverse_coordinate_;  // 1.0 / coordinate_[i]
+  std::vector<std::uint32_t> tile_of_;      // pixel -> its far-field tile (pixel_tile)
+  FaceSlabs face_slabs_;                    // of the face being traced
   int order_size_ = 0;
 };
 

@@ -17,19 +17,6 @@ std::uint8_t to_unorm8(float c) {
 
 }  // namespace
 
-void prefetch_triangle_indices(const Chunk& chunk, std::uint32_t triangle) {
-  __builtin_prefetch(chunk.indices.data() + 3 * std::size_t(triangle));
-}
-
-void prefetch_corner_attributes(const Chunk& chunk, std::uint32_t triangle) {
-  const std::uint32_t* corner = chunk.indices.data() + 3 * std::size_t(triangle);
-  for (int k = 0; k < 3; ++k) {
-    if (!chunk.colors.empty()) __builtin_prefetch(chunk.colors.data() + corner[k]);
-    if (!chunk.normals.empty()) __builtin_prefetch(chunk.normals.data() + corner[k]);
-    if (!chunk.uvs.empty()) __builtin_prefetch(chunk.uvs.data() + corner[k]);
-  }
-}
-
 HitShader::HitShader(const ShadingLights& l) {
   const auto finite_unit = [](const Vec3d& v) { return is_finite(v) && std::abs(length(v) - 1) < 1e-6; };
   const auto strength = [](double s) { return s >= 0 && std::isfinite(s); };

@@ -35,8 +35,18 @@ struct SurfaceHit {
 // corners that HitShader::shade and the texturer read. A shading loop asks for
 // the indices some hits ahead and the attributes fewer hits ahead, so the
 // dependent loads (index, then attribute) overlap with shading earlier hits.
-void prefetch_triangle_indices(const Chunk& chunk, std::uint32_t triangle);
-void prefetch_corner_attributes(const Chunk& chunk, std::uint32_t triangle);
+// Inline: called twice per ray.
+inline void prefetch_triangle_indices(const Chunk& chunk, std::uint32_t triangle) {
+  __builtin_prefetch(chunk.indices.data() + 3 * std::size_t(triangle));
+}
+inline void prefetch_corner_attributes(const Chunk& chunk, std::uint32_t triangle) {
+  const std::uint32_t* corner = chunk.indices.data() + 3 * std::size_t(triangle);
+  for (int k = 0; k < 3; ++k) {
+    if (!chunk.colors.empty()) __builtin_prefetch(chunk.colors.data() + corner[k]);
+    if (!chunk.normals.empty()) __builtin_prefetch(chunk.normals.data() + corner[k]);
+    if (!chunk.uvs.empty()) __builtin_prefetch(chunk.uvs.data() + corner[k]);
+  }
+}
 
 class HitShader {
  public:

@@ -12,6 +12,8 @@
 #include <bit>
 #include <cstdint>
 #include <limits>
+#include <span>
+#include <vector>
 
 #include "stages/cube_map.h"
 #include "stages/geometry.h"
@@ -35,14 +37,29 @@ struct EyeBox {
 // `box` (world) relative to `eye`; none when it is empty or flat on an axis.
 EyeBox eye_relative_box(const Box3d& box, const Vec3d& eye);
 
-// The segments of the ray eye + t * dir (dir finite and non-zero, near > 0)
-// outside the open box `box` and at t >= near. Segment ends on the box
-// boundary are widened by one float step, so surfaces lying on the boundary
-// (kept by the GL path) are not lost to rounding. Inline: the sampler calls it
-// once per ray. `inverse` holds 1.0 / dir[k] for every non-zero dir[k] (the
-// sampler knows them per pixel column and row: see face_ray_inverse).
-inline RaySegments ray_segments(const Vec3d& dir, const Vec3d& inverse, const EyeBox& box, double near) {
+// The open interval (lo, hi) of t where eye + t * dir is strictly inside one
+// slab (axis) of an EyeBox: lo >= hi when never (a ray parallel to the slab
+// outside it), (-inf, inf) when always (parallel and inside).
+struct SlabInterval {
+  double lo = -std::numeric_limits<double>::infinity(), hi = std::numeric_limits<double>::infinity();
+};
+
+// The slab [box_lo, box_hi] (eye-relative) for a ray with component `d` on
+// its axis; `inverse` = 1.0 / d, read only when d != 0.
+inline SlabInterval slab_interval(double d, double inverse, double box_lo, double box_hi) {
   constexpr double inf = std::numeric_limits<double>::infinity();
+  if (d == 0) return box_lo < 0 && 0 < box_hi ? SlabInterval{-inf, inf} : SlabInterval{inf, -inf};
+  const double a = box_lo * inverse, b = box_hi * inverse;
+  return {std::min(a, b), std::max(a, b)};
+}
+
+// The segments of a ray at t >= near (near > 0) outside the open box whose
+// three slabs it crosses in `x`, `y` and `z` (slab_interval), for a box that
+// is not EyeBox::none. Segment ends on the box boundary are widened by one
+// float step, so surfaces lying on the boundary (kept by the GL path) are not
+// lost to rounding.
+inline RaySegments ray_segments(const SlabInterval& x, const SlabInterval& y, const SlabInterval& z,
+                                double near) {
   // One float step towards zero / towards infinity, for positive finite floats.
   const auto step_down = [](float f) { return f > 0 ? std::bit_cast<float>(std::bit_cast<std::uint32_t>(f) - 1) : f; };
   const auto step_up = [](float f) {
@@ -50,18 +67,8 @@ inline RaySegments ray_segments(const Vec3d& dir, const Vec3d& inverse, const Ey
   };
   RaySegments s;
   s.t0 = static_cast<float>(near);
-  if (box.none) return s;
   // The open interval (t_in, t_out) of t with eye + t dir strictly inside.
-  double t_in = -inf, t_out = inf;
-  for (int k = 0; k < 3; ++k) {
-    if (dir[k] == 0) {
-      if (!(box.lo[k] < 0 && 0 < box.hi[k])) return s;  // never strictly inside this slab
-      continue;
-    }
-    const double a = box.lo[k] * inverse[k], b = box.hi[k] * inverse[k];
-    t_in = std::max(t_in, std::min(a, b));
-    t_out = std::min(t_out, std::max(a, b));
-  }
+  const double t_in = std::max(std::max(x.lo, y.lo), z.lo), t_out = std::min(std::min(x.hi, y.hi), z.hi);
   if (!(t_in < t_out) || t_out <= near) return s;  // the ray misses the interior beyond the near plane
   const float leave = step_down(static_cast<float>(t_out));
   if (t_in < near) {  // inside at the near plane: start where it leaves
@@ -74,22 +81,47 @@ inline RaySegments ray_segments(const Vec3d& dir, const Vec3d& inverse, const Ey
   return s;
 }
 
-// The same, dividing by dir's components here.
+// The segments of the ray eye + t * dir (dir finite and non-zero, near > 0)
+// outside the open box `box` and at t >= near, as above.
 inline RaySegments ray_segments(const Vec3d& dir, const EyeBox& box, double near) {
-  const auto inverse = [](double d) { return d != 0 ? 1.0 / d : 0.0; };  // 0 components are not read
-  return ray_segments(dir, Vec3d{inverse(dir.x), inverse(dir.y), inverse(dir.z)}, box, near);
+  if (box.none) {
+    RaySegments s;
+    s.t0 = static_cast<float>(near);
+    return s;
+  }
+  SlabInterval slab[3];
+  for (int k = 0; k < 3; ++k)
+    slab[k] = slab_interval(dir[k], dir[k] != 0 ? 1.0 / dir[k] : 0.0, box.lo[k], box.hi[k]);
+  return ray_segments(slab[0], slab[1], slab[2], near);
 }
 
-// 1.0 / d per non-zero component of d = cube_face_direction(b, s, t), from
-// 1.0 / s and 1.0 / t: each component of d is exactly one of +-1, +-s, +-t
-// (the basis vectors are signed unit axes), so these are the same bits.
-inline Vec3d face_ray_inverse(const FaceBasis& b, double inverse_s, double inverse_t) {
-  Vec3d out;
-  for (int k = 0; k < 3; ++k)
-    out[k] = b.forward[k] != 0 ? b.forward[k]
-             : b.right[k] != 0 ? b.right[k] * inverse_s
-                               : b.up[k] * inverse_t;
-  return out;
-}
+// The box's slabs along the rays of one cube face, by pixel. A ray's
+// direction cube_face_direction(b, s, t) has components +-1 (on the face's
+// forward axis), +-s (right axis) and +-t (up axis), so the forward slab is
+// the same for every ray of the face, the right one depends on the pixel's
+// column only and the up one on its row only: a face's segments cost a
+// min and a max per ray after 2 size slab tests.
+class FaceSlabs {
+ public:
+  // For face `b`, `box`, and coordinate[i] = s of column i = -t of row i
+  // (inverse_coordinate[i] = 1.0 / coordinate[i]; the spans the same size).
+  void set(const FaceBasis& b, const EyeBox& box, std::span<const double> coordinate,
+           std::span<const double> inverse_coordinate);
+  // ray_segments(cube_face_direction(b, coordinate[col], -coordinate[row]), box, near),
+  // the same bits.
+  RaySegments segments(std::size_t col, std::size_t row, double near) const {
+    if (none_) {
+      RaySegments s;
+      s.t0 = static_cast<float>(near);
+      return s;
+    }
+    return ray_segments(forward_, columns_[col], rows_[row], near);
+  }
+
+ private:
+  bool none_ = true;
+  SlabInterval forward_;
+  std::vector<SlabInterval> columns_, rows_;
+};
 
 }  // namespace cellbake
