@@ -73,7 +73,8 @@ struct Cell {
 
 // One cube map's rays: direction and first segment per pixel, in block order.
 struct Rays {
-  std::vector<float> dir;  // 3 per ray
+  float origin[3] = {0, 0, 0};  // InstanceScene::ray_origin()
+  std::vector<float> dir;       // 3 per ray
   std::vector<float> tnear, tfar;
 };
 
@@ -95,7 +96,9 @@ Rays make_rays(const Cell& cell, int size, double near, const std::vector<std::u
 }
 
 void set_ray(RTCRayHit& h, const Rays& r, std::size_t i) {
-  h.ray.org_x = h.ray.org_y = h.ray.org_z = 0;
+  h.ray.org_x = r.origin[0];
+  h.ray.org_y = r.origin[1];
+  h.ray.org_z = r.origin[2];
   h.ray.dir_x = r.dir[3 * i];
   h.ray.dir_y = r.dir[3 * i + 1];
   h.ray.dir_z = r.dir[3 * i + 2];
@@ -152,7 +155,9 @@ std::size_t trace_packets16(RTCScene scene, const Rays& r) {
       const std::size_t i = start + std::size_t(k);
       valid[k] = i < n ? -1 : 0;
       const std::size_t j = std::min(i, n - 1);
-      p.ray.org_x[k] = p.ray.org_y[k] = p.ray.org_z[k] = 0;
+      p.ray.org_x[k] = r.origin[0];
+      p.ray.org_y[k] = r.origin[1];
+      p.ray.org_z[k] = r.origin[2];
       p.ray.dir_x[k] = r.dir[3 * j];
       p.ray.dir_y[k] = r.dir[3 * j + 1];
       p.ray.dir_z[k] = r.dir[3 * j + 2];
@@ -232,7 +237,11 @@ int run(int argc, char** argv) {
 
   const std::vector<std::uint32_t> order = block_order(size);
   std::vector<Rays> rays;
-  for (const Cell& c : cells) rays.push_back(make_rays(c, size, near, order));
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    rays.push_back(make_rays(cells[i], size, near, order));
+    const Vec3f& o = scenes[i]->ray_origin();
+    rays.back().origin[0] = o.x, rays.back().origin[1] = o.y, rays.back().origin[2] = o.z;
+  }
   const std::size_t rays_per_cube = std::size_t(6) * std::size_t(size) * std::size_t(size);
 
   struct Mode {
@@ -278,10 +287,12 @@ int run(int argc, char** argv) {
       flat_build += seconds_since(t0);
       flat_scenes.push_back(sc);
     }
+    std::vector<Rays> eye_rays = rays;  // the flat scenes are in the eye's frame
+    for (Rays& r : eye_rays) r.origin[0] = r.origin[1] = r.origin[2] = 0;
     std::vector<double> per_cube;
     for (int rep = 0; rep < repetitions; ++rep) {
       const auto t0 = Clock::now();
-      for (std::size_t i = 0; i < cells.size(); ++i) trace_stream(flat_scenes[i], rays[i], true);
+      for (std::size_t i = 0; i < cells.size(); ++i) trace_stream(flat_scenes[i], eye_rays[i], true);
       per_cube.push_back(seconds_since(t0) / double(cells.size()));
     }
     std::printf("%-28s %8.2f ms per cube map (median of %d); one-level build %.0f ms per cell\n",

@@ -29,8 +29,10 @@ constexpr unsigned kStream = 1024;  // rays per rtcIntersect1M call
 constexpr unsigned kPrefetchIndicesAhead = 32;
 constexpr unsigned kPrefetchAttributesAhead = 16;
 
-void init_ray(RTCRayHit& r, const Vec3d& dir, float tnear, float tfar, unsigned id) {
-  r.ray.org_x = r.ray.org_y = r.ray.org_z = 0;
+void init_ray(RTCRayHit& r, const Vec3f& origin, const Vec3d& dir, float tnear, float tfar, unsigned id) {
+  r.ray.org_x = origin.x;
+  r.ray.org_y = origin.y;
+  r.ray.org_z = origin.z;
   r.ray.dir_x = static_cast<float>(dir.x);
   r.ray.dir_y = static_cast<float>(dir.y);
   r.ray.dir_z = static_cast<float>(dir.z);
@@ -315,7 +317,7 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
           const std::uint32_t row = p / std::uint32_t(size), col = p - row * std::uint32_t(size);
           const Vec3d dir = cube_face_direction(b, coordinate_[col], -coordinate_[row]);
           const RaySegments seg = face_slabs_.segments(col, row, params.near_plane);
-          init_ray(rays[k], dir, seg.t0, std::min(seg.t1, out.depth[p]), p);
+          init_ray(rays[k], scene.ray_origin(), dir, seg.t0, std::min(seg.t1, out.depth[p]), p);
           second[k] = seg.two && seg.t2 < out.depth[p] ? seg.t2 : std::numeric_limits<float>::infinity();
         }
         rtcIntersect1M(scene.scene(), &context, rays.data(), count, sizeof(RTCRayHit));
@@ -368,12 +370,14 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
               const float from = std::nextafter(t, std::numeric_limits<float>::infinity());
               bool found = false;
               if (from < seg.t1) {
-                init_ray(next, Vec3d{dir.x, dir.y, dir.z}, std::max(from, seg.t0), std::min(seg.t1, limit), p);
+                init_ray(next, scene.ray_origin(), Vec3d{dir.x, dir.y, dir.z}, std::max(from, seg.t0),
+                         std::min(seg.t1, limit), p);
                 rtcIntersect1(scene.scene(), &single, &next);
                 found = next.hit.geomID != RTC_INVALID_GEOMETRY_ID;
               }
               if (!found && seg.two) {
-                init_ray(next, Vec3d{dir.x, dir.y, dir.z}, std::max(from, seg.t2), limit, p);
+                init_ray(next, scene.ray_origin(), Vec3d{dir.x, dir.y, dir.z}, std::max(from, seg.t2), limit,
+                         p);
                 rtcIntersect1(scene.scene(), &single, &next);
                 found = next.hit.geomID != RTC_INVALID_GEOMETRY_ID;
               }

@@ -27,6 +27,14 @@ std::vector<ChunkRef> cube_chunks(const Vec3d& eye, const Box3d& cull_box, doubl
 InstanceScene::InstanceScene(const ChunkBvhCache& cache, std::vector<std::shared_ptr<const ChunkGroupBvh>> groups,
                              const Vec3d& eye, RTCBuildQuality quality)
     : groups_(std::move(groups)) {
+  if (groups_.size() == 1) {
+    const Vec3d offset = groups_[0]->origin - eye;  // as the instance's translation below
+    ray_origin_ = {-static_cast<float>(offset.x), -static_cast<float>(offset.y),
+                   -static_cast<float>(offset.z)};
+    scene_ = groups_[0]->scene;
+    rtcRetainScene(scene_);
+    return;
+  }
   scene_ = rtcNewScene(cache.device());
   if (!scene_) cache.check_device("rtcNewScene");
   try {

@@ -3,7 +3,11 @@
 // translated by (group origin - eye) computed in double and rounded to float
 // once, as ChunkRenderer translates chunks for the GPU. Rays then start at the
 // origin of this eye-relative frame, so models 1e6 m from the world origin
-// keep the precision of their stored float positions.
+// keep the precision of their stored float positions. A single group (a model
+// that fits one batch) is traced directly instead, with rays starting at
+// minus that translation in the group's frame: the ray Embree's instance
+// transform would give (a pure translation inverts exactly), without the
+// instance level.
 //
 // Instancing (two-level BVH): Wald et al. 2014, "Embree: a kernel framework
 // for efficient CPU ray tracing", ACM TOG 33(4); API
@@ -39,14 +43,21 @@ class InstanceScene {
   InstanceScene& operator=(const InstanceScene&) = delete;
 
   RTCScene scene() const { return scene_; }
-  // The group of instance `id` (an RTCHit::instID[0]).
-  const ChunkGroupBvh& instance(unsigned id) const { return *groups_[id]; }
+  // Where rays from the eye start in scene(): (0, 0, 0) with instances, else
+  // the eye in the single group's frame.
+  const Vec3f& ray_origin() const { return ray_origin_; }
+  // The group a hit lies in: instance `inst_id` (an RTCHit::instID[0]; RTC_INVALID_GEOMETRY_ID
+  // when the single group is traced directly).
+  const ChunkGroupBvh& instance(unsigned inst_id) const {
+    return *groups_[inst_id == RTC_INVALID_GEOMETRY_ID ? 0 : inst_id];
+  }
   std::size_t size() const { return groups_.size(); }
 
  private:
   void attach_and_commit(const ChunkBvhCache& cache, const Vec3d& eye, RTCBuildQuality quality);
 
   RTCScene scene_ = nullptr;
+  Vec3f ray_origin_;
   std::vector<std::shared_ptr<const ChunkGroupBvh>> groups_;
 };
 
