@@ -17,14 +17,16 @@ EyeBox eye_relative_box(const Box3d& box, const Vec3d& eye) {
 
 void FaceSlabs::set(const FaceBasis& b, const EyeBox& box, std::span<const double> coordinate,
                     std::span<const double> inverse_coordinate) {
-  none_ = box.none;
-  if (none_) return;
+  columns_.assign(coordinate.size(), SlabInterval{});
+  rows_.assign(coordinate.size(), SlabInterval{});
+  if (box.none) {
+    forward_ = SlabInterval::never();
+    return;
+  }
   const auto axis_of = [](const Vec3d& v) { return v.x != 0 ? 0 : v.y != 0 ? 1 : 2; };
   const int forward = axis_of(b.forward), right = axis_of(b.right), up = axis_of(b.up);
   const double f = b.forward[forward], r = b.right[right], u = b.up[up];
   forward_ = slab_interval(f, f, box.lo[forward], box.hi[forward]);
-  columns_.resize(coordinate.size());
-  rows_.resize(coordinate.size());
   for (std::size_t i = 0; i < coordinate.size(); ++i) {
     const double s = coordinate[i], inverse_s = inverse_coordinate[i];
     columns_[i] = slab_interval(r * s, r * inverse_s, box.lo[right], box.hi[right]);

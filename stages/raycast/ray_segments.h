@@ -42,20 +42,24 @@ EyeBox eye_relative_box(const Box3d& box, const Vec3d& eye);
 // outside it), (-inf, inf) when always (parallel and inside).
 struct SlabInterval {
   double lo = -std::numeric_limits<double>::infinity(), hi = std::numeric_limits<double>::infinity();
+  // A slab no ray point is inside: with it, ray_segments gives [near, inf).
+  static constexpr SlabInterval never() {
+    return {std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+  }
 };
 
 // The slab [box_lo, box_hi] (eye-relative) for a ray with component `d` on
 // its axis; `inverse` = 1.0 / d, read only when d != 0.
 inline SlabInterval slab_interval(double d, double inverse, double box_lo, double box_hi) {
   constexpr double inf = std::numeric_limits<double>::infinity();
-  if (d == 0) return box_lo < 0 && 0 < box_hi ? SlabInterval{-inf, inf} : SlabInterval{inf, -inf};
+  if (d == 0) return box_lo < 0 && 0 < box_hi ? SlabInterval{-inf, inf} : SlabInterval::never();
   const double a = box_lo * inverse, b = box_hi * inverse;
   return {std::min(a, b), std::max(a, b)};
 }
 
 // The segments of a ray at t >= near (near > 0) outside the open box whose
-// three slabs it crosses in `x`, `y` and `z` (slab_interval), for a box that
-// is not EyeBox::none. Segment ends on the box boundary are widened by one
+// three slabs it crosses in `x`, `y` and `z` (slab_interval; an
+// EyeBox::none is SlabInterval::never() on any axis). Segment ends on the box boundary are widened by one
 // float step, so surfaces lying on the boundary (kept by the GL path) are not
 // lost to rounding.
 inline RaySegments ray_segments(const SlabInterval& x, const SlabInterval& y, const SlabInterval& z,
@@ -84,11 +88,7 @@ inline RaySegments ray_segments(const SlabInterval& x, const SlabInterval& y, co
 // The segments of the ray eye + t * dir (dir finite and non-zero, near > 0)
 // outside the open box `box` and at t >= near, as above.
 inline RaySegments ray_segments(const Vec3d& dir, const EyeBox& box, double near) {
-  if (box.none) {
-    RaySegments s;
-    s.t0 = static_cast<float>(near);
-    return s;
-  }
+  if (box.none) return ray_segments(SlabInterval::never(), {}, {}, near);
   SlabInterval slab[3];
   for (int k = 0; k < 3; ++k)
     slab[k] = slab_interval(dir[k], dir[k] != 0 ? 1.0 / dir[k] : 0.0, box.lo[k], box.hi[k]);
@@ -110,17 +110,11 @@ class FaceSlabs {
   // ray_segments(cube_face_direction(b, coordinate[col], -coordinate[row]), box, near),
   // the same bits.
   RaySegments segments(std::size_t col, std::size_t row, double near) const {
-    if (none_) {
-      RaySegments s;
-      s.t0 = static_cast<float>(near);
-      return s;
-    }
     return ray_segments(forward_, columns_[col], rows_[row], near);
   }
 
  private:
-  bool none_ = true;
-  SlabInterval forward_;
+  SlabInterval forward_;  // never() for an EyeBox::none
   std::vector<SlabInterval> columns_, rows_;
 };
 
