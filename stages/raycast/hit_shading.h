@@ -57,10 +57,14 @@ class HitShader {
   // the base colour's rgb is multiplied by its rgb first (a textured material,
   // stages/raycast/hit_texturing.h), as the GL shader does.
   Rgba8 shade(const SurfaceHit& hit, const std::array<float, 4>* texel = nullptr) const;
-  // The unlit surface colour at the hit, RGBA in [0, 1].
-  std::array<float, 4> base_color(const SurfaceHit& hit) const;
 
  private:
+  // The lighting factor ambient + |n . key| + |n . fill| at the hit (corner:
+  // its triangle's three vertex indices; w0..w2: its barycentric weights);
+  // false when the normal there is zero or not finite (the colour stays unlit).
+  bool lit_factor(const SurfaceHit& hit, const std::uint32_t* corner, float w0, float w1, float w2,
+                  float& factor) const;
+
   bool lit_;
   float key_[3], fill_[3], ambient_;  // directions times strengths, as the shader's uniforms
 };
