@@ -9,6 +9,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <unordered_map>
@@ -96,19 +97,28 @@ std::vector<SeenChunk> seen_chunks(const FaceHits& hits, const std::vector<std::
                                    SeenScratch& scratch) {
   scratch.ranges.clear();
   const std::size_t pixels = hits.chunk.size();
+  // The span of triangles each chunk was hit in. A run of pixels on one chunk
+  // keeps its span in registers and stores it when the run ends.
   std::int64_t last = -1;
   SeenScratch::Range* range = nullptr;
+  std::uint32_t lo = 0, hi = 0;
+  const auto store = [&] {
+    if (range) range->lo = std::min(range->lo, lo), range->hi = std::max(range->hi, hi);
+  };
   for (std::size_t p = 0; p < pixels; ++p) {
     const std::int64_t id = hits.chunk[p];
     if (id < 0) continue;
     const std::uint32_t t = hits.triangle[p];
     if (id != last) {
+      store();
       range = &scratch.ranges.try_emplace(id, SeenScratch::Range{t, t}).first->second;
       last = id;
+      lo = hi = t;
     }
-    range->lo = std::min(range->lo, t);
-    range->hi = std::max(range->hi, t);
+    lo = std::min(lo, t);
+    hi = std::max(hi, t);
   }
+  store();
   scratch.by_id.clear();
   for (auto& [id, r] : scratch.ranges) scratch.by_id.emplace_back(id, &r);
   std::sort(scratch.by_id.begin(), scratch.by_id.end());
@@ -117,30 +127,39 @@ std::vector<SeenChunk> seen_chunks(const FaceHits& hits, const std::vector<std::
     r->offset = total;
     total += std::size_t(r->hi - r->lo) + 1;
   }
-  scratch.masks.assign(total, 0);
+  // Padded to whole 64-bit words of masks for the scan below.
+  scratch.masks.assign(total + 4, 0);
   last = -1;
+  std::size_t base = 0;  // of the current run's chunk: its triangle t's mask is masks[base + t] (modulo 2^64)
   for (std::size_t p = 0; p < pixels; ++p) {
     const std::int64_t id = hits.chunk[p];
     if (id < 0) continue;
     if (id != last) {
-      range = &scratch.ranges.find(id)->second;
+      const SeenScratch::Range& r = scratch.ranges.find(id)->second;
+      base = r.offset - std::size_t(r.lo);
       last = id;
     }
-    scratch.masks[range->offset + (hits.triangle[p] - range->lo)] |= std::uint16_t(1u << tile_of[p]);
+    scratch.masks[base + hits.triangle[p]] |= std::uint16_t(1u << tile_of[p]);
   }
+  // Each chunk's span, four masks at a time: faces see chunks in part, so
+  // most of a span is zero.
   std::vector<SeenChunk> seen(scratch.by_id.size());
   for (std::size_t c = 0; c < seen.size(); ++c) {
     const auto& [id, r] = scratch.by_id[c];
     SeenChunk& out = seen[c];
     out.id = id;
-    const std::uint16_t* masks = scratch.masks.data() + r->offset;
-    for (std::uint32_t t = r->lo;; ++t) {
-      if (const std::uint16_t m = masks[t - r->lo]) {
-        out.triangles.push_back(t);
-        out.triangle_tiles.push_back(m);
-        out.tiles |= m;
-      }
-      if (t == r->hi) break;
+    const std::uint16_t* span = scratch.masks.data() + r->offset;
+    const std::uint32_t count = r->hi - r->lo + 1;
+    for (std::uint32_t i = 0; i < count; i += 4) {
+      std::uint64_t word;
+      std::memcpy(&word, span + i, sizeof word);
+      if (word == 0) continue;
+      for (std::uint32_t j = i; j < std::min(count, i + 4); ++j)
+        if (const std::uint16_t m = span[j]) {
+          out.triangles.push_back(r->lo + j);
+          out.triangle_tiles.push_back(m);
+          out.tiles |= m;
+        }
     }
   }
   return seen;
