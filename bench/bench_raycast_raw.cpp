@@ -7,7 +7,9 @@
 // the same streams flagged incoherent, 16-wide packets over 4 x 4 pixel blocks
 // (rtcIntersect16) and single rays (rtcIntersect1). Also reports the BVH build
 // (triangles per thread-second, loading from the store excluded and
-// included) and the process's peak RSS.
+// included), the process's peak RSS, and the sampler itself (EmbreeCubeSampler,
+// the same cells and cache) alternating rep by rep with raw coherent streams:
+// sampler / raw measured side by side.
 //
 //   CELLBAKE_BENCH_STORE=/tmp/h1/plant.store.db build/bench/bench_raycast_raw [face_size=512] [repetitions=5]
 //     [robust|fast|compact] [low|medium|high] [group_triangles] [flat]
@@ -40,6 +42,7 @@
 #include "stages/raycast/embree_cube_sampler.h"
 #include "stages/raycast/instance_scene.h"
 #include "stages/raycast/ray_segments.h"
+#include "stages/sample.h"
 #include "storage/geometry_store.h"
 
 namespace cellbake {
@@ -312,6 +315,28 @@ int run(int argc, char** argv) {
     std::printf("%-28s %8.2f ms per cube map (median of %d), %6.1f Mrays/s, %.3f hit fraction\n", m.name, 1e3 * t,
                 repetitions, double(rays_per_cube) / t / 1e6, double(hits) / double(rays_per_cube * cells.size()));
   }
+  // The sampler on the same cells, BVH cache and rays, alternating with raw
+  // coherent streams rep by rep, so that both see the machine at the same
+  // speed (shared machines drift by tens of percent within minutes): the
+  // sampler's overhead as a ratio measured side by side.
+  EmbreeCubeSampler sampler(cache);
+  SampleParams params;
+  params.face_size = size;
+  params.near_plane = near;
+  std::vector<double> sampler_per_cube, raw_per_cube, ratios;
+  for (int rep = 0; rep < repetitions; ++rep) {
+    auto t0 = Clock::now();
+    for (const Cell& c : cells) sampler.sample(c.eye, c.cull, params, store);
+    sampler_per_cube.push_back(seconds_since(t0) / double(cells.size()));
+    t0 = Clock::now();
+    for (std::size_t i = 0; i < cells.size(); ++i) trace_stream(scenes[i]->scene(), rays[i], true);
+    raw_per_cube.push_back(seconds_since(t0) / double(cells.size()));
+    ratios.push_back(sampler_per_cube.back() / raw_per_cube.back());
+  }
+  std::printf("sampler %.2f ms, raw coherent %.2f ms per cube map, alternating (medians of %d): sampler / raw %.3f "
+              "(median of the per-rep ratios; range %.3f-%.3f)\n",
+              1e3 * median(sampler_per_cube), 1e3 * median(raw_per_cube), repetitions, median(ratios),
+              *std::min_element(ratios.begin(), ratios.end()), *std::max_element(ratios.begin(), ratios.end()));
   std::printf("peak RSS %.0f MiB\n", peak_rss_mib());
   return 0;
 }
