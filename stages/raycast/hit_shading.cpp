@@ -56,7 +56,8 @@ Rgba8 HitShader::shade(const SurfaceHit& hit, const std::array<float, 4>* texel)
   const float w0 = 1.0f - hit.u - hit.v, w1 = hit.u, w2 = hit.v;
   __m128 color;
   if (c.colors.empty()) {
-    color = _mm_set_ps(255 / 255.0f, 200 / 255.0f, 200 / 255.0f, 200 / 255.0f);  // Rgba8{}
+    const Rgba8 d{};
+    color = _mm_set_ps(d.a / 255.0f, d.b / 255.0f, d.g / 255.0f, d.r / 255.0f);
   } else {
     const __m128i zero = _mm_setzero_si128();
     const auto channels = [&](std::uint32_t vertex) {
