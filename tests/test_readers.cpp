@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cstdint>
@@ -686,6 +687,34 @@ TEST(AssimpReader, UniformBlackVertexColoursGiveWayToTheMaterial) {
   EXPECT_EQ(varied.triangles[0].color[0], (Rgba8{255, 0, 0, 255}));
   EXPECT_EQ(varied.triangles[0].color[1], (Rgba8{0, 0, 0, 255}));
   EXPECT_EQ(varied.info.vertex_colours, VertexColourUse::varying);
+}
+
+// Faces assimp drops on import (an index past the vertices) are not lost
+// silently: its warning becomes the model's, and the good face is read.
+TEST(AssimpReader, FacesAssimpDropsAreReportedInTheWarnings) {
+  TempDir dir;
+  std::string buffer;
+  for (float v : {0.0f, 0.0f, 0.0f, 2.0f, 0.0f, 0.0f, 0.0f, 3.0f, 0.0f}) put<float>(buffer, v, false);
+  for (std::uint16_t i : {0, 1, 2, 0, 1, 7}) put<std::uint16_t>(buffer, i, false);  // vertex 7 does not exist
+  write_text(dir / "bad_index.gltf",
+             R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+  "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],
+  "buffers":[{"byteLength":48,"uri":"data:application/octet-stream;base64,)" +
+                 base64(buffer) + R"("}],
+  "bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":12}],
+  "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[2,3,0]},
+               {"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"}]})");
+  const ReadResult r = read_all(dir / "bad_index.gltf");
+  EXPECT_EQ(r.triangles.size(), 1u);
+  ASSERT_FALSE(r.info.warnings.empty());
+  const auto said = std::find_if(r.info.warnings.begin(), r.info.warnings.end(),
+                                 [](const std::string& w) { return w.find("out-of-range") != std::string::npos; });
+  ASSERT_NE(said, r.info.warnings.end()) << r.info.warnings.front();
+  EXPECT_EQ(said->rfind(" assimp warning: ", 0), 0u) << *said;
+
+  // A clean file says nothing, and a later import does not repeat the old warning.
+  write_text(dir / "clean.gltf", one_triangle_gltf());
+  EXPECT_TRUE(read_all(dir / "clean.gltf").info.warnings.empty());
 }
 
 // A zipped COLLADA file (.zae) is COLLADA: assimp hands it over Y-up, as a

@@ -12,6 +12,8 @@
 // mode is OPAQUE never alpha-tests. Every file assimp opens itself (glTF
 // buffers, ...) goes through ContainedIOSystem, which refuses those outside
 // the model's folder (contained_paths.h) unless ReadOptions allow them.
+// Assimp's own warnings and errors during the import (faces it dropped,
+// materials it could not find) become the model's warnings (assimp_messages.h).
 #include <assimp/DefaultIOSystem.h>
 #include <assimp/config.h>
 #include <assimp/material.h>
@@ -27,6 +29,7 @@
 #include <vector>
 
 #include "pipeline/input_error.h"
+#include "pipeline/readers/assimp_messages.h"
 #include "pipeline/readers/buffered_input.h"
 #include "pipeline/readers/colour_math.h"
 #include "pipeline/readers/contained_paths.h"
@@ -245,6 +248,7 @@ void detect_up_axis(const aiScene& scene, const std::string& extension, ModelInf
 }  // namespace
 
 bool assimp_supports(const std::string& extension) {
+  const AssimpMessages serialised;  // every use of assimp holds its process-wide logger (assimp_messages.h)
   Assimp::Importer importer;
   return importer.IsExtensionSupported("." + extension);
 }
@@ -252,6 +256,7 @@ bool assimp_supports(const std::string& extension) {
 ModelInfo read_with_assimp(const std::filesystem::path& file, const std::string& extension, bool gzipped,
                            const TriangleCallback& emit, const ReadOptions& options) {
   const std::string name = file.string();
+  const AssimpMessages messages;  // what assimp says while reading: warnings, and the reason when it fails
   Assimp::Importer importer;
   // The importer owns and deletes the IOSystem.
   auto* io = new ContainedIOSystem(file.parent_path(), gzipped ? file.parent_path() : std::filesystem::path(),
@@ -295,6 +300,7 @@ ModelInfo read_with_assimp(const std::filesystem::path& file, const std::string&
 
   ModelInfo info;
   for (const std::string& refused : io->refused()) info.warnings.push_back(" reference '" + refused + "': " + kOutsideFolder);
+  for (std::string& said : messages.warnings()) info.warnings.push_back(std::move(said));
   info.format = "assimp:" + extension;
   detect_up_axis(*scene, extension, info);
   info.materials.push_back(default_material());
