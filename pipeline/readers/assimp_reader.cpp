@@ -256,7 +256,7 @@ bool assimp_supports(const std::string& extension) {
 ModelInfo read_with_assimp(const std::filesystem::path& file, const std::string& extension, bool gzipped,
                            const TriangleCallback& emit, const ReadOptions& options) {
   const std::string name = file.string();
-  const AssimpMessages messages;  // what assimp says while reading: warnings, and the reason when it fails
+  const AssimpMessages messages;  // what assimp says while reading (outlives the importer, which logs too)
   Assimp::Importer importer;
   // The importer owns and deletes the IOSystem.
   auto* io = new ContainedIOSystem(file.parent_path(), gzipped ? file.parent_path() : std::filesystem::path(),
