@@ -59,6 +59,7 @@ Rgba8 HitShader::shade(const SurfaceHit& hit, const std::array<float, 4>* texel)
     const Rgba8 d{};
     color = _mm_set_ps(d.a / 255.0f, d.b / 255.0f, d.g / 255.0f, d.r / 255.0f);
   } else {
+    static_assert(sizeof(Rgba8) == 4, "a vertex colour is loaded as one 32-bit word, r in its low byte");
     const __m128i zero = _mm_setzero_si128();
     const auto channels = [&](std::uint32_t vertex) {
       std::uint32_t bits;
