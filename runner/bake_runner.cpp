@@ -252,6 +252,12 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
     source.activate();
     g.wait_for_all();
     tsan::after(&graph_done);
+    for (const auto& sampler : thread_samplers)
+      if (sampler) {
+        summary.sample_backend = sampler->backend_name();
+        summary.sample_device = sampler->device();
+        break;
+      }
     if (options.verbose && samplers.bvh_cache()) {
       EmbreeSamplerStats total;
       for (const auto& sampler : thread_samplers)

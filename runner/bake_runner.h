@@ -32,6 +32,8 @@ struct BakeSummary {
   std::uint64_t cells_failed = 0;
   std::uint64_t cull_reused = 0;       // cull-box results reused from the database
   std::uint64_t cells_without_far_field = 0;  // baked cells whose far field came out empty
+  std::string sample_backend;  // who rendered the samples: "egl", "embree", ... ("" when nothing was sampled)
+  std::string sample_device;   // its CubeSampler::device(), e.g. a GPU's name, "llvmpipe (...)" or "CPU"
   double seconds = 0;
 };
 

@@ -22,7 +22,8 @@ void print_bake_summary(const BakeSummary& s, const BakeConfig& config, bool jso
     const nlohmann::json j{{"database", config.database.string()}, {"cells_selected", s.cells_selected},
                            {"cells_up_to_date", s.cells_up_to_date}, {"cells_baked", s.cells_baked},
                            {"cells_failed", s.cells_failed},       {"cull_reused", s.cull_reused},
-                           {"seconds", s.seconds}};
+                           {"seconds", s.seconds},                 {"sample_backend", s.sample_backend},
+                           {"sample_device", s.sample_device}};
     std::printf("%s\n", j.dump(2).c_str());
     return;
   }
@@ -31,6 +32,8 @@ void print_bake_summary(const BakeSummary& s, const BakeConfig& config, bool jso
               config.database.c_str(), (unsigned long long)s.cells_selected, (unsigned long long)s.cells_up_to_date,
               (unsigned long long)s.cells_baked, (unsigned long long)s.cells_failed, (unsigned long long)s.cull_reused,
               s.seconds);
+  if (!s.sample_backend.empty())
+    std::printf("samples rendered by %s on %s\n", s.sample_backend.c_str(), s.sample_device.c_str());
 }
 
 namespace {

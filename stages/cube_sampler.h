@@ -38,6 +38,10 @@ class CubeSampler {
   virtual void end_work() {}
   // The backend's name: "osmesa", "egl" or "embree".
   virtual std::string backend_name() const = 0;
+  // What does the work, for reports: the GL renderer string of a GL backend
+  // (e.g. "llvmpipe (LLVM 15.0.6, 256 bits)" or a GPU's name), "CPU" for a ray
+  // caster.
+  virtual std::string device() const = 0;
 };
 
 }  // namespace cellbake

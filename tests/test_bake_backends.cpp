@@ -24,6 +24,7 @@ TEST(BakeBackends, EmbreeBakesEveryCellAndRerunsSkipThem) {
   test::ingest_room_store(dir.path());
   const auto first = test::run_cellbake(bake_args(dir, "cells.db") + " --set sample.backend=embree");
   ASSERT_EQ(first.exit_code, 0) << first.output;
+  EXPECT_NE(first.output.find("samples rendered by embree on CPU"), std::string::npos) << first.output;
   {
     CellDb db(dir / "cells.db", CellDb::Mode::read_only);
     const auto totals = db.totals();
@@ -34,10 +35,13 @@ TEST(BakeBackends, EmbreeBakesEveryCellAndRerunsSkipThem) {
   }
   const auto again = test::run_cellbake(bake_args(dir, "cells.db") + " --set sample.backend=embree");
   ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_EQ(again.output.find("samples rendered by"), std::string::npos) << "nothing was sampled:\n" << again.output;
   const auto before = CellDb(dir / "cells.db", CellDb::Mode::read_only).totals();
   // Switching to OSMesa recomputes (different pixels), with the same number of cells done.
   const auto gl = test::run_cellbake(bake_args(dir, "cells.db") + " --set sample.backend=osmesa");
   ASSERT_EQ(gl.exit_code, 0) << gl.output;
+  // The GL renderer string names the rasteriser (llvmpipe here, a GPU's name on one).
+  EXPECT_NE(gl.output.find("samples rendered by osmesa on "), std::string::npos) << gl.output;
   const auto after = CellDb(dir / "cells.db", CellDb::Mode::read_only).totals();
   EXPECT_EQ(after.cells_done, 6u);
   EXPECT_NE(before.content_hash, after.content_hash);

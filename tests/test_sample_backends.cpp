@@ -702,8 +702,10 @@ TEST(SampleBackendConfig, NamesParseAndAutoResolvesToARealBackend) {
   EXPECT_STREQ(sample_backend_pixels(SampleBackend::osmesa), "gl");
   EXPECT_STREQ(sample_backend_pixels(SampleBackend::embree), "embree");
   EXPECT_EQ(CubeSamplerFactory(SampleBackend::embree, 1 << 20).make()->backend_name(), "embree");
+  EXPECT_EQ(CubeSamplerFactory(SampleBackend::embree, 1 << 20).make()->device(), "CPU");
   auto gl = CubeSamplerFactory(SampleBackend::osmesa, 1 << 20).make();
   EXPECT_EQ(gl->backend_name(), "osmesa");
+  EXPECT_FALSE(gl->device().empty());  // the GL_RENDERER string, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
   gl->end_work();
 }
 

@@ -69,6 +69,7 @@ class EmbreeCubeSampler final : public CubeSampler {
   CubeSample sample(const Vec3d& eye, const Box3d& cull_box, const SampleParams& params,
                     const ChunkSource& source) override;
   std::string backend_name() const override { return "embree"; }
+  std::string device() const override { return "CPU"; }
 
   const EmbreeSamplerStats& stats() const { return stats_; }
   const ChunkBvhCache& cache() const { return *cache_; }

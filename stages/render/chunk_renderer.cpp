@@ -247,6 +247,7 @@ ChunkRenderer::ChunkRenderer(std::unique_ptr<GlContext> context, ChunkRendererPa
   build_program();
   build_occlusion_program();
   textures_ = std::make_unique<GlTextureCache>(gl_, params_.texture_cache_bytes);
+  if (const auto* name = reinterpret_cast<const char*>(gl_.GetString(GL_RENDERER))) gl_renderer_ = name;
 }
 
 ChunkRenderer::~ChunkRenderer() {

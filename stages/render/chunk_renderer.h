@@ -28,6 +28,7 @@
 #include <list>
 #include <memory>
 #include <span>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -177,6 +178,8 @@ class ChunkRenderer {
 
   // True when the z-test uses reversed-Z (glClipControl was available).
   bool reversed_z() const;
+  // The context's GL_RENDERER string (which rasteriser or GPU draws).
+  const std::string& gl_renderer() const { return gl_renderer_; }
   ChunkRendererStats stats() const;
 
  private:
@@ -218,6 +221,7 @@ class ChunkRenderer {
   void require_frame(const char* what) const;
 
   std::unique_ptr<GlContext> context_;  // first member: destroyed last
+  std::string gl_renderer_;
   ChunkRendererParams params_;
   std::unique_ptr<GlFunctions> gl_functions_;
   const GlFunctions& gl_;  // *gl_functions_

@@ -24,6 +24,7 @@ class GlCubeSampler final : public CubeSampler {
   // Releases the GL context from the calling thread.
   void end_work() override { renderer_->release_context(); }
   std::string backend_name() const override { return backend_; }
+  std::string device() const override { return renderer_->gl_renderer(); }
   // The renderer, for its statistics.
   const ChunkRenderer& renderer() const { return *renderer_; }
 
