@@ -32,9 +32,9 @@
 #include <vector>
 
 #include "bench/bench_store_eyes.h"
+#include "stages/cube_map.h"
 #include "stages/cull_box.h"
 #include "stages/render/chunk_renderer.h"
-#include "stages/cube_map.h"
 #include "stages/render/gl_context.h"
 #include "stages/render/gl_functions.h"
 #include "stages/sample.h"
@@ -171,15 +171,16 @@ RawGlScene upload_raw_scene(const GlFunctions& gl, const GeometryStore& store) {
   gl.GenBuffers(1, &scene.vertex_buffer);
   gl.BindBuffer(GL_ARRAY_BUFFER, scene.vertex_buffer);
   const std::size_t position_bytes = positions.size() * sizeof(Vec3f);
-  gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(position_bytes + colors.size() * sizeof(Rgba8)), nullptr,
-                GL_STATIC_DRAW);
+  gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(position_bytes + colors.size() * sizeof(Rgba8)),
+                nullptr, GL_STATIC_DRAW);
   gl.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(position_bytes), positions.data());
   gl.BufferSubData(GL_ARRAY_BUFFER, static_cast<GLintptr>(position_bytes),
                    static_cast<GLsizeiptr>(colors.size() * sizeof(Rgba8)), colors.data());
   gl.EnableVertexAttribArray(0);
   gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vec3f), nullptr);
   gl.EnableVertexAttribArray(1);
-  gl.VertexAttribPointer(1, 4, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(Rgba8), reinterpret_cast<const void*>(position_bytes));
+  gl.VertexAttribPointer(1, 4, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(Rgba8),
+                         reinterpret_cast<const void*>(position_bytes));
   gl.GenBuffers(1, &scene.index_buffer);
   gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, scene.index_buffer);
   gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)),
@@ -204,7 +205,8 @@ void BM_RawGlCubeMapStore(benchmark::State& state) {
   std::vector<std::array<std::vector<std::int64_t>, kCubeFaces>> face_chunks(cells.size());
   for (std::size_t c = 0; c < cells.size(); ++c)
     for (int face = 0; face < kCubeFaces; ++face)
-      for (const ChunkRef& ref : chunks_in_face(face, cells[c].first, cells[c].second, params.near_plane, store))
+      for (const ChunkRef& ref :
+           chunks_in_face(face, cells[c].first, cells[c].second, params.near_plane, store))
         face_chunks[c][face].push_back(ref.id);
 
   const std::unique_ptr<GlContext> context = create_gl_context(GlBackend::egl, 1, 1);
@@ -260,7 +262,8 @@ void BM_RawGlCubeMapStore(benchmark::State& state) {
       gl.ClearBufferfv(GL_COLOR, 0, clear_color);
       gl.ClearBufferfv(GL_COLOR, 1, clear_view_depth);
       gl.ClearBufferfv(GL_DEPTH, 0, &clear_depth);
-      gl.Uniform3f(u_offset, static_cast<float>(offset.x), static_cast<float>(offset.y), static_cast<float>(offset.z));
+      gl.Uniform3f(u_offset, static_cast<float>(offset.x), static_cast<float>(offset.y),
+                   static_cast<float>(offset.z));
       gl.Uniform3f(u_forward, static_cast<float>(b.forward.x), static_cast<float>(b.forward.y),
                    static_cast<float>(b.forward.z));
       gl.UniformMatrix4fv(u_view_projection, 1, GL_FALSE, view_projection.data());
@@ -290,7 +293,8 @@ void BM_RawGlCubeMapStore(benchmark::State& state) {
   state.SetLabel(std::string("egl raw: ") + reinterpret_cast<const char*>(gl.GetString(GL_RENDERER)));
   state.counters["cells"] = static_cast<double>(cells.size());
   state.counters["store_tris"] = static_cast<double>(scene.triangles);
-  state.counters["s_per_cube"] = benchmark::Counter(cube_maps, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["s_per_cube"] =
+      benchmark::Counter(cube_maps, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
   state.counters["tris_drawn_per_cube"] = static_cast<double>(triangles_drawn) / cube_maps;
   if (read_back) state.counters["covered"] = static_cast<double>(covered) / (6.0 * size * size);
   gl.DeleteFramebuffers(1, &framebuffer);
@@ -301,7 +305,13 @@ void BM_RawGlCubeMapStore(benchmark::State& state) {
   gl.DeleteBuffers(1, &scene.index_buffer);
 }
 // One iteration is one pass over all cells, as BM_CubeMapStore.
-BENCHMARK(BM_RawGlCubeMapStore)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime()->Iterations(1);
+BENCHMARK(BM_RawGlCubeMapStore)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime()
+    ->Iterations(1);
 
 }  // namespace
 }  // namespace cellbake

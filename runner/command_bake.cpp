@@ -19,10 +19,14 @@ namespace cellbake {
 
 void print_bake_summary(const BakeSummary& s, const BakeConfig& config, bool json) {
   if (json) {
-    const nlohmann::json j{{"database", config.database.string()}, {"cells_selected", s.cells_selected},
-                           {"cells_up_to_date", s.cells_up_to_date}, {"cells_baked", s.cells_baked},
-                           {"cells_failed", s.cells_failed},       {"cull_reused", s.cull_reused},
-                           {"seconds", s.seconds},                 {"sample_backend", s.sample_backend},
+    const nlohmann::json j{{"database", config.database.string()},
+                           {"cells_selected", s.cells_selected},
+                           {"cells_up_to_date", s.cells_up_to_date},
+                           {"cells_baked", s.cells_baked},
+                           {"cells_failed", s.cells_failed},
+                           {"cull_reused", s.cull_reused},
+                           {"seconds", s.seconds},
+                           {"sample_backend", s.sample_backend},
                            {"sample_device", s.sample_device}};
     std::printf("%s\n", j.dump(2).c_str());
     return;

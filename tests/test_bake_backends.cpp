@@ -35,7 +35,8 @@ TEST(BakeBackends, EmbreeBakesEveryCellAndRerunsSkipThem) {
   }
   const auto again = test::run_cellbake(bake_args(dir, "cells.db") + " --set sample.backend=embree");
   ASSERT_EQ(again.exit_code, 0) << again.output;
-  EXPECT_EQ(again.output.find("samples rendered by"), std::string::npos) << "nothing was sampled:\n" << again.output;
+  EXPECT_EQ(again.output.find("samples rendered by"), std::string::npos) << "nothing was sampled:\n"
+                                                                         << again.output;
   const auto before = CellDb(dir / "cells.db", CellDb::Mode::read_only).totals();
   // Switching to OSMesa recomputes (different pixels), with the same number of cells done.
   const auto gl = test::run_cellbake(bake_args(dir, "cells.db") + " --set sample.backend=osmesa");
