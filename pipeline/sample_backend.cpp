@@ -28,11 +28,40 @@ SampleBackend parse_sample_backend(const std::string& name) {
                               "\"");
 }
 
-SampleBackend resolve_sample_backend(SampleBackend backend) {
-  if (backend != SampleBackend::automatic) return backend;
-  static const bool gpu = egl_hardware_device_present();  // probed once per process (no context is created)
-  return gpu ? SampleBackend::egl : SampleBackend::embree;
+namespace {
+
+struct AutomaticChoice {
+  SampleBackend backend = SampleBackend::embree;
+  std::string note;  // why a GPU that is present is not used
+};
+
+// Probed once per process: device enumeration (no context) everywhere, and
+// where a GPU is enumerated one context created on it, so a GPU EGL cannot
+// draw on (no permission on its device node, a missing driver part) leaves
+// the bake on Embree rather than on EGL's software fallback or failing cells.
+const AutomaticChoice& automatic_choice() {
+  static const AutomaticChoice choice = [] {
+    AutomaticChoice c;
+    if (!egl_hardware_device_present()) return c;
+    const std::string error = egl_hardware_context_error();
+    if (error.empty()) {
+      c.backend = SampleBackend::egl;
+    } else {
+      c.note = "sample.backend \"auto\": a GPU is present but EGL cannot draw on it (" + error +
+               "); sampling with embree on the CPU";
+    }
+    return c;
+  }();
+  return choice;
 }
+
+}  // namespace
+
+SampleBackend resolve_sample_backend(SampleBackend backend) {
+  return backend == SampleBackend::automatic ? automatic_choice().backend : backend;
+}
+
+const std::string& automatic_backend_note() { return automatic_choice().note; }
 
 const char* sample_backend_pixels(SampleBackend backend) {
   return resolve_sample_backend(backend) == SampleBackend::embree ? "embree" : "gl";

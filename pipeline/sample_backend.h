@@ -3,7 +3,7 @@
 // (stages/cube_sampler.h): "osmesa" and "egl" rasterise with ChunkRenderer on
 // a GL context of that kind, "embree" ray-casts on the CPU through one BVH
 // cache shared by all of a bake's samplers, "auto" picks EGL when EGL
-// enumerates a hardware (GPU) device, else Embree (README.md "Sampling backends").
+// can draw on a hardware (GPU) device, else Embree (README.md "Sampling backends").
 #pragma once
 
 #include <cstddef>
@@ -24,9 +24,14 @@ const char* sample_backend_name(SampleBackend backend);
 SampleBackend parse_sample_backend(const std::string& name);
 
 // The backend `backend` stands for on this machine: itself, or for
-// `automatic` EGL when a GPU device is present (probed once per process,
-// creating no context), else Embree.
+// `automatic` EGL when a GPU device is present and an EGL context can be
+// created on it (probed once per process: one context, on a thread of its
+// own, only where a GPU is enumerated), else Embree.
 SampleBackend resolve_sample_backend(SampleBackend backend);
+
+// Why `automatic` did not pick a GPU that is present ("" when it did, or when
+// there is none), for the bake to print.
+const std::string& automatic_backend_note();
 
 // What the backend's pixels depend on, for the bake hash: "gl" for osmesa and
 // egl (the same shaders; the rasteriser's rules), "embree" for the ray caster

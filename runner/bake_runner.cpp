@@ -171,6 +171,9 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
     const CubeSamplerFactory samplers(parse_sample_backend(config.sample_backend),
                                       std::size_t(config.embree_cache_mb) << 20,
                                       std::size_t(config.texture_cache_mb) << 20);
+    if (!options.quiet && parse_sample_backend(config.sample_backend) == SampleBackend::automatic &&
+        !automatic_backend_note().empty())
+      progress.line("note: " + automatic_backend_note());
     tbb::enumerable_thread_specific<std::unique_ptr<CubeSampler>> thread_samplers;
     tbb::flow::graph g;
     // A node body as TBB runs it, with the hand-offs TSan cannot see marked.

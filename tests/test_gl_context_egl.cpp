@@ -373,6 +373,29 @@ TEST(EglContext, PoolThreadsThatOutliveExitLeaveNoEglStateBehind) {
   else unsetenv("GLIBC_TUNABLES");
 }
 
+// hardware_only never falls back to Mesa's software paths, and the probe that
+// `sample.backend = "auto"` runs agrees with it: here (CI has no GPU) both
+// say no; on a GPU machine both say yes and the context is not llvmpipe.
+TEST(EglContext, HardwareOnlyNeverFallsBackToSoftware) {
+  auto mine = create_egl_context(1, 1, EglDevicePolicy::software_only);
+  const std::string probe = egl_hardware_context_error();
+  EXPECT_TRUE(mine->is_current());  // the probe ran on a thread of its own
+  mine.reset();
+  if (!egl_hardware_device_present()) {
+    try {
+      create_egl_context(1, 1, EglDevicePolicy::hardware_only);
+      ADD_FAILURE() << "a hardware_only context without a hardware device";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("no hardware EGL device"), std::string::npos) << e.what();
+    }
+    EXPECT_NE(probe.find("no hardware EGL device"), std::string::npos) << probe;
+    return;
+  }
+  EXPECT_EQ(probe, "");
+  ChunkRenderer renderer(create_egl_context(1, 1, EglDevicePolicy::hardware_only));
+  EXPECT_EQ(renderer.gl_renderer().find("llvmpipe"), std::string::npos) << renderer.gl_renderer();
+}
+
 TEST(EglContext, HeadlessFallbackPrefersOsmesaThenEgl) {
   EXPECT_TRUE(gl_backend_compiled(GlBackend::egl));
   EXPECT_TRUE(gl_backend_available(GlBackend::egl));

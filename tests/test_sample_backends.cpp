@@ -25,6 +25,7 @@
 #include "stages/raycast/ray_segments.h"
 #include "stages/render/chunk_renderer.h"
 #include "stages/render/gl_context.h"
+#include "stages/render/gl_context_egl.h"
 #include "stages/render/gl_cube_sampler.h"
 #include "stages/sample.h"
 #include "tests/fixture_chunk_source.h"
@@ -699,6 +700,14 @@ TEST(SampleBackendConfig, NamesParseAndAutoResolvesToARealBackend) {
     EXPECT_EQ(parse_sample_backend(sample_backend_name(b)), b);
   EXPECT_THROW(parse_sample_backend("vulkan"), std::invalid_argument);
   EXPECT_NE(resolve_sample_backend(SampleBackend::automatic), SampleBackend::automatic);
+  // Without a GPU, auto is Embree and has nothing to explain; with one that
+  // EGL can draw on, EGL.
+  if (!egl_hardware_device_present()) {
+    EXPECT_EQ(resolve_sample_backend(SampleBackend::automatic), SampleBackend::embree);
+    EXPECT_EQ(automatic_backend_note(), "");
+  } else if (egl_hardware_context_error().empty()) {
+    EXPECT_EQ(resolve_sample_backend(SampleBackend::automatic), SampleBackend::egl);
+  }
   EXPECT_STREQ(sample_backend_pixels(SampleBackend::osmesa), "gl");
   EXPECT_STREQ(sample_backend_pixels(SampleBackend::embree), "embree");
   EXPECT_EQ(CubeSamplerFactory(SampleBackend::embree, 1 << 20).make()->backend_name(), "embree");

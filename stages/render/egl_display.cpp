@@ -143,9 +143,12 @@ EglDisplayChoice open_egl_display(EglDevicePolicy policy) {
   const std::vector<Device> devices = enumerate_devices();
   EglDisplayChoice choice;
   std::string tried;
-  if (policy == EglDevicePolicy::prefer_hardware)
+  if (policy == EglDevicePolicy::prefer_hardware || policy == EglDevicePolicy::hardware_only)
     for (const Device& d : devices)
       if (!d.software && try_device(d, choice, tried)) return choice;
+  if (policy == EglDevicePolicy::hardware_only)
+    throw std::runtime_error("gl_context(egl): no hardware EGL device could be initialised; tried:" +
+                             (tried.empty() ? std::string(" nothing (no hardware devices)") : tried));
   const auto try_software_devices = [&] {
     for (const Device& d : devices)
       if (d.software && try_device(d, choice, tried)) return true;

@@ -8,6 +8,8 @@
 
 #include <cstring>
 #include <stdexcept>
+#include <string>
+#include <thread>
 #include <utility>
 
 #include "stages/render/egl_display.h"
@@ -142,5 +144,18 @@ std::unique_ptr<GlContext> create_egl_context(int width, int height, EglDevicePo
 }
 
 bool egl_hardware_device_present() { return egl_hardware_device_count() > 0; }
+
+std::string egl_hardware_context_error() {
+  std::string error;
+  std::thread probe([&] {
+    try {
+      create_egl_context(1, 1, EglDevicePolicy::hardware_only);  // current on the probe thread until destroyed
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+  });
+  probe.join();
+  return error;
+}
 
 }  // namespace cellbake

@@ -10,6 +10,8 @@
 //     platform (EGL_MESA_platform_surfaceless); else the software device.
 //   software_only: the software device (EGL_MESA_device_software, llvmpipe);
 //     else Mesa's surfaceless platform (Mesa may pick a hardware driver there).
+//   hardware_only: the first hardware device that initialises, else an error
+//     (what `sample.backend = "auto"` probes before it picks EGL).
 //
 // Threads: release_current() (and destruction, and a failed creation) also
 // hands the calling thread's EGL state back with eglReleaseThread when no EGL
@@ -18,12 +20,13 @@
 #pragma once
 
 #include <memory>
+#include <string>
 
 #include "stages/render/gl_context.h"
 
 namespace cellbake {
 
-enum class EglDevicePolicy { prefer_hardware, software_only };
+enum class EglDevicePolicy { prefer_hardware, software_only, hardware_only };
 
 // An EGL context of `width` x `height` nominal pixels (both >= 1; there is no
 // default framebuffer, width()/height() report the request), current on the
@@ -36,5 +39,11 @@ std::unique_ptr<GlContext> create_egl_context(int width, int height,
 // True when EGL enumerates a device that is not Mesa's software device (a GPU).
 // Initialises nothing and creates no context.
 bool egl_hardware_device_present();
+
+// "" when an EGL context can be created on a hardware device, else why not
+// (the error, naming each device tried). Probes by creating and destroying a
+// 1x1 hardware_only context on a short-lived thread of its own, so the calling
+// thread's current context is untouched; costs a context creation.
+std::string egl_hardware_context_error();
 
 }  // namespace cellbake
