@@ -1,7 +1,11 @@
 // Every format without a streaming reader of our own goes through the Open
-// Asset Import Library (assimp), which loads the whole scene: node transforms
-// are baked into the vertices (aiProcess_PreTransformVertices), polygons are
-// triangulated, points and lines are dropped. Material i of the scene becomes
+// Asset Import Library (assimp), which loads the whole scene: polygons are
+// triangulated, points and lines are dropped, and each mesh is emitted once
+// per node that places it, under the node's world transform composed in
+// double (assimp's own aiProcess_PreTransformVertices works in float, which
+// loses centimetres 1e6 m from the origin, and crashes on some files: an
+// assertion on OpenGEX scenes, a segfault on RAW ones); meshes no node places
+// are not part of the scene and are skipped with a warning. Material i of the scene becomes
 // material i + 1 of ours (0 stays the default grey). Vertex colours (set 0)
 // multiply material colours only when they vary across the scene; all equal,
 // the material colour wins (model_reader.h). Normals are the file's when it
@@ -38,8 +42,10 @@
 namespace cellbake {
 namespace {
 
-constexpr unsigned kImportFlags =
-    aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType;
+constexpr unsigned kImportFlags = aiProcess_Triangulate | aiProcess_SortByPType;
+
+// Deeper node hierarchies are refused as malformed.
+constexpr int kMaxNodeDepth = 1024;
 
 // A ".gz" model is decompressed into memory for assimp: at most this much.
 constexpr std::uint64_t kMaxDecompressedBytes = std::uint64_t{4} << 30;
@@ -183,10 +189,102 @@ ColourVariation scene_colour_variation(const aiScene& scene) {
   return variation;
 }
 
-// Emits the mesh's triangles; `colours_vary` is the scene-wide rule's verdict.
-// Returns true when some corner's uniform vertex colour gave way to its material's.
-bool emit_mesh(const std::string& file, unsigned mesh_index, const aiMesh& mesh, bool colours_vary, ModelInfo& info,
-               const TriangleCallback& emit) {
+// A node's affine transform in double, row-major 3x4 (assimp's matrices are
+// row-major too, translation in the fourth column).
+struct Affine {
+  double m[3][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}};
+  Vec3d point(double x, double y, double z) const {
+    return {m[0][0] * x + m[0][1] * y + m[0][2] * z + m[0][3], m[1][0] * x + m[1][1] * y + m[1][2] * z + m[1][3],
+            m[2][0] * x + m[2][1] * y + m[2][2] * z + m[2][3]};
+  }
+};
+
+Affine affine_of(const aiMatrix4x4& a) {
+  const float* rows[3] = {&a.a1, &a.b1, &a.c1};
+  Affine t;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) t.m[r][c] = rows[r][c];
+  return t;
+}
+
+// parent * child.
+Affine compose(const Affine& parent, const Affine& child) {
+  Affine t;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) {
+      double sum = c == 3 ? parent.m[r][3] : 0;
+      for (int k = 0; k < 3; ++k) sum += parent.m[r][k] * child.m[k][c];
+      t.m[r][c] = sum;
+    }
+  return t;
+}
+
+// The transpose of the inverse of the linear part (adjugate over determinant,
+// whose sign alone matters once normals are renormalised): maps normals.
+std::array<std::array<double, 3>, 3> normal_matrix(const Affine& t) {
+  const auto& m = t.m;
+  std::array<std::array<double, 3>, 3> n{};
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) {
+      const int r1 = (r + 1) % 3, r2 = (r + 2) % 3, c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+      n[r][c] = m[r1][c1] * m[r2][c2] - m[r1][c2] * m[r2][c1];  // cofactor (r, c)
+    }
+  const double det = m[0][0] * n[0][0] + m[0][1] * n[0][1] + m[0][2] * n[0][2];
+  if (det < 0)
+    for (auto& row : n)
+      for (double& v : row) v = -v;
+  return n;
+}
+
+struct MeshInstance {
+  unsigned mesh = 0;
+  Affine world;
+};
+
+// Every (mesh, world transform) the node tree places, depth first in child
+// order; without a root node every mesh once, untransformed. Throws
+// InputError for a mesh index out of range, a non-finite transform or a tree
+// deeper than kMaxNodeDepth.
+std::vector<MeshInstance> placed_meshes(const aiScene& scene, const std::string& file) {
+  std::vector<MeshInstance> placed;
+  if (!scene.mRootNode) {
+    for (unsigned m = 0; m < scene.mNumMeshes; ++m) placed.push_back({m, Affine{}});
+    return placed;
+  }
+  struct Pending {
+    const aiNode* node;
+    Affine parent;
+    int depth;
+  };
+  std::vector<Pending> stack{{scene.mRootNode, Affine{}, 0}};
+  while (!stack.empty()) {
+    const Pending p = stack.back();
+    stack.pop_back();
+    if (p.depth > kMaxNodeDepth)
+      throw InputError(file, "", "node hierarchy deeper than " + std::to_string(kMaxNodeDepth) + " levels");
+    const Affine world = compose(p.parent, affine_of(p.node->mTransformation));
+    for (const auto& row : world.m)
+      for (double v : row)
+        if (!std::isfinite(v))
+          throw InputError(file, std::string("node '") + p.node->mName.C_Str() + "'", "non-finite transform");
+    for (unsigned i = 0; i < p.node->mNumMeshes; ++i) {
+      const unsigned m = p.node->mMeshes[i];
+      if (m >= scene.mNumMeshes)
+        throw InputError(file, std::string("node '") + p.node->mName.C_Str() + "'",
+                         "mesh index " + std::to_string(m) + " out of range");
+      placed.push_back({m, world});
+    }
+    for (unsigned c = p.node->mNumChildren; c-- > 0;)  // reversed: popped in child order
+      if (p.node->mChildren[c]) stack.push_back({p.node->mChildren[c], world, p.depth + 1});
+  }
+  return placed;
+}
+
+// Emits the mesh's triangles under `world`; `colours_vary` is the scene-wide
+// rule's verdict. Returns true when some corner's uniform vertex colour gave
+// way to its material's.
+bool emit_mesh(const std::string& file, unsigned mesh_index, const aiMesh& mesh, const Affine& world,
+               bool colours_vary, ModelInfo& info, const TriangleCallback& emit) {
   const std::uint32_t material_index = mesh.mMaterialIndex + 1;
   const Rgba8 material_colour =
       material_index < info.materials.size() ? info.materials[material_index].color : info.materials[0].color;
@@ -199,6 +297,7 @@ bool emit_mesh(const std::string& file, unsigned mesh_index, const aiMesh& mesh,
                        "non-finite coordinate");
   }
   bool ignored = false;
+  const auto normals = normal_matrix(world);
   Triangle t;
   t.material = material_index < info.materials.size() ? material_index : 0;
   for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
@@ -209,13 +308,20 @@ bool emit_mesh(const std::string& file, unsigned mesh_index, const aiMesh& mesh,
       if (v >= mesh.mNumVertices)
         throw InputError(file, "mesh " + std::to_string(mesh_index) + " face " + std::to_string(f),
                          "vertex index " + std::to_string(v) + " out of range");
-      t.p[i] = {mesh.mVertices[v].x, mesh.mVertices[v].y, mesh.mVertices[v].z};
+      t.p[i] = world.point(mesh.mVertices[v].x, mesh.mVertices[v].y, mesh.mVertices[v].z);
       Rgba8 vertex_colour;
       if (colours) vertex_colour = vertex_colour_of(colours[v]);
       t.color[i] = corner_colour(material_colour, t.material, colours ? &vertex_colour : nullptr, colours_vary);
       ignored |= colours && t.material != 0 && !colours_vary;
       if (texcoords) t.uv[i] = {texcoords[v].x, texcoords[v].y};
-      if (mesh.mNormals) t.normal[i] = {mesh.mNormals[v].x, mesh.mNormals[v].y, mesh.mNormals[v].z};
+      if (mesh.mNormals) {
+        const aiVector3D& a = mesh.mNormals[v];
+        double n[3];
+        for (int r = 0; r < 3; ++r) n[r] = normals[r][0] * a.x + normals[r][1] * a.y + normals[r][2] * a.z;
+        const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        const double scale = length > 0 ? 1 / length : 0;  // a zero normal stays zero (ingest checks normals)
+        t.normal[i] = {float(n[0] * scale), float(n[1] * scale), float(n[2] * scale)};
+      }
     }
     t.has_normals = mesh.mNormals != nullptr;
     emit(t);
@@ -224,7 +330,7 @@ bool emit_mesh(const std::string& file, unsigned mesh_index, const aiMesh& mesh,
   return ignored;
 }
 
-// The up axis of what assimp hands over (after aiProcess_PreTransformVertices):
+// The up axis of what assimp hands over (the root node's transform applied):
 // glTF is Y-up by specification; assimp rotates IFC (Z-up) and COLLADA files
 // to Y-up; other importers (FBX, ...) may record the file's axis in the scene
 // metadata "UpAxis" (0 = x, 1 = y, 2 = z) with "UpAxisSign" without rotating.
@@ -317,8 +423,16 @@ ModelInfo read_with_assimp(const std::filesystem::path& file, const std::string&
   // The scene-wide rule: do the vertex colours vary anywhere?
   const ColourVariation variation = scene_colour_variation(*scene);
   bool ignored = false;
-  for (unsigned m = 0; m < scene->mNumMeshes; ++m)
-    ignored |= emit_mesh(name, m, *scene->mMeshes[m], variation.varies, info, emit);
+  const std::vector<MeshInstance> placed = placed_meshes(*scene, name);
+  std::vector<bool> used(scene->mNumMeshes, false);
+  for (const MeshInstance& instance : placed) {
+    used[instance.mesh] = true;
+    ignored |= emit_mesh(name, instance.mesh, *scene->mMeshes[instance.mesh], instance.world, variation.varies, info,
+                         emit);
+  }
+  if (const auto unplaced = std::count(used.begin(), used.end(), false); unplaced > 0)
+    info.warnings.push_back(" " + std::to_string(unplaced) + " of " + std::to_string(scene->mNumMeshes) +
+                            " meshes are placed by no node of the scene and were skipped");
   record_vertex_colour_use(info, variation, ignored);
   return info;
 }
