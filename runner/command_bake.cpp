@@ -32,12 +32,13 @@ void print_bake_summary(const BakeSummary& s, const BakeConfig& config, bool jso
     return;
   }
   std::printf("bake %s: %llu cells selected, %llu up to date, %llu baked, %llu failed (cull box reused for %llu) in "
-              "%.1f s\n",
+              "%.1f s",
               config.database.c_str(), (unsigned long long)s.cells_selected, (unsigned long long)s.cells_up_to_date,
               (unsigned long long)s.cells_baked, (unsigned long long)s.cells_failed, (unsigned long long)s.cull_reused,
               s.seconds);
-  if (!s.sample_backend.empty())
-    std::printf("samples rendered by %s on %s\n", s.sample_backend.c_str(), s.sample_device.c_str());
+  if (!s.sample_backend.empty())  // on the same line: --quiet prints the summary line alone
+    std::printf("; samples rendered by %s on %s", s.sample_backend.c_str(), s.sample_device.c_str());
+  std::printf("\n");
 }
 
 namespace {
