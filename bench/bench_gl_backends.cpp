@@ -250,12 +250,7 @@ void BM_RawGlCubeMapStore(benchmark::State& state) {
     const Vec3d& eye = cells[c].first;
     for (int face = 0; face < kCubeFaces; ++face) {
       const FaceBasis b = cube_face_basis(face);
-      RenderCamera camera;
-      camera.eye = eye;
-      camera.forward = b.forward;
-      camera.right = b.right;
-      camera.up = b.up;
-      camera.near_plane = params.near_plane;
+      const RenderCamera camera = cube_face_camera(eye, face, params.near_plane);
       const std::array<float, 16> view_projection = camera_view_projection(camera, false);
       const Vec3d offset = scene.centre - eye;
       const float clear_color[4] = {0, 0, 0, 0}, clear_view_depth[4] = {1e30f, 0, 0, 0}, clear_depth = 1.0f;

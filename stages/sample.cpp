@@ -149,12 +149,7 @@ CubeSample sample_cube(const Vec3d& eye, const Box3d& cull_box, const SamplePara
     std::vector<ChunkRef> nearest_first;
     nearest_first.reserve(refs.size());
     for (const auto& [distance, i] : order) nearest_first.push_back(refs[i]);
-    RenderCamera camera;
-    camera.eye = eye;
-    camera.forward = b.forward;
-    camera.right = b.right;
-    camera.up = b.up;
-    camera.near_plane = params.near_plane;
+    const RenderCamera camera = cube_face_camera(eye, face, params.near_plane);
     renderer.begin_frame(render_size, render_size);
     std::vector<std::int64_t> drawn;
     renderer.draw_unoccluded(camera, cull_box, nearest_first, load, &drawn);

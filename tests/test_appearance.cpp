@@ -261,12 +261,7 @@ TEST(Appearance, CheckerQuadShowsInTheSampleCubeFace) {
   params.face_size = 128;
   const CubeSample sample = sample_cube(kWallEye, Box3d{}, params, store, *r);
   const CubeFace& face = sample.faces[0];  // +X
-  const FaceBasis b = cube_face_basis(0);
-  RenderCamera cam;
-  cam.eye = kWallEye;
-  cam.forward = b.forward;
-  cam.right = b.right;
-  cam.up = b.up;  // tangents -1..1: the face's pixel grid
+  const RenderCamera cam = cube_face_camera(kWallEye, 0);  // tangents -1..1: the face's pixel grid
   EXPECT_EQ(matching_squares(face.color, face.size, face.size, cam, checker_wall(), kChecker, 2, "sample face +X"),
             64);
   const Pixel centre = pixel_of(cam, face.size, face.size, checker_wall().at(0.5, 0.5));

@@ -124,12 +124,7 @@ Frames render_cube(ChunkRenderer& renderer) {
   frames.color.resize(kCubeFaces);
   frames.depth.resize(kCubeFaces);
   for (int f = 0; f < kCubeFaces; ++f) {
-    const FaceBasis b = cube_face_basis(f);
-    RenderCamera camera;
-    camera.eye = s.eye;
-    camera.forward = b.forward;
-    camera.right = b.right;
-    camera.up = b.up;
+    const RenderCamera camera = cube_face_camera(s.eye, f);
     renderer.begin_frame(64, 64);
     if (f % 2) renderer.draw(camera, s.discard, s.chunks);
     else renderer.draw_unoccluded(camera, s.discard, refs, load);

@@ -280,12 +280,7 @@ TEST(Sample, OcclusionCullingSkipsHiddenChunksWithoutChangingTheImage) {
   std::vector<std::int64_t> ids;
   for (const ChunkRef& r : chunks_in_face(0, eye, cull_box, 0.01, source)) ids.push_back(r.id);
   ASSERT_EQ(ids.size(), 241u);
-  const FaceBasis b = cube_face_basis(0);
-  RenderCamera camera;
-  camera.eye = eye;
-  camera.forward = b.forward;
-  camera.right = b.right;
-  camera.up = b.up;
+  const RenderCamera camera = cube_face_camera(eye, 0);
   plain->begin_frame(96, 96);
   plain->draw(camera, cull_box, ids, [&](std::int64_t id) { return source.load(id); });
   std::vector<Rgba8> color;

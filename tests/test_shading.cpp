@@ -276,13 +276,7 @@ TEST(Shading, BakedSampleFaceMatchesTheViewersTruthFromTheSameEye) {
   ShadingParams unlit;
   unlit.mode = ShadingMode::unlit;
   for (const DecodedFace& f : cell.faces) {
-    const FaceBasis b = cube_face_basis(f.face);
-    RenderCamera cam;
-    cam.eye = f.eye;
-    cam.forward = b.forward;
-    cam.right = b.right;
-    cam.up = b.up;
-    cam.near_plane = c.near_plane;
+    const RenderCamera cam = cube_face_camera(f.eye, f.face, c.near_plane);
     ViewFrame truth, flat;
     drawer.set_shading(shading_lights(shading, kZUp));
     drawer.draw_truth(cam, 64, 64, SceneDrawOptions{}, truth);

@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "stages/chunk_source.h"
+#include "stages/cube_map.h"
 #include "stages/geometry.h"
 #include "stages/render/gl_context.h"
 #include "stages/render/shading.h"
@@ -55,6 +56,19 @@ struct RenderCamera {
   double tan_left = -1, tan_right = 1, tan_bottom = -1, tan_top = 1;
   double near_plane = 0.01;  // metres along forward; nearer geometry is clipped
 };
+
+// The camera of cube face `face` (0..5, stages/cube_map.h) at `eye`: the
+// face's basis and its 90-degree frustum.
+inline RenderCamera cube_face_camera(const Vec3d& eye, int face, double near_plane = 0.01) {
+  const FaceBasis b = cube_face_basis(face);
+  RenderCamera camera;
+  camera.eye = eye;
+  camera.forward = b.forward;
+  camera.right = b.right;
+  camera.up = b.up;
+  camera.near_plane = near_plane;
+  return camera;
+}
 
 // What draw() does with fragments relative to its box. The two modes are exact
 // complements: a fragment on the box boundary is kept by discard_inside only.
