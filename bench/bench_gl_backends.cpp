@@ -59,6 +59,13 @@ BENCHMARK(BM_CreateContext)
     ->Arg(static_cast<int>(GlBackend::egl))
     ->Unit(benchmark::kMillisecond);
 
+// The store CELLBAKE_BENCH_STORE names, or nullptr with `state` marked skipped.
+const char* bench_store_path(benchmark::State& state) {
+  const char* path = std::getenv("CELLBAKE_BENCH_STORE");
+  if (!path) state.SkipWithError("CELLBAKE_BENCH_STORE is not set");
+  return path;
+}
+
 // bench_sample's cells on `store`: each eye of bench_eyes() with the cull box
 // the cull_box stage finds for 4 m cells (as configs/plant-demo.toml).
 std::vector<std::pair<Vec3d, Box3d>> bench_cells(const GeometryStore& store) {
@@ -73,11 +80,8 @@ std::vector<std::pair<Vec3d, Box3d>> bench_cells(const GeometryStore& store) {
 
 void BM_CubeMapStore(benchmark::State& state) {
   const GlBackend backend = backend_of(state);
-  const char* path = std::getenv("CELLBAKE_BENCH_STORE");
-  if (!path) {
-    state.SkipWithError("CELLBAKE_BENCH_STORE is not set");
-    return;
-  }
+  const char* path = bench_store_path(state);
+  if (!path) return;
   if (!gl_backend_compiled(backend)) {
     state.SkipWithError("backend not in this build");
     return;
@@ -191,11 +195,8 @@ RawGlScene upload_raw_scene(const GlFunctions& gl, const GeometryStore& store) {
 
 void BM_RawGlCubeMapStore(benchmark::State& state) {
   const bool read_back = state.range(0) != 0;
-  const char* path = std::getenv("CELLBAKE_BENCH_STORE");
-  if (!path) {
-    state.SkipWithError("CELLBAKE_BENCH_STORE is not set");
-    return;
-  }
+  const char* path = bench_store_path(state);
+  if (!path) return;
   const GeometryStore store(path);
   const std::vector<std::pair<Vec3d, Box3d>> cells = bench_cells(store);
   SampleParams params;
