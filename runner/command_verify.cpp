@@ -5,15 +5,12 @@
 // `cellbake plot CSV --x COL --y COL [--series COL] --out FILE.svg` (the
 // report's SVG scatter plot over any CSV; scripts/sweep.sh uses it).
 #include <CLI/CLI.hpp>
-
 #include <cmath>
 #include <cstdio>
-
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
-
-#include <nlohmann/json.hpp>
 
 #include "runner/commands.h"
 #include "runner/console.h"
@@ -31,29 +28,43 @@ void add_verify_command(CLI::App& app) {
     VerifyOptions verify;
   };
   auto opt = std::make_shared<Options>();
-  CLI::App* cmd = app.add_subcommand(
-      "verify", "Render every cell's impostor against the ground truth from views inside the cell; write an HTML/JSON report");
+  CLI::App* cmd = app.add_subcommand("verify",
+                                     "Render every cell's impostor against the ground truth from views "
+                                     "inside the cell; write an HTML/JSON report");
   cmd->add_option("database", opt->database, "Cell database")->required();
-  cmd->add_option("--report", opt->report, "Report folder (report.html, report.json, plots, resume file)")->required();
+  cmd->add_option("--report", opt->report, "Report folder (report.html, report.json, plots, resume file)")
+      ->required();
   cmd->add_option("--views-per-cell", opt->verify.views_per_cell,
-                  "Views per cell: centre, corners, then seeded interior points; each sample point of the "
-                  "cell adds one more")
+                  "Random views per cell (the headline): eyes uniform over the cell's navigable part, random "
+                  "horizontal directions; the centre, the corners and each sample point add reference views, "
+                  "reported apart")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   cmd->add_option("--cells", opt->verify.cells, "Cell selection, e.g. 1-10,15 (default: all done cells)");
   cmd->add_option("--size", opt->size, "Image size WxH")->capture_default_str();
-  cmd->add_option("--fov", opt->verify.fov_y_deg, "Vertical field of view, degrees")->check(CLI::Range(1.0, 179.0));
-  cmd->add_option("--near", opt->verify.near_plane, "Near plane distance, model units")->check(CLI::PositiveNumber);
-  cmd->add_option("--seed", opt->verify.seed, "Seed of the interior view points")->capture_default_str();
-  cmd->add_option("--threads", opt->verify.threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
-  cmd->add_option("--worst", opt->verify.worst_views, "Worst views shown as triptychs")->capture_default_str();
+  cmd->add_option("--fov", opt->verify.fov_y_deg, "Vertical field of view, degrees")
+      ->check(CLI::Range(1.0, 179.0));
+  cmd->add_option("--near", opt->verify.near_plane, "Near plane distance, model units")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--seed", opt->verify.seed, "Seed of the random views")->capture_default_str();
+  cmd->add_flag("--no-reference-views{false}", opt->verify.reference_views,
+                "Look only from the random views and the sample points, not from the centre and the corners");
+  cmd->add_flag("--no-sample-views{false}", opt->verify.sample_views,
+                "Do not look from the cell's sample points");
+  cmd->add_option("--threads", opt->verify.threads, "Worker threads (0 = all cores)")
+      ->check(CLI::Range(0, 1024));
+  cmd->add_option("--worst", opt->verify.worst_views, "Worst views shown as triptychs")
+      ->capture_default_str();
   cmd->add_option("--store", opt->verify.store, "Geometry store (default: the one the database names)");
-  cmd->add_flag("--json", opt->json, "Print the summary as JSON (progress still goes to stderr; -q hides it)");
-  cmd->add_option("--far-budget", opt->verify.far_budget,
-                  "Far-field triangles per view: the nearest sample with its ancestors, then more while under this "
-                  "(default: the bake's view.far_budget)");
+  cmd->add_flag("--json", opt->json,
+                "Print the summary as JSON (progress still goes to stderr; -q hides it)");
+  cmd->add_option(
+      "--far-budget", opt->verify.far_budget,
+      "Far-field triangles per view: the nearest sample with its ancestors, then more while under this "
+      "(default: the bake's view.far_budget)");
   cmd->add_option("--max-samples", opt->verify.max_samples,
-                  "At most this many samples per view (0 = no cap; 1 = the root sample alone, the single-sample far field)")
+                  "At most this many samples per view (0 = no cap; 1 = the root sample alone, the "
+                  "single-sample far field)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->callback([opt] {
@@ -62,7 +73,9 @@ void add_verify_command(CLI::App& app) {
     opt->verify.verbose = verbose_output();
     const VerifySummary s = run_verify(opt->database, opt->report, opt->verify);
     if (opt->json) {
-      const auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+      const auto number = [](double v) {
+        return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+      };
       const nlohmann::json j{{"database", opt->database},
                              {"cells_selected", s.cells_selected},
                              {"cells_rendered", s.cells_rendered},
@@ -73,12 +86,14 @@ void add_verify_command(CLI::App& app) {
                              {"truth_blank_views", s.truth_blank_views},
                              {"identical_views", s.identical_views},
                              {"psnr_median_db", number(s.psnr_median_db)},
+                             {"psnr_median_reference_db", number(s.psnr_median_reference_db)},
                              {"psnr_median_infinite", std::isinf(s.psnr_median_db)},
                              {"seconds", s.seconds},
                              {"report_html", s.report_html.string()},
                              {"report_json", s.report_json.string()}};
       std::printf("%s\n", j.dump(2).c_str());
-      if (s.cells_failed > 0) throw std::runtime_error(std::to_string(s.cells_failed) + " cell(s) could not be verified");
+      if (s.cells_failed > 0)
+        throw std::runtime_error(std::to_string(s.cells_failed) + " cell(s) could not be verified");
       return;
     }
     std::string blank;  // " (what the median does not say)"
@@ -93,15 +108,20 @@ void add_verify_command(CLI::App& app) {
     if (std::isnan(s.psnr_median_db))
       std::snprintf(median, sizeof median, "none (no view with the model in it)");
     else
-      std::snprintf(median, sizeof median, "%.2f dB", s.psnr_median_db);
+      std::snprintf(median, sizeof median, "%.2f dB over random views", s.psnr_median_db);
+    char reference[64] = "";
+    if (!std::isnan(s.psnr_median_reference_db))
+      std::snprintf(reference, sizeof reference, " (%.2f dB at the centre, corners and sample points)",
+                    s.psnr_median_reference_db);
     std::printf(
         "verified %llu cells (%llu rendered, %llu reused, %llu failed), %llu views in %.1f s; median PSNR "
-        "%s%s\n",
+        "%s%s%s\n",
         (unsigned long long)s.cells_selected, (unsigned long long)s.cells_rendered,
         (unsigned long long)s.cells_reused, (unsigned long long)s.cells_failed,
-        (unsigned long long)s.views_rendered, s.seconds, median, blank.c_str());
+        (unsigned long long)s.views_rendered, s.seconds, median, reference, blank.c_str());
     std::printf("report: %s\n", s.report_html.c_str());
-    if (s.cells_failed > 0) throw std::runtime_error(std::to_string(s.cells_failed) + " cell(s) could not be verified");
+    if (s.cells_failed > 0)
+      throw std::runtime_error(std::to_string(s.cells_failed) + " cell(s) could not be verified");
   });
 
   struct PlotOptions {
@@ -109,7 +129,8 @@ void add_verify_command(CLI::App& app) {
     bool log_x = false;
   };
   auto plot = std::make_shared<PlotOptions>();
-  CLI::App* pc = app.add_subcommand("plot", "Scatter plot of two CSV columns as SVG (the verify report's plot writer)");
+  CLI::App* pc =
+      app.add_subcommand("plot", "Scatter plot of two CSV columns as SVG (the verify report's plot writer)");
   pc->add_option("csv", plot->csv, "CSV file with a header line")->required();
   pc->add_option("--x", plot->x, "Column for x")->required();
   pc->add_option("--y", plot->y, "Column for y")->required();

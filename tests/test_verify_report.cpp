@@ -3,11 +3,10 @@
 // the room fixture (files written, numbers parse, rerun renders nothing new).
 #include <gtest/gtest.h>
 
-#include <nlohmann/json.hpp>
-
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "fixture_room_obj.h"
@@ -58,37 +57,43 @@ TEST(VerifyStats, MedianOfOddEvenInfiniteAndEmpty) {
   EXPECT_TRUE(std::isnan(median_of({})));
 }
 
-TEST(VerifyStats, MediansWorstAndCentreVersusCorner) {
+// The headline (median, worst, worst cell) is over the random views; the
+// centre, corner and sample-point views are summarised apart.
+TEST(VerifyStats, HeadlineOverRandomViewsReferenceViewsApart) {
   VerifyCellResult a, b;
   a.id = 7;
-  a.views = {view(VerifyViewKind::centre, 30, 0.01), view(VerifyViewKind::corner, 20, 0.2)};
+  a.views = {view(VerifyViewKind::random, 30, 0.01), view(VerifyViewKind::centre, 20, 0.2)};
   b.id = 9;
-  b.views = {view(VerifyViewKind::centre, kInf, 0), view(VerifyViewKind::corner, 40, 0.05),
-             view(VerifyViewKind::interior, 25, 0.1)};
+  b.views = {view(VerifyViewKind::random, kInf, 0), view(VerifyViewKind::random, 25, 0.1),
+             view(VerifyViewKind::corner, 40, 0.05), view(VerifyViewKind::sample, 22, 0.3)};
   const std::vector<VerifyCellResult> cells{a, b};
   const MetricStats psnr = metric_stats(cells, verify_metrics()[0]);
-  EXPECT_EQ(psnr.count, 5u);
-  EXPECT_DOUBLE_EQ(psnr.median, 30);  // 20 25 30 40 inf
-  EXPECT_DOUBLE_EQ(psnr.worst, 20);
-  EXPECT_EQ(psnr.worst_cell, 7);
+  EXPECT_EQ(psnr.count, 3u);
+  EXPECT_DOUBLE_EQ(psnr.median, 30);  // random: 30 inf 25
+  EXPECT_DOUBLE_EQ(psnr.worst, 25);   // not the centre's 20 nor the sample's 22
+  EXPECT_EQ(psnr.worst_cell, 9);
   EXPECT_EQ(psnr.worst_view, 1);
-  EXPECT_EQ(psnr.median_centre, kInf);  // 30, inf
-  EXPECT_DOUBLE_EQ(psnr.median_corner, 30);  // 20, 40
+  EXPECT_DOUBLE_EQ(psnr.median_centre, 20);
+  EXPECT_DOUBLE_EQ(psnr.median_corner, 40);
+  EXPECT_DOUBLE_EQ(psnr.median_sample, 22);
+  EXPECT_DOUBLE_EQ(psnr.median_reference, 22);  // 20 22 40
 
   const MetricInfo* holes = nullptr;
   for (const auto& m : verify_metrics())
     if (std::string(m.name) == "hole_fraction") holes = &m;
   ASSERT_TRUE(holes);
   const MetricStats h = metric_stats(cells, *holes);
-  EXPECT_DOUBLE_EQ(h.worst, 0.2);  // lower is better: the maximum
-  EXPECT_DOUBLE_EQ(h.median, 0.05);
-  EXPECT_EQ(worst_view_index(b.views), 2);
+  EXPECT_DOUBLE_EQ(h.worst, 0.1);  // lower is better: the maximum of the random views
+  EXPECT_DOUBLE_EQ(h.median, 0.01);
+  EXPECT_EQ(worst_view_index(b.views), 1);  // the worst random view, not the sample view's 22 dB
   EXPECT_EQ(worst_view_index({}), -1);
+  EXPECT_EQ(worst_view_index({view(VerifyViewKind::centre, 9, 0)}), -1);
 
   const nlohmann::json s = summary_json(cells);
-  EXPECT_EQ(s["views"].get<int>(), 5);
-  EXPECT_DOUBLE_EQ(s["psnr_db"]["median_corner"].get<double>(), 30);
-  EXPECT_TRUE(s["psnr_db"]["median_centre"].is_null());  // infinite
+  EXPECT_EQ(s["views"].get<int>(), 6);
+  EXPECT_DOUBLE_EQ(s["psnr_db"]["median"].get<double>(), 30);
+  EXPECT_DOUBLE_EQ(s["psnr_db"]["median_reference"].get<double>(), 22);
+  EXPECT_DOUBLE_EQ(s["psnr_db"]["median_corner"].get<double>(), 40);
 }
 
 // A view whose truth is blank (the model out of view) says nothing: it counts
@@ -97,8 +102,8 @@ TEST(VerifyStats, MediansWorstAndCentreVersusCorner) {
 TEST(VerifyStats, BlankTruthViewsCountInNoStatisticAndAreNeverTheWorst) {
   VerifyCellResult a;
   a.id = 3;
-  a.views = {view(VerifyViewKind::centre, 30, 0.01), view(VerifyViewKind::corner, 3.2, 0.0),
-             view(VerifyViewKind::interior, 24, 0.02)};
+  a.views = {view(VerifyViewKind::random, 30, 0.01), view(VerifyViewKind::random, 3.2, 0.0),
+             view(VerifyViewKind::random, 24, 0.02)};
   a.views[1].truth_blank = true;
   const MetricStats psnr = metric_stats({a}, verify_metrics()[0]);
   EXPECT_EQ(psnr.count, 2u);
@@ -110,7 +115,7 @@ TEST(VerifyStats, BlankTruthViewsCountInNoStatisticAndAreNeverTheWorst) {
   EXPECT_FALSE(worse_view(a.views[1], a.views[2]));
   // Only blank views: no statistic, and the worst is the lowest of them.
   VerifyCellResult b;
-  b.views = {view(VerifyViewKind::centre, 9, 0), view(VerifyViewKind::corner, 5, 0)};
+  b.views = {view(VerifyViewKind::random, 9, 0), view(VerifyViewKind::random, 5, 0)};
   for (auto& v : b.views) v.truth_blank = true;
   EXPECT_EQ(metric_stats({b}, verify_metrics()[0]).count, 0u);
   EXPECT_TRUE(std::isnan(metric_stats({b}, verify_metrics()[0]).median));
@@ -166,7 +171,7 @@ TEST(SvgPlot, ScatterHasOneCirclePerFinitePoint) {
   EXPECT_EQ(drawable_points(p), 7u);
   EXPECT_NE(svg.find("title &amp; more"), std::string::npos);
   EXPECT_EQ(count_of(svg, "<rect x=\"") - 1, 2u);  // background + one legend swatch per series
-  p.log_x = true;  // x = 0 is not drawable on a log axis
+  p.log_x = true;                                  // x = 0 is not drawable on a log axis
   EXPECT_EQ(count_of(scatter_plot_svg(p), "<circle"), 6u);
   ScatterPlot nothing;
   nothing.title = "t";
@@ -186,48 +191,89 @@ TEST(SvgPlot, CellMapColoursWorstRedAndNamesIt) {
   EXPECT_EQ(ramp_color(1.0), "#dc2626");
 }
 
-TEST(VerifyViews, FlatCellCentreCornersInsideAndInteriorDeterministic) {
+// Random views first (inside the navigable part, on its plane when flat,
+// horizontal), then the centre and the corners pulled inside; deterministic.
+TEST(VerifyViews, RandomViewsInTheNavigablePartThenCentreAndCorners) {
   const Box3d cell{{0, 0, 0}, {4, 4, 4}};
-  const auto views = plan_verify_views(cell, true, {0, 0, 1}, 7, 42);
-  ASSERT_EQ(views.size(), 7u);
-  EXPECT_EQ(views[0].kind, VerifyViewKind::centre);
-  EXPECT_EQ(views[0].eye, (Vec3d{2, 2, 2}));
-  for (int i = 1; i <= 4; ++i) {
+  const Box3d flat{{0, 0, 1.7}, {4, 4, 1.7}};  // a walkthrough region at eye height
+  const auto views = plan_verify_views(cell, flat, {0, 0, 1}, 3, true, 42);
+  ASSERT_EQ(views.size(), 8u);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(views[i].kind, VerifyViewKind::random);
+  EXPECT_EQ(views[3].kind, VerifyViewKind::centre);
+  EXPECT_EQ(views[3].eye, (Vec3d{2, 2, 1.7}));
+  for (int i = 4; i < 8; ++i) {
     EXPECT_EQ(views[i].kind, VerifyViewKind::corner);
-    EXPECT_DOUBLE_EQ(views[i].eye.z, 2);  // at eye height
     EXPECT_NEAR(std::abs(views[i].eye.x - 2), 1.96, 1e-12);
     EXPECT_NEAR(std::abs(views[i].eye.y - 2), 1.96, 1e-12);
   }
-  for (int i = 5; i < 7; ++i) EXPECT_EQ(views[i].kind, VerifyViewKind::interior);
   for (const auto& v : views) {
-    EXPECT_DOUBLE_EQ(v.look.z, v.eye.z);                    // horizontal
+    EXPECT_DOUBLE_EQ(v.eye.z, 1.7);       // at eye height
+    EXPECT_DOUBLE_EQ(v.look.z, v.eye.z);  // horizontal
     EXPECT_NEAR(length(v.look - v.eye), 4, 1e-12);
-    EXPECT_GT(v.eye.x, 0);
-    EXPECT_LT(v.eye.x, 4);
-    EXPECT_GT(v.eye.y, 0);
-    EXPECT_LT(v.eye.y, 4);
+    EXPECT_GE(v.eye.x, 0);
+    EXPECT_LE(v.eye.x, 4);
+    EXPECT_GE(v.eye.y, 0);
+    EXPECT_LE(v.eye.y, 4);
   }
-  const auto again = plan_verify_views(cell, true, {0, 0, 1}, 7, 42);
-  for (int i = 0; i < 7; ++i) EXPECT_EQ(again[i].eye, views[i].eye);
-  EXPECT_NE(plan_verify_views(cell, true, {0, 0, 1}, 7, 43)[6].eye, views[6].eye);
+  const auto again = plan_verify_views(cell, flat, {0, 0, 1}, 3, true, 42);
+  for (int i = 0; i < 8; ++i) {
+    EXPECT_EQ(again[i].eye, views[i].eye);
+    EXPECT_EQ(again[i].look, views[i].look);
+  }
+  EXPECT_NE(plan_verify_views(cell, flat, {0, 0, 1}, 3, true, 43)[2].eye, views[2].eye);
+  EXPECT_EQ(plan_verify_views(cell, flat, {0, 0, 1}, 3, false, 42).size(), 3u);
 
-  const auto cube = plan_verify_views(cell, false, {0, 0, 1}, 9, 1);
+  const auto cube = plan_verify_views(cell, cell, {0, 0, 1}, 1, true, 1);
+  ASSERT_EQ(cube.size(), 10u);  // 1 random, centre, 8 corners
   int low = 0, high = 0;
-  for (int i = 1; i <= 8; ++i) {
+  for (int i = 2; i < 10; ++i) {
     EXPECT_EQ(cube[i].kind, VerifyViewKind::corner);
-    low += cube[i].eye.z < 1, high += cube[i].eye.z > 3;
+    low += cube[i].eye.z<1, high += cube[i].eye.z> 3;
   }
   EXPECT_EQ(low, 4);
   EXPECT_EQ(high, 4);
-  EXPECT_THROW(plan_verify_views(cell, true, {0, 0, 1}, 0, 1), std::invalid_argument);
+  EXPECT_THROW(plan_verify_views(cell, flat, {0, 0, 1}, 0, true, 1), std::invalid_argument);
+  EXPECT_THROW(plan_verify_views(cell, Box3d{}, {0, 0, 1}, 1, true, 1), std::invalid_argument);
+}
+
+// The headline's eyes are uniform over the navigable part and their
+// directions uniform over the circle: chi-square over an 8 x 8 grid of
+// positions and 16 yaw sectors, pooled over many cells' seeds (as verify
+// seeds each cell), below the 0.999 quantile of the chi-square distribution.
+// The generator is deterministic, so this cannot flake; a biased plan (points
+// pulled to the centre, corners or a band, yaws from a few directions) fails.
+TEST(VerifyViews, RandomViewsAreUniformInPositionAndDirection) {
+  const Box3d cell{{10, 20, 0}, {14, 24, 4}};
+  const Box3d navigable{{10, 21, 1.5}, {14, 24, 1.5}};  // cut by the region on one side
+  constexpr int kGrid = 8, kSectors = 16, kCells = 500, kPerCell = 8;
+  std::vector<int> cells_hit(kGrid * kGrid, 0), sectors(kSectors, 0);
+  for (int c = 0; c < kCells; ++c)
+    for (const auto& v : plan_verify_views(cell, navigable, {0, 0, 1}, kPerCell, false,
+                                           1 * 0x9E3779B97F4A7C15ull + std::uint64_t(c))) {
+      ASSERT_EQ(v.kind, VerifyViewKind::random);
+      ASSERT_GE(v.eye.y, 21);  // never outside the navigable part
+      ASSERT_DOUBLE_EQ(v.eye.z, 1.5);
+      const int gx = std::min(kGrid - 1, int((v.eye.x - 10) / 4 * kGrid));
+      const int gy = std::min(kGrid - 1, int((v.eye.y - 21) / 3 * kGrid));
+      ++cells_hit[gy * kGrid + gx];
+      const double yaw = std::atan2(v.look.y - v.eye.y, v.look.x - v.eye.x) + M_PI;  // [0, 2 pi]
+      ++sectors[std::min(kSectors - 1, int(yaw / (2 * M_PI) * kSectors))];
+    }
+  const auto chi_square = [](const std::vector<int>& counts) {
+    double total = 0, chi = 0;
+    for (int n : counts) total += n;
+    const double expected = total / double(counts.size());
+    for (int n : counts) chi += (n - expected) * (n - expected) / expected;
+    return chi;
+  };
+  EXPECT_LT(chi_square(cells_hit), 103.4);  // 63 degrees of freedom: the 0.999 quantile
+  EXPECT_LT(chi_square(sectors), 37.7);     // 15 degrees of freedom: 0.999 quantile 37.7
 }
 
 TEST(VerifyViews, RegionsFromConfigText) {
   const auto regions = regions_of_config_text("up=z\ncells.size=4\nregion=4,6,1.7,40,34,1.7\n");
   ASSERT_EQ(regions.size(), 1u);
   EXPECT_EQ(regions[0].hi, (Vec3d{40, 34, 1.7}));
-  EXPECT_TRUE(region_is_flat(regions[0], {0, 0, 1}, 4));
-  EXPECT_FALSE(region_is_flat(Box3d{{0, 0, 0}, {8, 8, 8}}, {0, 0, 1}, 4));
   EXPECT_THROW(regions_of_config_text("region=1,2,3\n"), std::invalid_argument);
 }
 
@@ -276,6 +322,7 @@ TEST(VerifyRun, BlackModelReportsBlankTruthViews) {
   vo.threads = 1;
   vo.quiet = true;
   vo.sample_views = false;
+  vo.reference_views = false;
   const VerifySummary s = run_verify(c.database, dir / "report", vo);
   EXPECT_EQ(s.views, 2u);
   EXPECT_EQ(s.truth_blank_views, 2u);
@@ -284,12 +331,14 @@ TEST(VerifyRun, BlackModelReportsBlankTruthViews) {
   EXPECT_TRUE(j["cells"][0]["views"][0]["truth_blank"].get<bool>());
   EXPECT_NE(read_text(dir / "report" / "report.html").find("truth views are blank"), std::string::npos);
 
-  // And the command's summary line says so.
-  const auto cli = test::run_cellbake("verify " + c.database.string() + " --report " + (dir / "cli").string() +
-                                      " --views-per-cell 1 --size 16x16 --threads 1 --quiet");
+  // And the command's summary line says so (one random view and the centre: the
+  // region is a point, so the navigable part has no corners apart from it).
+  const auto cli =
+      test::run_cellbake("verify " + c.database.string() + " --report " + (dir / "cli").string() +
+                         " --views-per-cell 1 --size 16x16 --threads 1 --quiet");
   EXPECT_EQ(cli.exit_code, 0) << cli.output;
-  EXPECT_NE(cli.output.find("1 of 1 truth views blank"), std::string::npos) << cli.output;
-  EXPECT_NE(cli.output.find("warning: 1 of 1 truth views are blank"), std::string::npos) << cli.output;
+  EXPECT_NE(cli.output.find("2 of 2 truth views blank"), std::string::npos) << cli.output;
+  EXPECT_NE(cli.output.find("warning: 2 of 2 truth views are blank"), std::string::npos) << cli.output;
 }
 
 // The room store's cells of 2 m over `region` (near budget 600, 32² faces) into DIR/cells.db.
@@ -304,7 +353,7 @@ BakeConfig room_cells(const test::TempDir& dir, const Box3d& region) {
   return c;
 }
 
-// Two planned 64x48 views per cell (no views at the sample points), quiet.
+// Two random 64x48 views per cell (no reference views), quiet.
 VerifyOptions two_small_views(int threads) {
   VerifyOptions vo;
   vo.views_per_cell = 2;
@@ -313,6 +362,7 @@ VerifyOptions two_small_views(int threads) {
   vo.threads = threads;
   vo.quiet = true;
   vo.sample_views = false;
+  vo.reference_views = false;
   return vo;
 }
 
@@ -334,9 +384,9 @@ TEST(VerifyRun, ViewsDrawnAsExactGeometryAreCountedAsIdentical) {
   EXPECT_EQ(s.identical_views, 2u);
   EXPECT_TRUE(std::isinf(s.psnr_median_db));
 
-  const auto cli =
-      test::run_cellbake("verify " + c.database.string() + " --report " + (dir / "cli").string() +
-                         " --views-per-cell 2 --size 64x48 --threads 1");
+  const auto cli = test::run_cellbake(
+      "verify " + c.database.string() + " --report " + (dir / "cli").string() +
+      " --views-per-cell 2 --no-reference-views --no-sample-views --size 64x48 --threads 1");
   EXPECT_EQ(cli.exit_code, 0) << cli.output;
   EXPECT_NE(cli.output.find("2 of 2 views identical to the truth"), std::string::npos) << cli.output;
   EXPECT_NE(cli.output.find("note: every view the cells drew equals the truth"), std::string::npos)
@@ -348,12 +398,13 @@ TEST(VerifyRun, TinyBakeReportIsCompleteAndResumable) {
   test::ingest_room_store(dir.path());
   BakeConfig c = room_cells(dir, Box3d{{1, 1, 1.6}, {5, 3, 1.6}});  // 2 x 1 cells of 2 m
   c.image_format = "png";
+  c.far_choice = "tdm";  // depth meshes everywhere: finite PSNR in every view, so every plot has points
   BakeOptions bo;
   bo.threads = 2;
   bo.quiet = true;
   ASSERT_EQ(run_bake(c, bo).cells_baked, 2u);
 
-  VerifyOptions vo = two_small_views(2);  // planned views only here; views at the sample points are checked below
+  VerifyOptions vo = two_small_views(2);  // random views only here; reference views are checked below
   const std::filesystem::path report = dir / "report";
   const VerifySummary s = run_verify(c.database, report, vo);
   EXPECT_EQ(s.cells_selected, 2u);
@@ -387,9 +438,10 @@ TEST(VerifyRun, TinyBakeReportIsCompleteAndResumable) {
       EXPECT_GE(v["distance_from_sample"].get<double>(), 0.0);
       EXPECT_TRUE(v["psnr_db"].is_null() || v["psnr_db"].get<double>() > 5.0);
     }
-    EXPECT_EQ(cell["views"][0]["kind"], "centre");
-    EXPECT_NEAR(cell["views"][0]["distance_from_sample"].get<double>(), 0.0, 1e-9);  // sample at the centre
-    EXPECT_EQ(cell["views"][1]["kind"], "corner");
+    for (const auto& v : cell["views"]) {
+      EXPECT_EQ(v["kind"], "random");
+      EXPECT_DOUBLE_EQ(v["eye"][2].get<double>(), 1.6);  // in the region's plane
+    }
     EXPECT_TRUE(std::filesystem::file_size(report / cell["triptych"].get<std::string>()) > 100);
   }
   EXPECT_EQ(j["summary"]["views"].get<int>(), 4);
@@ -415,9 +467,11 @@ TEST(VerifyRun, TinyBakeReportIsCompleteAndResumable) {
   EXPECT_EQ(changed.cells_rendered, 2u);
   EXPECT_EQ(changed.views_rendered, 6u);
 
-  // Views at every sample point too, each with the root-alone columns, and
-  // the void curve and seconds per sample.
+  // Views at every sample point and at the centre and corners too (after the
+  // random ones, summarised apart), the sample views with the root-alone
+  // columns, and the void curve and seconds per sample.
   vo.sample_views = true;
+  vo.reference_views = true;
   run_verify(c.database, report, vo);
   const nlohmann::json k = nlohmann::json::parse(read_text(report / "report.json"));
   CellDb db(c.database, CellDb::Mode::read_only);
@@ -426,10 +480,14 @@ TEST(VerifyRun, TinyBakeReportIsCompleteAndResumable) {
     ASSERT_TRUE(row);
     const std::size_t samples = row->samples.size();
     ASSERT_GE(samples, 5u);
-    ASSERT_EQ(cell["views"].size(), 3u + samples);
+    ASSERT_EQ(cell["views"].size(), 3u + 5u + samples);  // random, centre and 4 corners, samples
     ASSERT_EQ(cell["void_curve"].size(), samples);
     ASSERT_EQ(cell["sample_seconds"].size(), samples);
-    for (std::size_t i = 3; i < 3 + samples; ++i) {
+    for (std::size_t i = 0; i < 3; ++i) EXPECT_EQ(cell["views"][i]["kind"], "random");
+    EXPECT_EQ(cell["views"][3]["kind"], "centre");
+    for (std::size_t i = 4; i < 8; ++i) EXPECT_EQ(cell["views"][i]["kind"], "corner");
+    EXPECT_LT(cell["worst_view"].get<int>(), 3);  // the triptych shows a random view
+    for (std::size_t i = 8; i < 8 + samples; ++i) {
       const auto& v = cell["views"][i];
       EXPECT_EQ(v["kind"], "sample");
       EXPECT_NEAR(v["distance_from_sample"].get<double>(), 0.0, 1e-9);
@@ -438,6 +496,8 @@ TEST(VerifyRun, TinyBakeReportIsCompleteAndResumable) {
     }
   }
   EXPECT_TRUE(k["summary"]["psnr_db_root"].contains("median_sample"));
+  EXPECT_EQ(k["summary"]["psnr_db"]["count"].get<int>(), 6);  // the headline: the random views alone
+  EXPECT_TRUE(k["summary"]["psnr_db"].contains("median_reference"));
 }
 
 }  // namespace

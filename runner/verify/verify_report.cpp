@@ -15,7 +15,9 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+nlohmann::json number_or_null(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+}
 
 double number_from(const nlohmann::json& j, const char* key, double if_null) {
   const auto& v = j.at(key);
@@ -23,7 +25,9 @@ double number_from(const nlohmann::json& j, const char* key, double if_null) {
 }
 
 nlohmann::json vec_json(const Vec3d& v) { return nlohmann::json::array({v.x, v.y, v.z}); }
-Vec3d vec_from(const nlohmann::json& j) { return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()}; }
+Vec3d vec_from(const nlohmann::json& j) {
+  return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()};
+}
 
 std::string fmt(double v, const char* format = "%.4g") {
   if (std::isnan(v)) return "&ndash;";
@@ -52,11 +56,11 @@ std::string void_curve_text(const VerifyCellResult& c) {
   return out.empty() ? "&ndash;" : out;
 }
 
-// Over the cell's views whose truth is not blank (NaN when none is).
+// Over the cell's headline (random) views whose truth is not blank (NaN when none is).
 double cell_median(const VerifyCellResult& c, double VerifyViewResult::*field) {
   std::vector<double> v;
   for (const auto& view : c.views)
-    if (!view.truth_blank) v.push_back(view.*field);
+    if (!view.truth_blank && is_headline_view(view.kind)) v.push_back(view.*field);
   return median_of(v);
 }
 
@@ -72,7 +76,8 @@ std::string base64(const std::string& bytes) {
   out.reserve((bytes.size() + 2) / 3 * 4);
   std::size_t i = 0;
   for (; i + 2 < bytes.size(); i += 3) {
-    const unsigned v = (unsigned char)bytes[i] << 16 | (unsigned char)bytes[i + 1] << 8 | (unsigned char)bytes[i + 2];
+    const unsigned v =
+        (unsigned char)bytes[i] << 16 | (unsigned char)bytes[i + 1] << 8 | (unsigned char)bytes[i + 2];
     out += {k[v >> 18], k[(v >> 12) & 63], k[(v >> 6) & 63], k[v & 63]};
   }
   if (i + 1 == bytes.size()) {
@@ -102,10 +107,14 @@ std::string inline_svg(const std::string& svg) {
 
 const char* kind_color(VerifyViewKind k) {
   switch (k) {
-    case VerifyViewKind::centre: return "#1f77b4";
-    case VerifyViewKind::corner: return "#d62728";
-    case VerifyViewKind::interior: return "#2ca02c";
-    case VerifyViewKind::sample: return "#9467bd";
+    case VerifyViewKind::centre:
+      return "#1f77b4";
+    case VerifyViewKind::corner:
+      return "#d62728";
+    case VerifyViewKind::random:
+      return "#2ca02c";
+    case VerifyViewKind::sample:
+      return "#9467bd";
   }
   return "#000";
 }
@@ -115,12 +124,13 @@ template <class X, class Y>
 std::vector<PlotSeries> per_view_series(const std::vector<VerifyCellResult>& cells, X x, Y y) {
   std::vector<PlotSeries> series;
   for (VerifyViewKind k :
-       {VerifyViewKind::centre, VerifyViewKind::corner, VerifyViewKind::interior, VerifyViewKind::sample}) {
+       {VerifyViewKind::random, VerifyViewKind::centre, VerifyViewKind::corner, VerifyViewKind::sample}) {
     PlotSeries s{std::string(view_kind_name(k)) + " views", kind_color(k), {}};
     for (const auto& c : cells)
       for (std::size_t i = 0; i < c.views.size(); ++i)
         if (c.views[i].kind == k)
-          s.points.push_back({x(c.views[i], c), y(c.views[i]), "cell " + std::to_string(c.id) + " view " + std::to_string(i)});
+          s.points.push_back({x(c.views[i], c), y(c.views[i]),
+                              "cell " + std::to_string(c.id) + " view " + std::to_string(i)});
     if (!s.points.empty()) series.push_back(std::move(s));
   }
   return series;
@@ -165,27 +175,41 @@ const std::vector<MetricInfo>& verify_metrics() {
 
 MetricStats metric_stats(const std::vector<VerifyCellResult>& cells, const MetricInfo& metric) {
   MetricStats s;
-  std::vector<double> all, centre, corner, interior, sample;
+  std::vector<double> random, centre, corner, sample, reference;
   for (const auto& c : cells)
     for (std::size_t i = 0; i < c.views.size(); ++i) {
-      const double v = c.views[i].*metric.field;
-      if (std::isnan(v) || c.views[i].truth_blank) continue;
-      all.push_back(v);
-      if (c.views[i].kind == VerifyViewKind::centre) centre.push_back(v);
-      if (c.views[i].kind == VerifyViewKind::corner) corner.push_back(v);
-      if (c.views[i].kind == VerifyViewKind::interior) interior.push_back(v);
-      if (c.views[i].kind == VerifyViewKind::sample) sample.push_back(v);
+      const VerifyViewResult& view = c.views[i];
+      const double v = view.*metric.field;
+      if (std::isnan(v) || view.truth_blank) continue;
+      switch (view.kind) {
+        case VerifyViewKind::random:
+          random.push_back(v);
+          break;
+        case VerifyViewKind::centre:
+          centre.push_back(v);
+          break;
+        case VerifyViewKind::corner:
+          corner.push_back(v);
+          break;
+        case VerifyViewKind::sample:
+          sample.push_back(v);
+          break;
+      }
+      if (!is_headline_view(view.kind)) {
+        reference.push_back(v);
+        continue;
+      }
       if (s.count++ == 0 || (metric.higher_is_better ? v < s.worst : v > s.worst)) {
         s.worst = v;
         s.worst_cell = c.id;
         s.worst_view = int(i);
       }
     }
-  s.median = median_of(all);
+  s.median = median_of(random);
   s.median_centre = median_of(centre);
   s.median_corner = median_of(corner);
-  s.median_interior = median_of(interior);
   s.median_sample = median_of(sample);
+  s.median_reference = median_of(reference);
   return s;
 }
 
@@ -197,7 +221,7 @@ bool worse_view(const VerifyViewResult& a, const VerifyViewResult& b) {
 int worst_view_index(const std::vector<VerifyViewResult>& views) {
   int worst = -1;
   for (int i = 0; i < int(views.size()); ++i)
-    if (worst < 0 || worse_view(views[i], views[worst])) worst = i;
+    if (is_headline_view(views[i].kind) && (worst < 0 || worse_view(views[i], views[worst]))) worst = i;
   return worst;
 }
 
@@ -278,8 +302,11 @@ VerifyCellResult cell_from_json(const nlohmann::json& j) {
     r.extra_fraction = number_from(v, "extra_fraction", kNaN);
     r.depth_error_median = number_from(v, "depth_error_median", kNaN);
     // Absent in reports of older versions.
-    r.psnr_db_root = v.contains("psnr_db_root") ? number_from(v, "psnr_db_root", std::numeric_limits<double>::infinity()) : kNaN;
-    r.hole_fraction_root = v.contains("hole_fraction_root") ? number_from(v, "hole_fraction_root", kNaN) : kNaN;
+    r.psnr_db_root = v.contains("psnr_db_root")
+                         ? number_from(v, "psnr_db_root", std::numeric_limits<double>::infinity())
+                         : kNaN;
+    r.hole_fraction_root =
+        v.contains("hole_fraction_root") ? number_from(v, "hole_fraction_root", kNaN) : kNaN;
     r.samples_drawn = v.value("samples_drawn", std::uint64_t{0});
     r.truth_blank = v.value("truth_blank", false);
     r.triangles_impostor = v.at("triangles_impostor").get<std::uint64_t>();
@@ -304,6 +331,7 @@ nlohmann::json summary_json(const std::vector<VerifyCellResult>& cells) {
     bake.push_back(c.bake_seconds_total());
     bytes.push_back(double(c.bytes));
     for (const auto& v : c.views) {
+      if (!is_headline_view(v.kind)) continue;
       tri_imp.push_back(double(v.triangles_impostor));
       tri_truth.push_back(double(v.triangles_truth));
     }
@@ -321,7 +349,7 @@ nlohmann::json summary_json(const std::vector<VerifyCellResult>& cells) {
                  {"worst_view", st.worst_view},
                  {"median_centre", number_or_null(st.median_centre)},
                  {"median_corner", number_or_null(st.median_corner)},
-                 {"median_interior", number_or_null(st.median_interior)},
+                 {"median_reference", number_or_null(st.median_reference)},
                  {"median_sample", number_or_null(st.median_sample)},
                  {"higher_is_better", m.higher_is_better}};
   }
@@ -342,7 +370,8 @@ void write_text_file_atomically(const std::filesystem::path& file, const std::st
   }
   std::error_code ec;
   std::filesystem::rename(tmp, file, ec);
-  if (ec) throw std::runtime_error("cannot rename " + tmp.string() + " to " + file.string() + ": " + ec.message());
+  if (ec)
+    throw std::runtime_error("cannot rename " + tmp.string() + " to " + file.string() + ": " + ec.message());
 }
 
 VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const VerifyReportInput& input) {
@@ -360,12 +389,14 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
 
   // Plots.
   const std::string psnr_label = "median PSNR per cell, dB (higher is better)";
-  auto per_cell = [&](const std::string& name, const std::string& title, const std::string& x_label, bool log_x,
-                      auto x_of) {
+  auto per_cell = [&](const std::string& name, const std::string& title, const std::string& x_label,
+                      bool log_x, auto x_of) {
     ScatterPlot p{title, x_label, psnr_label, log_x, 640, 420, {}};
     PlotSeries s{"cells", "#1f77b4", {}};
     for (const auto& c : cells)
-      if (c.error.empty()) s.points.push_back({x_of(c), cell_median(c, &VerifyViewResult::psnr_db), "cell " + std::to_string(c.id)});
+      if (c.error.empty())
+        s.points.push_back(
+            {x_of(c), cell_median(c, &VerifyViewResult::psnr_db), "cell " + std::to_string(c.id)});
     p.series.push_back(std::move(s));
     write_svg(dir / "plots" / name, scatter_plot_svg(p), files);
   };
@@ -374,24 +405,43 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
   per_cell("psnr_vs_bytes.svg", "Error vs stored bytes", "stored bytes per cell", false,
            [](const VerifyCellResult& c) { return double(c.bytes); });
   {
-    ScatterPlot p{"Error vs triangles drawn", "triangles drawn (impostor: near + far field)",
-                  "PSNR per view, dB (higher is better)", false, 640, 420,
-                  per_view_series(cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return double(v.triangles_impostor); },
-                                  [](const VerifyViewResult& v) { return v.psnr_db; })};
+    ScatterPlot p{
+        "Error vs triangles drawn",
+        "triangles drawn (impostor: near + far field)",
+        "PSNR per view, dB (higher is better)",
+        false,
+        640,
+        420,
+        per_view_series(
+            cells,
+            [](const VerifyViewResult& v, const VerifyCellResult&) { return double(v.triangles_impostor); },
+            [](const VerifyViewResult& v) { return v.psnr_db; })};
     write_svg(dir / "plots" / "psnr_vs_triangles.svg", scatter_plot_svg(p), files);
   }
   {
-    ScatterPlot p{"Error vs distance from the sample point", "eye distance from the nearest sample point (model units)",
-                  "PSNR per view, dB (higher is better)", false, 640, 420,
-                  per_view_series(cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return v.distance_from_sample; },
-                                  [](const VerifyViewResult& v) { return v.psnr_db; })};
+    ScatterPlot p{
+        "Error vs distance from the sample point",
+        "eye distance from the nearest sample point (model units)",
+        "PSNR per view, dB (higher is better)",
+        false,
+        640,
+        420,
+        per_view_series(
+            cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return v.distance_from_sample; },
+            [](const VerifyViewResult& v) { return v.psnr_db; })};
     write_svg(dir / "plots" / "psnr_vs_distance.svg", scatter_plot_svg(p), files);
   }
   {
-    ScatterPlot p{"Holes vs distance from the sample point", "eye distance from the nearest sample point (model units)",
-                  "hole fraction per view (lower is better)", false, 640, 420,
-                  per_view_series(cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return v.distance_from_sample; },
-                                  [](const VerifyViewResult& v) { return v.hole_fraction; })};
+    ScatterPlot p{
+        "Holes vs distance from the sample point",
+        "eye distance from the nearest sample point (model units)",
+        "hole fraction per view (lower is better)",
+        false,
+        640,
+        420,
+        per_view_series(
+            cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return v.distance_from_sample; },
+            [](const VerifyViewResult& v) { return v.hole_fraction; })};
     write_svg(dir / "plots" / "holes_vs_distance.svg", scatter_plot_svg(p), files);
   }
 
@@ -407,7 +457,8 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
   for (const auto& c : cells) order.push_back(&c);
   // Worst cells last, so the worst of a stack of layers shows on top.
   std::stable_sort(order.begin(), order.end(), [](const VerifyCellResult* x, const VerifyCellResult* y) {
-    const double px = cell_median(*x, &VerifyViewResult::psnr_db), py = cell_median(*y, &VerifyViewResult::psnr_db);
+    const double px = cell_median(*x, &VerifyViewResult::psnr_db),
+                 py = cell_median(*y, &VerifyViewResult::psnr_db);
     return (std::isnan(px) ? -1e300 : -px) < (std::isnan(py) ? -1e300 : -py);
   });
   for (const auto* c : order)
@@ -420,45 +471,68 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
   // report.html
   std::ostringstream h;
   h << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>cellbake verify: "
-    << escape_xml(input.database) << "</title>\n<style>\n"
+    << escape_xml(input.database)
+    << "</title>\n<style>\n"
        "body{font-family:sans-serif;margin:2em;color:#222;max-width:1400px}\n"
-       "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}\n"
+       "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:3px "
+       "8px;text-align:right}\n"
        "th{background:#f0f0f0}td.l,th.l{text-align:left}tr.bad td{background:#fde2e2}\n"
        ".plots svg{margin:4px;border:1px solid #ddd}.trip img{max-width:100%;border:1px solid #ddd}\n"
        "code{background:#f4f4f4;padding:1px 4px}.note{color:#666;font-size:90%}\n"
        "</style></head><body>\n";
-  h << "<h1>cellbake verify</h1>\n<p>Database <code>" << escape_xml(input.database) << "</code>; parameters <code>"
-    << escape_xml(input.params.dump()) << "</code>. " << summary["cells"].get<std::size_t>() << " cells ("
-    << summary["cells_failed"].get<std::size_t>() << " could not be verified), " << summary["views"].get<std::size_t>()
-    << " views: each rendered as the cell's impostor (near field + textured depth meshes) and as ground truth.</p>\n";
+  h << "<h1>cellbake verify</h1>\n<p>Database <code>" << escape_xml(input.database)
+    << "</code>; parameters <code>" << escape_xml(input.params.dump()) << "</code>. "
+    << summary["cells"].get<std::size_t>() << " cells (" << summary["cells_failed"].get<std::size_t>()
+    << " could not be verified), " << summary["views"].get<std::size_t>()
+    << " views: each rendered as the cell's impostor (near field + textured depth meshes) and as ground "
+       "truth.</p>\n";
   if (input.params.contains("lighting"))
     h << "<p>Lighting (truth and samples alike): " << escape_xml(input.params["lighting"].get<std::string>())
       << ".</p>\n";
   if (const std::size_t blank = summary["truth_blank_views"].get<std::size_t>(); blank > 0)
     h << "<p><b>Warning: " << blank << " of " << summary["views"].get<std::size_t>()
-      << " truth views are blank</b> (one colour over every covered pixel, or nothing covered): their PSNR and SSIM "
-         "say nothing about the bake. A black or single-colour model (check the ingest summary's vertex colours) "
+      << " truth views are blank</b> (one colour over every covered pixel, or nothing covered): their PSNR "
+         "and SSIM "
+         "say nothing about the bake. A black or single-colour model (check the ingest summary's vertex "
+         "colours) "
          "or views that see nothing.</p>\n";
-  h << "<p class=\"note\">PSNR and SSIM compare colours (higher is better); hole = truth surface the impostor "
-       "misses, skin = impostor surface >5% nearer than the truth, extra = impostor surface where the truth is empty "
+  h << "<p class=\"note\">PSNR and SSIM compare colours (higher is better); hole = truth surface the "
+       "impostor "
+       "misses, skin = impostor surface >5% nearer than the truth, extra = impostor surface where the truth "
+       "is empty "
        "(fractions, lower is better); depth error = median relative depth error; ms = warm frame time of the "
        "software renderer while other views render in parallel.</p>\n";
-  h << "<h2>Summary</h2>\n<table><tr><th class=\"l\">metric</th><th>median</th><th>worst</th><th>worst cell</th>"
-       "<th>median, centre views</th><th>median, corner views</th><th>median, interior views</th>"
-       "<th>median, views at sample points</th></tr>\n";
+  h << "<h2>Summary</h2>\n<p class=\"note\">The headline columns (median, worst, worst cell), the cell map, "
+       "the "
+       "per-cell figures and the worst views are over the <b>random views</b>: eyes drawn uniformly from "
+       "each "
+       "cell's navigable part, looking in uniformly random horizontal directions &mdash; what a person "
+       "walking "
+       "anywhere in the cell sees. The reference views are reported apart: the centre and corners of the "
+       "navigable part and the cell's sample points, where the far field was sampled and is at its "
+       "best.</p>\n"
+       "<table><tr><th class=\"l\">metric</th><th>median</th><th>worst</th><th>worst cell</th>"
+       "<th>median, centre views</th><th>median, corner views</th><th>median, views at sample points</th>"
+       "<th>median, all reference views</th></tr>\n";
   for (const auto& m : verify_metrics()) {
     const MetricStats st = metric_stats(cells, m);
     h << "<tr><td class=\"l\">" << m.name << "</td><td>" << fmt(st.median) << "</td><td>" << fmt(st.worst)
-      << "</td><td>" << (st.count ? std::to_string(st.worst_cell) : "&ndash;") << "</td><td>" << fmt(st.median_centre)
-      << "</td><td>" << fmt(st.median_corner) << "</td><td>" << fmt(st.median_interior) << "</td><td>"
-      << fmt(st.median_sample) << "</td></tr>\n";
+      << "</td><td>" << (st.count ? std::to_string(st.worst_cell) : "&ndash;") << "</td><td>"
+      << fmt(st.median_centre) << "</td><td>" << fmt(st.median_corner) << "</td><td>" << fmt(st.median_sample)
+      << "</td><td>" << fmt(st.median_reference) << "</td></tr>\n";
   }
-  h << "</table>\n<p>Median per cell: bake " << fmt(summary["bake_seconds_median"].is_null() ? kNaN : summary["bake_seconds_median"].get<double>())
+  h << "</table>\n<p>Median per cell: bake "
+    << fmt(summary["bake_seconds_median"].is_null() ? kNaN : summary["bake_seconds_median"].get<double>())
     << " s, " << fmt(summary["bytes_median"].is_null() ? kNaN : summary["bytes_median"].get<double>(), "%.0f")
     << " bytes stored; triangles drawn per view: impostor "
-    << fmt(summary["triangles_impostor_median"].is_null() ? kNaN : summary["triangles_impostor_median"].get<double>(), "%.0f")
+    << fmt(summary["triangles_impostor_median"].is_null()
+               ? kNaN
+               : summary["triangles_impostor_median"].get<double>(),
+           "%.0f")
     << ", truth "
-    << fmt(summary["triangles_truth_median"].is_null() ? kNaN : summary["triangles_truth_median"].get<double>(), "%.0f")
+    << fmt(summary["triangles_truth_median"].is_null() ? kNaN
+                                                       : summary["triangles_truth_median"].get<double>(),
+           "%.0f")
     << ".</p>\n";
 
   // Everything inline: the report is one file that can be copied or mailed
@@ -475,7 +549,8 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
     svg << in.rdbuf();
     h << "<!-- plots/" << escape_xml(p.filename().string()) << " -->\n" << inline_svg(svg.str()) << "\n";
   }
-  h << "</div>\n<p class=\"note\">Views whose impostor equals the truth exactly (PSNR = &infin;) are not drawn in "
+  h << "</div>\n<p class=\"note\">Views whose impostor equals the truth exactly (PSNR = &infin;) are not "
+       "drawn in "
        "PSNR plots.</p>\n";
 
   // Worst views: each cell's worst view, worst first.
@@ -487,54 +562,70 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
     return vx.psnr_db < vy.psnr_db || (vx.psnr_db == vy.psnr_db && vx.hole_fraction > vy.hole_fraction);
   });
   if (int(worst.size()) > input.worst_views) worst.resize(std::max(0, input.worst_views));
-  h << "<h2>Worst views</h2>\n<p class=\"note\">Left to right: ground truth, impostor, error image (magenta hole, "
+  h << "<h2>Worst views</h2>\n<p class=\"note\">Left to right: ground truth, impostor, error image (magenta "
+       "hole, "
        "yellow skin, cyan extra surface, blue&rarr;green&rarr;red colour error).</p>\n";
   for (const auto* c : worst) {
     const auto& v = c->views[c->worst_view];
-    h << "<div class=\"trip\"><h3>cell " << c->id << ", view " << c->worst_view << " (" << view_kind_name(v.kind)
-      << "): PSNR " << fmt(v.psnr_db, "%.2f") << " dB, SSIM " << fmt(v.ssim, "%.3f") << ", holes "
-      << fmt(v.hole_fraction, "%.4f") << ", skins " << fmt(v.skin_fraction, "%.4f") << "</h3>\n<p class=\"note\">eye ("
-      << fmt(v.eye.x, "%.3f") << ", " << fmt(v.eye.y, "%.3f") << ", " << fmt(v.eye.z, "%.3f") << "), look ("
-      << fmt(v.look.x, "%.3f") << ", " << fmt(v.look.y, "%.3f") << ", " << fmt(v.look.z, "%.3f")
-      << "), " << fmt(v.distance_from_sample, "%.3f") << " from the sample point</p>\n<img src=\""
-      << png_data_uri(dir / c->triptych) << "\" alt=\"cell " << c->id << " (" << escape_xml(c->triptych)
-      << ")\"></div>\n";
+    h << "<div class=\"trip\"><h3>cell " << c->id << ", view " << c->worst_view << " ("
+      << view_kind_name(v.kind) << "): PSNR " << fmt(v.psnr_db, "%.2f") << " dB, SSIM " << fmt(v.ssim, "%.3f")
+      << ", holes " << fmt(v.hole_fraction, "%.4f") << ", skins " << fmt(v.skin_fraction, "%.4f")
+      << "</h3>\n<p class=\"note\">eye (" << fmt(v.eye.x, "%.3f") << ", " << fmt(v.eye.y, "%.3f") << ", "
+      << fmt(v.eye.z, "%.3f") << "), look (" << fmt(v.look.x, "%.3f") << ", " << fmt(v.look.y, "%.3f") << ", "
+      << fmt(v.look.z, "%.3f") << "), " << fmt(v.distance_from_sample, "%.3f")
+      << " from the sample point</p>\n<img src=\"" << png_data_uri(dir / c->triptych) << "\" alt=\"cell "
+      << c->id << " (" << escape_xml(c->triptych) << ")\"></div>\n";
   }
 
-  h << "<h2>Cells</h2>\n<table><tr><th>cell</th><th>views</th><th>median PSNR</th><th>min PSNR</th><th>median SSIM</th>"
-       "<th>max holes</th><th>max skins</th><th>median depth err</th><th>tris impostor</th><th>tris truth</th>"
+  h << "<h2>Cells</h2>\n<table><tr><th>cell</th><th>views</th><th>median PSNR</th><th>min "
+       "PSNR</th><th>median SSIM</th>"
+       "<th>max holes</th><th>max skins</th><th>median depth err</th><th>tris impostor</th><th>tris "
+       "truth</th>"
        "<th>max tris impostor / truth</th><th>far tris stored: depth meshes / geometry</th>"
-       "<th>ms impostor</th><th>ms truth</th><th>bake s</th><th>bytes</th><th>KB colour / mesh / near list</th><th>samples</th>"
+       "<th>ms impostor</th><th>ms truth</th><th>bake s</th><th>bytes</th><th>KB colour / mesh / near "
+       "list</th><th>samples</th>"
        "<th>median PSNR, root sample alone</th><th>max holes, root sample alone</th>"
        "<th class=\"l\">void curve (after each sample)</th><th class=\"l\">note</th></tr>\n";
   const MetricStats psnr_stats = metric_stats(cells, verify_metrics()[0]);
   for (const auto& c : cells) {
     std::vector<double> psnr, holes, skins;
-    for (const auto& v : c.views) psnr.push_back(v.psnr_db), holes.push_back(v.hole_fraction), skins.push_back(v.skin_fraction);
+    for (const auto& v : c.views)
+      psnr.push_back(v.psnr_db), holes.push_back(v.hole_fraction), skins.push_back(v.skin_fraction);
     const double min_psnr = psnr.empty() ? kNaN : *std::min_element(psnr.begin(), psnr.end());
     const double max_ratio = max_of(c, &VerifyViewResult::triangle_ratio);
     const bool bad = !c.error.empty() || (psnr_stats.count && c.id == psnr_stats.worst_cell);
-    h << "<tr" << (bad ? " class=\"bad\"" : "") << "><td>" << c.id << "</td><td>" << c.views.size() << "</td><td>"
-      << fmt(cell_median(c, &VerifyViewResult::psnr_db), "%.2f") << "</td><td>" << fmt(min_psnr, "%.2f") << "</td><td>"
-      << fmt(cell_median(c, &VerifyViewResult::ssim), "%.3f") << "</td><td>"
-      << fmt(holes.empty() ? kNaN : *std::max_element(holes.begin(), holes.end()), "%.4f") << "</td><td>"
-      << fmt(skins.empty() ? kNaN : *std::max_element(skins.begin(), skins.end()), "%.4f") << "</td><td>"
-      << fmt(cell_median(c, &VerifyViewResult::depth_error_median), "%.4f") << "</td><td>"
-      << fmt(median_of([&] { std::vector<double> v; for (auto& x : c.views) v.push_back(double(x.triangles_impostor)); return v; }()), "%.0f")
+    h << "<tr" << (bad ? " class=\"bad\"" : "") << "><td>" << c.id << "</td><td>" << c.views.size()
+      << "</td><td>" << fmt(cell_median(c, &VerifyViewResult::psnr_db), "%.2f") << "</td><td>"
+      << fmt(min_psnr, "%.2f") << "</td><td>" << fmt(cell_median(c, &VerifyViewResult::ssim), "%.3f")
+      << "</td><td>" << fmt(holes.empty() ? kNaN : *std::max_element(holes.begin(), holes.end()), "%.4f")
+      << "</td><td>" << fmt(skins.empty() ? kNaN : *std::max_element(skins.begin(), skins.end()), "%.4f")
+      << "</td><td>" << fmt(cell_median(c, &VerifyViewResult::depth_error_median), "%.4f") << "</td><td>"
+      << fmt(median_of([&] {
+               std::vector<double> v;
+               for (auto& x : c.views) v.push_back(double(x.triangles_impostor));
+               return v;
+             }()),
+             "%.0f")
       << "</td><td>"
-      << fmt(median_of([&] { std::vector<double> v; for (auto& x : c.views) v.push_back(double(x.triangles_truth)); return v; }()), "%.0f")
-      << "</td><td>" << fmt(max_ratio, "%.2f") << (max_ratio > 1 ? " (draws more than the model)" : "") << "</td><td>"
-      << c.far_triangles << " / " << c.far_geometry_triangles
-      << "</td><td>" << fmt(cell_median(c, &VerifyViewResult::ms_impostor), "%.1f") << "</td><td>"
-      << fmt(cell_median(c, &VerifyViewResult::ms_truth), "%.1f") << "</td><td>" << fmt(c.bake_seconds_total(), "%.2f")
-      << "</td><td>" << c.bytes << "</td><td>" << fmt(c.colour_bytes / 1024.0, "%.1f") << " / "
-      << fmt(c.mesh_bytes / 1024.0, "%.1f") << " / " << fmt(c.near_list_bytes / 1024.0, "%.1f") << "</td><td>"
-      << c.void_curve.size() << "</td><td>"
+      << fmt(median_of([&] {
+               std::vector<double> v;
+               for (auto& x : c.views) v.push_back(double(x.triangles_truth));
+               return v;
+             }()),
+             "%.0f")
+      << "</td><td>" << fmt(max_ratio, "%.2f") << (max_ratio > 1 ? " (draws more than the model)" : "")
+      << "</td><td>" << c.far_triangles << " / " << c.far_geometry_triangles << "</td><td>"
+      << fmt(cell_median(c, &VerifyViewResult::ms_impostor), "%.1f") << "</td><td>"
+      << fmt(cell_median(c, &VerifyViewResult::ms_truth), "%.1f") << "</td><td>"
+      << fmt(c.bake_seconds_total(), "%.2f") << "</td><td>" << c.bytes << "</td><td>"
+      << fmt(c.colour_bytes / 1024.0, "%.1f") << " / " << fmt(c.mesh_bytes / 1024.0, "%.1f") << " / "
+      << fmt(c.near_list_bytes / 1024.0, "%.1f") << "</td><td>" << c.void_curve.size() << "</td><td>"
       << fmt(cell_median(c, &VerifyViewResult::psnr_db_root), "%.2f") << "</td><td>"
-      << fmt(max_of(c, &VerifyViewResult::hole_fraction_root), "%.4f") << "</td><td class=\"l\">" << void_curve_text(c)
-      << "</td><td class=\"l\">" << escape_xml(c.error) << "</td></tr>\n";
+      << fmt(max_of(c, &VerifyViewResult::hole_fraction_root), "%.4f") << "</td><td class=\"l\">"
+      << void_curve_text(c) << "</td><td class=\"l\">" << escape_xml(c.error) << "</td></tr>\n";
   }
-  h << "</table>\n<p class=\"note\">Per-view numbers: <a href=\"report.json\">report.json</a>.</p>\n</body></html>\n";
+  h << "</table>\n<p class=\"note\">Per-view numbers: <a "
+       "href=\"report.json\">report.json</a>.</p>\n</body></html>\n";
   files.html = dir / "report.html";
   write_text_file_atomically(files.html, h.str());
   return files;

@@ -48,11 +48,13 @@ struct VerifyCellResult {
   std::uint64_t bytes = 0, near_triangles = 0, far_triangles = 0;
   std::uint64_t far_geometry_triangles = 0;  // exact far geometry stored (issue #13)
   std::uint64_t colour_bytes = 0, mesh_bytes = 0, near_list_bytes = 0;  // stored bytes by kind (issue #16)
-  std::vector<double> void_curve;  // per sample in the order taken: worst candidate's void fraction after it (-1: not measured)
+  std::vector<double> void_curve;  // per sample in the order taken: worst candidate's void fraction after it
+                                   // (-1: not measured)
   std::vector<double> sample_seconds;  // bake seconds per sample, same order
-  std::string error;     // non-empty when the cell could not be verified (views then empty)
-  std::string triptych;  // its worst view as truth | impostor | error image, path relative to the report folder
-  int worst_view = -1;   // index into views of that view
+  std::string error;                   // non-empty when the cell could not be verified (views then empty)
+  std::string
+      triptych;  // its worst view as truth | impostor | error image, path relative to the report folder
+  int worst_view = -1;  // index into views of that view
   std::vector<VerifyViewResult> views;
   double bake_seconds_total() const;
 };
@@ -61,16 +63,20 @@ struct VerifyCellResult {
 // of the two middle ones; NaN when there are none. Does not modify `values`.
 double median_of(const std::vector<double>& values);
 
+// One metric's statistics. The headline — count, median, worst — is over the
+// random views (runner/verify/verify_views.h: uniform over each cell's
+// navigable part, what a person walking there sees); the reference views
+// (centre, corners, sample points) are summarised apart.
 struct MetricStats {
-  std::size_t count = 0;  // non-NaN values
+  std::size_t count = 0;  // non-NaN values of random views
   double median = std::numeric_limits<double>::quiet_NaN();
   double worst = std::numeric_limits<double>::quiet_NaN();  // minimum when higher is better, else maximum
   std::int64_t worst_cell = 0;  // the cell of the (first) worst value; 0 when count == 0
   int worst_view = -1;          // its index in that cell's views
-  double median_centre = std::numeric_limits<double>::quiet_NaN();  // over centre views only
-  double median_corner = std::numeric_limits<double>::quiet_NaN();  // over corner views only
-  double median_interior = std::numeric_limits<double>::quiet_NaN();  // over interior views only
-  double median_sample = std::numeric_limits<double>::quiet_NaN();  // over views at sample points only
+  double median_centre = std::numeric_limits<double>::quiet_NaN();     // over centre views only
+  double median_corner = std::numeric_limits<double>::quiet_NaN();     // over corner views only
+  double median_sample = std::numeric_limits<double>::quiet_NaN();     // over views at sample points only
+  double median_reference = std::numeric_limits<double>::quiet_NaN();  // over all three kinds above
 };
 
 // The metrics summarised, each with whether higher is better.
@@ -81,7 +87,7 @@ struct MetricInfo {
 };
 const std::vector<MetricInfo>& verify_metrics();
 
-// Statistics of one metric over every view of every cell whose truth is not
+// Statistics of one metric (MetricStats) over the views of every cell whose truth is not
 // blank (a blank truth, the model out of view or one colour, says nothing;
 // VerifySummary counts those views), cells in the given order, views in
 // order: ties for the worst go to the first. Deterministic.
@@ -91,8 +97,9 @@ MetricStats metric_stats(const std::vector<VerifyCellResult>& cells, const Metri
 // before one whose truth is, then the lower PSNR, then the larger hole fraction.
 bool worse_view(const VerifyViewResult& a, const VerifyViewResult& b);
 
-// The view of a cell that counts as its worst (worse_view; ties go to the
-// lower index); -1 when the cell has no views.
+// The view of a cell that counts as its worst, shown as its triptych: the
+// worst of its random (headline) views by worse_view, ties to the lower
+// index; -1 when the cell has no random views.
 int worst_view_index(const std::vector<VerifyViewResult>& views);
 
 // JSON forms (non-finite numbers as null, read back as +infinity for psnr_db
@@ -104,15 +111,16 @@ VerifyCellResult cell_from_json(const nlohmann::json& j);
 
 // The `summary` object of report.json: cells, cells_failed, views,
 // truth_blank_views (views whose truth was blank: their PSNR says nothing), and per
-// metric of verify_metrics() {count, median, worst, worst_cell, worst_view,
-// median_centre, median_corner}; also median bake seconds and bytes per cell.
+// metric of verify_metrics() {count, median, worst, worst_cell, worst_view (over
+// the random views), median_centre, median_corner, median_sample,
+// median_reference}; also median bake seconds and bytes per cell.
 nlohmann::json summary_json(const std::vector<VerifyCellResult>& cells);
 
 struct VerifyReportInput {
-  std::string database;    // shown in the report
-  nlohmann::json params;   // the verify parameters, shown and stored
+  std::string database;                 // shown in the report
+  nlohmann::json params;                // the verify parameters, shown and stored
   std::vector<VerifyCellResult> cells;  // in id order
-  int worst_views = 6;     // triptychs shown (cells with the worst views)
+  int worst_views = 6;                  // triptychs shown (cells with the worst views)
 };
 
 // The report's absolute colour scale for a cell's median PSNR, dB: at or below

@@ -20,6 +20,7 @@
 #include "runner/progress.h"
 #include "runner/verify/verify_report.h"
 #include "stages/render/gl_context.h"
+#include "stages/sample_points.h"
 #include "storage/cell_db.h"
 #include "storage/geometry_store.h"
 #include "storage/meta_values.h"
@@ -39,13 +40,22 @@ namespace {
 std::string describe_lighting(const ShadingLights& l) {
   if (!l.lit) return "unlit (colours as stored)";
   char text[256];
-  std::snprintf(text, sizeof text,
-                "lit, two-sided Lambert: key (%.3f %.3f %.3f) x %.2f, fill (%.3f %.3f %.3f) x %.2f, ambient %.2f",
-                l.key.x, l.key.y, l.key.z, l.key_strength, l.fill.x, l.fill.y, l.fill.z, l.fill_strength, l.ambient);
+  std::snprintf(
+      text, sizeof text,
+      "lit, two-sided Lambert: key (%.3f %.3f %.3f) x %.2f, fill (%.3f %.3f %.3f) x %.2f, ambient %.2f",
+      l.key.x, l.key.y, l.key.z, l.key_strength, l.fill.x, l.fill.y, l.fill.z, l.fill_strength, l.ambient);
   return text;
 }
 
-constexpr int kCacheVersion = 2;  // 2: views record truth_blank
+constexpr int kCacheVersion = 3;  // 2: views record truth_blank; 3: random views over the navigable part
+
+// Where a cell's eyes may be: its bounds intersected with its region (the
+// bounds alone when the database names no such region).
+Box3d navigable_of(const CellRow& row, const std::vector<Box3d>& regions) {
+  if (row.region < 0 || row.region >= int(regions.size())) return row.bounds;
+  const Box3d part = navigable_part(row.bounds, regions[std::size_t(row.region)]);
+  return part.empty() ? row.bounds : part;
+}
 
 struct CellTask {
   std::int64_t id = 0;
@@ -83,7 +93,8 @@ void save_cache(const std::filesystem::path& file, const std::map<std::int64_t, 
 }
 
 // Side by side: truth | impostor | error image.
-std::vector<Rgba8> triptych(const ViewFrame& truth, const ViewFrame& impostor, const std::vector<Rgba8>& diff) {
+std::vector<Rgba8> triptych(const ViewFrame& truth, const ViewFrame& impostor,
+                            const std::vector<Rgba8>& diff) {
   const int w = truth.width, h = truth.height;
   std::vector<Rgba8> out(std::size_t(3) * w * h);
   for (int y = 0; y < h; ++y)
@@ -102,8 +113,10 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
                          const VerifyOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   if (options.views_per_cell < 1) throw std::invalid_argument("verify: --views-per-cell must be at least 1");
-  if (options.width < 8 || options.height < 8) throw std::invalid_argument("verify: image size must be at least 8x8");
-  const int threads = options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+  if (options.width < 8 || options.height < 8)
+    throw std::invalid_argument("verify: image size must be at least 8x8");
+  const int threads =
+      options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
   if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", threads > 1 ? "1" : "2", 1);
 
   CellDb db(database, CellDb::Mode::read_only);
@@ -117,15 +130,21 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
   const std::string config_text = db.meta("config").value_or("");
   const std::vector<Box3d> regions = regions_of_config_text(config_text);
   const ShadingLights shading = shading_lights(shading_of_config_text(config_text), up);
-  const std::uint64_t far_budget =
-      options.far_budget.value_or(far_budget_of_config_text(config_text).value_or(SampleSelectionParams{}.far_budget));
+  const std::uint64_t far_budget = options.far_budget.value_or(
+      far_budget_of_config_text(config_text).value_or(SampleSelectionParams{}.far_budget));
 
-  nlohmann::json params{{"views_per_cell", options.views_per_cell}, {"width", options.width},
-                        {"height", options.height},                 {"fov_y_deg", options.fov_y_deg},
-                        {"near_plane", options.near_plane},         {"seed", options.seed},
-                        {"up", up_name},                            {"store_hash", db.meta("store_hash").value_or("")},
-                        {"far_budget", far_budget},         {"max_samples", options.max_samples},
+  nlohmann::json params{{"views_per_cell", options.views_per_cell},
+                        {"width", options.width},
+                        {"height", options.height},
+                        {"fov_y_deg", options.fov_y_deg},
+                        {"near_plane", options.near_plane},
+                        {"seed", options.seed},
+                        {"up", up_name},
+                        {"store_hash", db.meta("store_hash").value_or("")},
+                        {"far_budget", far_budget},
+                        {"max_samples", options.max_samples},
                         {"sample_views", options.sample_views},
+                        {"reference_views", options.reference_views},
                         {"lighting", describe_lighting(shading)}};
   const std::string params_key = params.dump();
 
@@ -150,7 +169,8 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
   summary.cells_selected = specs.size();
   for (const auto& s : specs) {
     const auto stamp = stamps.find(s.id);
-    const std::string key = (stamp != stamps.end() ? stamp->second.content_hash : std::string()) + "|" + params_key;
+    const std::string key =
+        (stamp != stamps.end() ? stamp->second.content_hash : std::string()) + "|" + params_key;
     auto it = cached.find(s.id);
     if (it != cached.end() && it->second.key == key && it->second.error.empty() &&
         (it->second.triptych.empty() || std::filesystem::exists(report_dir / it->second.triptych))) {
@@ -188,25 +208,20 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
       result.far_triangles = row->far_triangles;
       result.far_geometry_triangles = row->far_geometry_triangles;
       const DecodedCell cell = decode_cell(*row, &store);  // far pieces cut here, not timed as drawing
-      const bool flat = row->region >= 0 && row->region < int(regions.size()) &&
-                        region_is_flat(regions[row->region], up, cell_size);
-      auto plans = plan_verify_views(row->bounds, flat, up, options.views_per_cell,
-                                     options.seed * 0x9E3779B97F4A7C15ull + std::uint64_t(task.id));
+      const Box3d navigable = navigable_of(*row, regions);
+      auto plans =
+          plan_verify_views(row->bounds, navigable, up, options.views_per_cell, options.reference_views,
+                            options.seed * 0x9E3779B97F4A7C15ull + std::uint64_t(task.id));
       for (const auto& s : row->samples) {
         result.void_curve.push_back(s.void_after);
         result.sample_seconds.push_back(s.seconds);
       }
       if (options.sample_views && row->samples.size() > 1) {
-        // Look from each sample point too, along the golden-angle directions the plans use after theirs.
-        const std::size_t planned = plans.size();
-        const auto extra = plan_verify_views(row->bounds, flat, up, int(planned + row->samples.size()),
-                                             options.seed * 0x9E3779B97F4A7C15ull + std::uint64_t(task.id));
-        for (std::size_t k = 0; k < row->samples.size(); ++k) {
-          VerifyViewPlan plan = extra[planned + k];
-          plan.look = row->samples[k].eye + (plan.look - plan.eye);
-          plan.eye = row->samples[k].eye;
-          plan.kind = VerifyViewKind::sample;
-          plans.push_back(plan);
+        // Look from each sample point too, along the golden-angle directions after the plans' own.
+        const double reach = length(row->bounds.extent());
+        for (const SampleRow& s : row->samples) {
+          const Vec3d dir = golden_angle_direction(int(plans.size()), up);
+          plans.push_back({VerifyViewKind::sample, s.eye, s.eye + dir * reach});
         }
       }
       if (!drawer) {
@@ -228,17 +243,22 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
         ViewFrame impostor, truth, root;
         VerifyViewResult v;
         try {
-          drawer->draw_impostor(camera, options.width, options.height, cell, draw_options, impostor);  // uploads
-          const SceneFrameStats is = drawer->draw_impostor(camera, options.width, options.height, cell, draw_options, impostor);
+          drawer->draw_impostor(camera, options.width, options.height, cell, draw_options,
+                                impostor);  // uploads
+          const SceneFrameStats is =
+              drawer->draw_impostor(camera, options.width, options.height, cell, draw_options, impostor);
           if (cell.samples.size() > 1)
             drawer->draw_impostor(camera, options.width, options.height, cell, root_options, root);
           v.samples_drawn = is.samples_drawn;
           drawer->draw_truth(camera, options.width, options.height, draw_options, truth);  // uploads
-          const SceneFrameStats ts = drawer->draw_truth(camera, options.width, options.height, draw_options, truth);
+          const SceneFrameStats ts =
+              drawer->draw_truth(camera, options.width, options.height, draw_options, truth);
           drawer->release_context();
-          v.triangles_impostor = is.chunk_triangles + is.far_triangles;  // near + far geometry + depth meshes drawn
+          v.triangles_impostor =
+              is.chunk_triangles + is.far_triangles;  // near + far geometry + depth meshes drawn
           v.triangles_truth = ts.chunk_triangles;
-          if (v.triangles_truth > 0) v.triangle_ratio = double(v.triangles_impostor) / double(v.triangles_truth);
+          if (v.triangles_truth > 0)
+            v.triangle_ratio = double(v.triangles_impostor) / double(v.triangles_truth);
           v.ms_impostor = is.milliseconds;
           v.ms_truth = ts.milliseconds;
         } catch (...) {
@@ -253,7 +273,8 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
         v.eye = plan.eye;
         v.look = plan.look;
         v.distance_from_sample = std::numeric_limits<double>::infinity();
-        for (const auto& s : row->samples) v.distance_from_sample = std::min(v.distance_from_sample, length(plan.eye - s.eye));
+        for (const auto& s : row->samples)
+          v.distance_from_sample = std::min(v.distance_from_sample, length(plan.eye - s.eye));
         v.psnr_db = m.psnr_db;
         v.ssim = m.ssim;
         v.hole_fraction = m.hole_fraction;
@@ -261,12 +282,14 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
         v.extra_fraction = m.extra_fraction;
         v.depth_error_median = m.depth_error_median;
         v.truth_blank = is_blank(truth);
-        if (result.views.empty() || worse_view(v, result.views[result.worst_view])) {
-          result.worst_view = int(result.views.size());
+        result.views.push_back(v);
+        // The cell's worst view, shown as its triptych (worst_view_index: of the random views, which come
+        // first).
+        if (worst_view_index(result.views) == int(result.views.size()) - 1) {
+          result.worst_view = int(result.views.size()) - 1;
           worst_truth = std::move(truth);
           worst_impostor = std::move(impostor);
         }
-        result.views.push_back(v);
       }
       if (result.worst_view >= 0) {
         result.triptych = "views/cell_" + std::to_string(task.id) + ".png";
@@ -289,11 +312,13 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
     } else if (options.verbose) {
       std::vector<double> psnr;
       for (const VerifyViewResult& v : result.views)
-        if (!v.truth_blank) psnr.push_back(v.psnr_db);
+        if (!v.truth_blank && is_headline_view(v.kind)) psnr.push_back(v.psnr_db);
       char line[160];
-      std::snprintf(line, sizeof line, "cell %lld: %zu views, median PSNR %.2f dB, worst %.2f dB (view %d)",
+      std::snprintf(line, sizeof line,
+                    "cell %lld: %zu views, median PSNR %.2f dB, worst %.2f dB (view %d) over random views",
                     (long long)result.id, result.views.size(), median_of(psnr),
-                    result.worst_view >= 0 ? result.views[result.worst_view].psnr_db : 0.0, result.worst_view);
+                    result.worst_view >= 0 ? result.views[result.worst_view].psnr_db : 0.0,
+                    result.worst_view);
       progress.line(line);
     }
     summary.views_rendered += result.views.size();
@@ -311,7 +336,8 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
     tbb::enumerable_thread_specific<std::unique_ptr<SceneDrawer>> drawers;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pending.size(), 1),
                       [&](const tbb::blocked_range<std::size_t>& range) {
-                        for (std::size_t i = range.begin(); i != range.end(); ++i) verify_cell(pending[i], drawers.local());
+                        for (std::size_t i = range.begin(); i != range.end(); ++i)
+                          verify_cell(pending[i], drawers.local());
                       });
   });
   if (!options.quiet && !pending.empty()) progress.finish();
@@ -325,7 +351,9 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
   const VerifyReportFiles files = write_verify_report(report_dir, input);
   summary.report_html = files.html;
   summary.report_json = files.json;
-  summary.psnr_median_db = metric_stats(input.cells, verify_metrics()[0]).median;
+  const MetricStats psnr = metric_stats(input.cells, verify_metrics()[0]);
+  summary.psnr_median_db = psnr.median;
+  summary.psnr_median_reference_db = psnr.median_reference;
   for (const auto& c : input.cells) {
     summary.views += c.views.size();
     for (const auto& v : c.views) {

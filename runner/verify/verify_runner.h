@@ -15,22 +15,25 @@
 namespace cellbake {
 
 struct VerifyOptions {
-  int views_per_cell = 6;
-  std::string cells;               // selection like "1-10,15" ("" = all done cells)
-  int width = 320, height = 240;   // image size, pixels
+  // Views at uniformly random points of each cell's navigable part, random
+  // horizontal directions: the headline (runner/verify/verify_views.h).
+  int views_per_cell = 4;
+  std::string cells;              // selection like "1-10,15" ("" = all done cells)
+  int width = 320, height = 240;  // image size, pixels
   double fov_y_deg = 60;
-  double near_plane = 0.05;        // model units
-  std::uint64_t seed = 1;          // interior view points
-  int threads = 0;                 // 0 = all cores
-  int worst_views = 8;             // triptychs shown in the report
-  std::filesystem::path store;     // geometry store override ("" = the database's meta `store`)
-  bool quiet = false;              // no progress output
-  bool verbose = false;            // a line per verified cell: views, median and worst PSNR
+  double near_plane = 0.05;     // model units
+  std::uint64_t seed = 1;       // random view points and directions
+  int threads = 0;              // 0 = all cores
+  int worst_views = 8;          // triptychs shown in the report
+  std::filesystem::path store;  // geometry store override ("" = the database's meta `store`)
+  bool quiet = false;           // no progress output
+  bool verbose = false;         // a line per verified cell: views, median and worst PSNR
   // Far field drawn per view (viewer/sample_selection.h); every view is also
   // drawn with the root sample alone for the 1-sample columns.
   std::optional<std::uint64_t> far_budget;  // unset: the database's view.far_budget
-  int max_samples = 0;             // 0 = as many as the budget allows
-  bool sample_views = true;        // also look from every sample point of the cell
+  int max_samples = 0;                      // 0 = as many as the budget allows
+  bool sample_views = true;                 // also look from every sample point of the cell (reported apart)
+  bool reference_views = true;              // also look from the centre and the corners (reported apart)
 };
 
 struct VerifySummary {
@@ -39,12 +42,14 @@ struct VerifySummary {
   std::uint64_t cells_reused = 0;    // taken from verify-cells.json
   std::uint64_t cells_failed = 0;    // could not be decoded or drawn (listed in the report)
   std::uint64_t views_rendered = 0;
-  std::uint64_t views = 0;              // in the report (rendered + reused)
-  std::uint64_t truth_blank_views = 0;  // of those, truth views that were blank (image_metrics.h is_blank): PSNR says nothing
+  std::uint64_t views = 0;  // in the report (rendered + reused)
+  std::uint64_t truth_blank_views =
+      0;  // of those, truth views that were blank (image_metrics.h is_blank): PSNR says nothing
   // Of those, views (truth not blank) the cells drew exactly: nothing approximated.
   std::uint64_t identical_views = 0;
-  // Over the views whose truth is not blank (+inf when all are identical; NaN without any).
+  // Over the random views whose truth is not blank (+inf when all are identical; NaN without any).
   double psnr_median_db = 0;
+  double psnr_median_reference_db = 0;  // the same over centre, corner and sample-point views
   std::filesystem::path report_html, report_json;
   double seconds = 0;
 };

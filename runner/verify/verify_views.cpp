@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
+
+#include "stages/sample_points.h"
 
 namespace cellbake {
 namespace {
@@ -25,73 +28,80 @@ struct SplitMix64 {
   double uniform() { return double(next() >> 11) * (1.0 / 9007199254740992.0); }  // [0, 1)
 };
 
+// The horizontal unit direction at `yaw` radians around the up axis `u`.
+Vec3d yaw_direction(double yaw, int u) {
+  Vec3d dir;
+  dir[(u + 1) % 3] = std::cos(yaw);
+  dir[(u + 2) % 3] = std::sin(yaw);
+  return dir;
+}
+
 }  // namespace
 
 const char* view_kind_name(VerifyViewKind kind) {
   switch (kind) {
-    case VerifyViewKind::centre: return "centre";
-    case VerifyViewKind::corner: return "corner";
-    case VerifyViewKind::interior: return "interior";
-    case VerifyViewKind::sample: return "sample";
+    case VerifyViewKind::random:
+      return "random";
+    case VerifyViewKind::centre:
+      return "centre";
+    case VerifyViewKind::corner:
+      return "corner";
+    case VerifyViewKind::sample:
+      return "sample";
   }
-  return "centre";
+  return "random";
 }
 
 VerifyViewKind parse_view_kind(const std::string& name) {
+  if (name == "random") return VerifyViewKind::random;
   if (name == "centre") return VerifyViewKind::centre;
   if (name == "corner") return VerifyViewKind::corner;
-  if (name == "interior") return VerifyViewKind::interior;
   if (name == "sample") return VerifyViewKind::sample;
   throw std::invalid_argument("verify views: unknown view kind \"" + name + "\"");
 }
 
-std::vector<VerifyViewPlan> plan_verify_views(const Box3d& bounds, bool flat, const Vec3d& up, int count,
-                                              std::uint64_t seed) {
-  if (count < 1) throw std::invalid_argument("verify views: need at least one view per cell");
-  if (bounds.empty()) throw std::invalid_argument("verify views: empty cell bounds");
-  const int u = up_index(up), a = (u + 1) % 3, b = (u + 2) % 3;
-  const Vec3d c = bounds.center();
-  const Vec3d e = bounds.extent();
-  const double size = std::max({e.x, e.y, e.z});
-  const double inset = 0.01 * size;
-
-  std::vector<std::pair<VerifyViewKind, Vec3d>> points{{VerifyViewKind::centre, c}};
-  const int up_layers = flat ? 1 : 2;
-  for (int k = 0; k < up_layers && int(points.size()) < count; ++k)
-    for (int corner = 0; corner < 4 && int(points.size()) < count; ++corner) {
-      Vec3d p = c;
-      // Corners go round the square: (lo, lo), (hi, lo), (hi, hi), (lo, hi).
-      const bool hi_a = corner == 1 || corner == 2, hi_b = corner >= 2;
-      p[a] = hi_a ? bounds.hi[a] - inset : bounds.lo[a] + inset;
-      p[b] = hi_b ? bounds.hi[b] - inset : bounds.lo[b] + inset;
-      if (!flat) p[u] = k == 1 ? bounds.hi[u] - inset : bounds.lo[u] + inset;
-      points.push_back({VerifyViewKind::corner, p});
-    }
-  SplitMix64 rng{seed};
-  while (int(points.size()) < count) {
-    Vec3d p = c;
-    for (int axis = 0; axis < 3; ++axis) {
-      const double t = rng.uniform();
-      if (axis == u && flat) continue;
-      p[axis] = bounds.lo[axis] + inset + t * (e[axis] - 2 * inset);
-    }
-    points.push_back({VerifyViewKind::interior, p});
-  }
-
-  std::vector<VerifyViewPlan> views;
-  constexpr double kGoldenAngle = 137.50776405003785 * 3.14159265358979323846 / 180.0;
-  for (int k = 0; k < count; ++k) {
-    const double yaw = std::fmod(k * kGoldenAngle, 2 * 3.14159265358979323846);
-    Vec3d dir;
-    dir[a] = std::cos(yaw);
-    dir[b] = std::sin(yaw);
-    views.push_back({points[k].first, points[k].second, points[k].second + dir * size});
-  }
-  return views;
+Vec3d golden_angle_direction(int k, const Vec3d& up) {
+  constexpr double kGoldenAngle = 137.50776405003785 * std::numbers::pi / 180.0;
+  return yaw_direction(std::fmod(k * kGoldenAngle, 2 * std::numbers::pi), up_index(up));
 }
 
-bool region_is_flat(const Box3d& region, const Vec3d& up, double cell_size) {
-  return dot(region.extent(), up) < cell_size;
+std::vector<VerifyViewPlan> plan_verify_views(const Box3d& cell, const Box3d& navigable, const Vec3d& up,
+                                              int random_views, bool reference_views, std::uint64_t seed) {
+  if (random_views < 1) throw std::invalid_argument("verify views: need at least one random view per cell");
+  if (cell.empty() || !is_finite(cell.lo) || !is_finite(cell.hi))
+    throw std::invalid_argument("verify views: empty or non-finite cell bounds");
+  if (navigable.empty() || !is_finite(navigable.lo) || !is_finite(navigable.hi))
+    throw std::invalid_argument("verify views: empty or non-finite navigable part");
+  const int u = up_index(up);
+  const Vec3d e = cell.extent();
+  const double size = std::max({e.x, e.y, e.z});
+
+  std::vector<VerifyViewPlan> views;
+  SplitMix64 rng{seed};
+  for (int k = 0; k < random_views; ++k) {
+    Vec3d p;
+    for (int axis = 0; axis < 3; ++axis)
+      p[axis] = std::min(navigable.hi[axis], navigable.lo[axis] + rng.uniform() * navigable.extent()[axis]);
+    const Vec3d dir = yaw_direction(rng.uniform() * 2 * std::numbers::pi, u);
+    views.push_back({VerifyViewKind::random, p, p + dir * size});
+  }
+  if (reference_views) {
+    const Vec3d c = navigable.center();
+    const auto add = [&](VerifyViewKind kind, const Vec3d& p) {
+      views.push_back({kind, p, p + golden_angle_direction(int(views.size()), up) * size});
+    };
+    add(VerifyViewKind::centre, c);
+    for (const Vec3d& corner : initial_sample_points(navigable, InitialSamples::corners)) {
+      if (corner == c) continue;  // a point-sized part has no corners apart from its centre
+      Vec3d p = corner;
+      for (int axis = 0; axis < 3; ++axis) {
+        const double inset = std::min(0.01 * size, 0.5 * navigable.extent()[axis]);
+        p[axis] += p[axis] < c[axis] ? inset : p[axis] > c[axis] ? -inset : 0;
+      }
+      add(VerifyViewKind::corner, p);
+    }
+  }
+  return views;
 }
 
 }  // namespace cellbake
