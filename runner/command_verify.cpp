@@ -23,7 +23,7 @@ namespace cellbake {
 
 void add_verify_command(CLI::App& app) {
   struct Options {
-    std::string database, report, size = "320x240";
+    std::string database, report, size = "320x240", sweep;
     bool json = false;
     VerifyOptions verify;
   };
@@ -62,6 +62,10 @@ void add_verify_command(CLI::App& app) {
       "--far-budget", opt->verify.far_budget,
       "Far-field triangles per view: the nearest sample with its ancestors, then more while under this "
       "(default: the bake's view.far_budget)");
+  cmd->add_option("--far-budget-sweep", opt->sweep,
+                  "Speed against error as a curve: draw every random view once more per far budget in this "
+                  "comma-separated list (e.g. 25000,50000,100000,200000,400000); the report plots median PSNR "
+                  "against triangles drawn");
   cmd->add_option("--max-samples", opt->verify.max_samples,
                   "At most this many samples per view (0 = no cap; 1 = the root sample alone, the "
                   "single-sample far field)")
@@ -69,6 +73,7 @@ void add_verify_command(CLI::App& app) {
       ->capture_default_str();
   cmd->callback([opt] {
     std::tie(opt->verify.width, opt->verify.height) = parse_image_size(opt->size);
+    if (!opt->sweep.empty()) opt->verify.far_budget_sweep = parse_far_budget_sweep(opt->sweep);
     opt->verify.quiet = quiet_output();
     opt->verify.verbose = verbose_output();
     const VerifySummary s = run_verify(opt->database, opt->report, opt->verify);

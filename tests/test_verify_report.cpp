@@ -122,6 +122,38 @@ TEST(VerifyStats, BlankTruthViewsCountInNoStatisticAndAreNeverTheWorst) {
   EXPECT_EQ(worst_view_index(b.views), 1);
 }
 
+TEST(FarBudgetSweep, ParsesSortsAndRefusesBadItems) {
+  EXPECT_EQ(parse_far_budget_sweep("200000,50000,50000,100"), (std::vector<std::uint64_t>{100, 50000, 200000}));
+  for (const char* bad : {"", "1,,2", "0", "-5", "1e5", "12x", "+3"})
+    EXPECT_THROW(parse_far_budget_sweep(bad), std::invalid_argument) << bad;
+}
+
+// Medians per budget over the views that were drawn under it; the plot has a
+// point per budget and names the truth's count; the table a row per budget.
+TEST(FarBudgetSweep, MediansPerBudgetPlotAndTable) {
+  const std::vector<std::vector<FarBudgetPoint>> views{
+      {{1000, 500, 20}, {4000, 2000, 30}},
+      {{4000, 3000, 34}, {1000, 700, 22}},
+      {{1000, 600, 24}, {4000, 2500, kInf}},
+  };
+  const auto rows = summarise_far_budget_sweep(views);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].far_budget, 1000u);
+  EXPECT_EQ(rows[0].views, 3u);
+  EXPECT_DOUBLE_EQ(rows[0].triangles_median, 600);
+  EXPECT_DOUBLE_EQ(rows[0].psnr_median_db, 22);
+  EXPECT_DOUBLE_EQ(rows[0].psnr_worst_db, 20);
+  EXPECT_DOUBLE_EQ(rows[1].triangles_median, 2500);
+  EXPECT_DOUBLE_EQ(rows[1].psnr_median_db, 34);  // 30 34 inf
+  const ScatterPlot plot = far_budget_sweep_plot(rows, 10000);
+  EXPECT_EQ(drawable_points(plot), 2u);
+  EXPECT_NE(plot.x_label.find("10k"), std::string::npos) << plot.x_label;
+  const std::string table = far_budget_sweep_table_html(rows, 10000);
+  EXPECT_EQ(count_of(table, "<tr>"), 3u);
+  EXPECT_NE(table.find("<td>0.25</td>"), std::string::npos) << table;  // 2500 of the truth's 10000
+  EXPECT_TRUE(summarise_far_budget_sweep({}).empty());
+}
+
 TEST(VerifyStats, CellJsonRoundTripsIncludingInfinitePsnr) {
   VerifyCellResult c;
   c.id = 3;
@@ -463,9 +495,22 @@ TEST(VerifyRun, TinyBakeReportIsCompleteAndResumable) {
   EXPECT_EQ(nlohmann::json::parse(read_text(report / "report.json"))["cells"].size(), 2u);
 
   vo.views_per_cell = 3;  // other parameters: everything is rendered again
+  vo.far_budget_sweep = {1, 1000000};  // the root sample alone, and every sample
   const VerifySummary changed = run_verify(c.database, report, vo);
   EXPECT_EQ(changed.cells_rendered, 2u);
   EXPECT_EQ(changed.views_rendered, 6u);
+  const nlohmann::json swept = nlohmann::json::parse(read_text(report / "report.json"));
+  for (const auto& cell : swept["cells"])
+    for (const auto& v : cell["views"]) {
+      ASSERT_EQ(v["far_budget_sweep"].size(), 2u);
+      // More budget draws at least as many triangles.
+      EXPECT_LE(v["far_budget_sweep"][0]["triangles"].get<std::uint64_t>(),
+                v["far_budget_sweep"][1]["triangles"].get<std::uint64_t>());
+      EXPECT_EQ(v["far_budget_sweep"][1]["far_budget"].get<std::uint64_t>(), 1000000u);
+    }
+  EXPECT_TRUE(std::filesystem::exists(report / "plots" / "psnr_vs_triangles_far_budget.svg"));
+  EXPECT_NE(read_text(report / "report.html").find("far budget swept"), std::string::npos);
+  vo.far_budget_sweep.clear();
 
   // Views at every sample point and at the centre and corners too (after the
   // random ones, summarised apart), the sample views with the root-alone

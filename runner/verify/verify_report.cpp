@@ -244,7 +244,14 @@ nlohmann::json to_json(const VerifyViewResult& v) {
           {"triangles_truth", v.triangles_truth},
           {"triangle_ratio", number_or_null(v.triangle_ratio)},
           {"ms_impostor", number_or_null(v.ms_impostor)},
-          {"ms_truth", number_or_null(v.ms_truth)}};
+          {"ms_truth", number_or_null(v.ms_truth)},
+          {"far_budget_sweep", [&] {
+             nlohmann::json points = nlohmann::json::array();
+             for (const FarBudgetPoint& p : v.far_budget_sweep)
+               points.push_back(
+                   {{"far_budget", p.far_budget}, {"triangles", p.triangles}, {"psnr_db", number_or_null(p.psnr_db)}});
+             return points;
+           }()}};
 }
 
 nlohmann::json to_json(const VerifyCellResult& c) {
@@ -300,6 +307,10 @@ VerifyCellResult cell_from_json(const nlohmann::json& j) {
     r.hole_fraction = number_from(v, "hole_fraction", kNaN);
     r.skin_fraction = number_from(v, "skin_fraction", kNaN);
     r.extra_fraction = number_from(v, "extra_fraction", kNaN);
+    if (v.contains("far_budget_sweep"))
+      for (const auto& p : v.at("far_budget_sweep"))
+        r.far_budget_sweep.push_back({p.at("far_budget").get<std::uint64_t>(), p.at("triangles").get<std::uint64_t>(),
+                                      number_from(p, "psnr_db", std::numeric_limits<double>::infinity())});
     r.depth_error_median = number_from(v, "depth_error_median", kNaN);
     // Absent in reports of older versions.
     r.psnr_db_root = v.contains("psnr_db_root")
@@ -445,6 +456,21 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
     write_svg(dir / "plots" / "holes_vs_distance.svg", scatter_plot_svg(p), files);
   }
 
+  // The far-budget sweep's curve, when the views were drawn under several budgets.
+  std::vector<std::vector<FarBudgetPoint>> sweep_views;
+  std::vector<double> truth_triangles;
+  for (const auto& c : cells)
+    for (const auto& v : c.views)
+      if (is_headline_view(v.kind) && !v.truth_blank && !v.far_budget_sweep.empty()) {
+        sweep_views.push_back(v.far_budget_sweep);
+        truth_triangles.push_back(double(v.triangles_truth));
+      }
+  const std::vector<FarBudgetSummary> sweep = summarise_far_budget_sweep(sweep_views);
+  const double sweep_truth_triangles = median_of(truth_triangles);
+  if (!sweep.empty())
+    write_svg(dir / "plots" / "psnr_vs_triangles_far_budget.svg",
+              scatter_plot_svg(far_budget_sweep_plot(sweep, sweep_truth_triangles)), files);
+
   // Cell map in plan: drop the up axis (the one with the most cells sharing one value is not known
   // here, so use the database's up from params when given, else z).
   const std::string up = input.params.value("up", std::string("z"));
@@ -542,6 +568,12 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
     << " dB green; perfect cells (impostor = truth, PSNR = &infin;) dark green, labelled perfect; grey: no "
        "data. Hover a cell for its id and value.</p>\n<div class=\"map\"><!-- cell_map.svg -->\n"
     << inline_svg(cell_map) << "</div>\n";
+  if (!sweep.empty())
+    h << "<h2>Speed against error: far budget swept</h2>\n<p class=\"note\">Every random view drawn once more "
+         "per far-field budget (the nearest sample with its ancestors, then more samples while the far field's "
+         "triangles stay under the budget); the truth draws a median of "
+      << fmt(sweep_truth_triangles, "%.0f") << " triangles per view (frustum-culled).</p>\n"
+      << far_budget_sweep_table_html(sweep, sweep_truth_triangles);
   h << "<h2>Plots</h2>\n<div class=\"plots\">\n";
   for (const auto& p : files.plots) {
     std::ifstream in(p, std::ios::binary);

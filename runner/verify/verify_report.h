@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "runner/verify/far_budget_sweep.h"
 #include "runner/verify/verify_views.h"
 #include "stages/geometry.h"
 
@@ -38,6 +39,8 @@ struct VerifyViewResult {
   // at most 1). NaN when the truth draws nothing.
   double triangle_ratio = std::numeric_limits<double>::quiet_NaN();
   double ms_impostor = 0, ms_truth = 0;  // warm frame, wall clock
+  // The view drawn once more per budget of `verify --far-budget-sweep` (random views only).
+  std::vector<FarBudgetPoint> far_budget_sweep;
 };
 
 struct VerifyCellResult {

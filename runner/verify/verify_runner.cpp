@@ -126,7 +126,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
   GeometryStore store(options.store.empty() ? std::filesystem::path(*store_meta) : options.store);
   const std::string up_name = db.meta("up").value_or("z");
   const Vec3d up = up_axis(up_name);
-  const double cell_size = meta_double(db, "cell_size", 0);
+  meta_double(db, "cell_size", 0);  // not used here, but a damaged value fails the run naming the key
   const std::string config_text = db.meta("config").value_or("");
   const std::vector<Box3d> regions = regions_of_config_text(config_text);
   const ShadingLights shading = shading_lights(shading_of_config_text(config_text), up);
@@ -145,6 +145,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
                         {"max_samples", options.max_samples},
                         {"sample_views", options.sample_views},
                         {"reference_views", options.reference_views},
+                        {"far_budget_sweep", options.far_budget_sweep},
                         {"lighting", describe_lighting(shading)}};
   const std::string params_key = params.dump();
 
@@ -253,6 +254,16 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
           drawer->draw_truth(camera, options.width, options.height, draw_options, truth);  // uploads
           const SceneFrameStats ts =
               drawer->draw_truth(camera, options.width, options.height, draw_options, truth);
+          if (is_headline_view(plan.kind))  // speed against error: the same view under each swept budget
+            for (const std::uint64_t budget : options.far_budget_sweep) {
+              SceneDrawOptions swept = draw_options;
+              swept.samples.far_budget = budget;
+              ViewFrame frame;
+              const SceneFrameStats st =
+                  drawer->draw_impostor(camera, options.width, options.height, cell, swept, frame);
+              v.far_budget_sweep.push_back(
+                  {budget, st.chunk_triangles + st.far_triangles, compare_frames(frame, truth).psnr_db});
+            }
           drawer->release_context();
           v.triangles_impostor =
               is.chunk_triangles + is.far_triangles;  // near + far geometry + depth meshes drawn

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace cellbake {
 
@@ -32,6 +33,9 @@ struct VerifyOptions {
   // drawn with the root sample alone for the 1-sample columns.
   std::optional<std::uint64_t> far_budget;  // unset: the database's view.far_budget
   int max_samples = 0;                      // 0 = as many as the budget allows
+  // Random views drawn once more per budget here (speed against error as a
+  // curve, runner/verify/far_budget_sweep.h); empty: no sweep.
+  std::vector<std::uint64_t> far_budget_sweep;
   bool sample_views = true;                 // also look from every sample point of the cell (reported apart)
   bool reference_views = true;              // also look from the centre and the corners (reported apart)
 };
