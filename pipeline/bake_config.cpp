@@ -190,6 +190,9 @@ const std::map<std::string, Setter>& setters() {
       {"depth_mesh.depth_jump", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.depth_jump = number(n, w, "depth_mesh.depth_jump", 1e-4, 10);
        }},
+      {"depth_mesh.multi_source_skins", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.multi_source_skins = text(n, w, "depth_mesh.multi_source_skins", {"on", "off"});
+       }},
       {"simplify.depth_error_relative", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.depth_error_relative = number(n, w, "simplify.depth_error_relative", 0, 1);
        }},
@@ -370,7 +373,7 @@ std::string describe_bake_config(const BakeConfig& c) {
     << "\nsimplify.delta_boundary_error_px=" << c.delta_boundary_error_px
     << "\nsamples.redundancy_tolerance=" << c.samples_redundancy_tolerance << "\nview.far_budget=" << c.far_budget
     << "\ndepth_mesh.skin_angle_deg=" << c.skin_angle_deg
-    << "\ndepth_mesh.depth_jump=" << c.depth_jump
+    << "\ndepth_mesh.depth_jump=" << c.depth_jump << "\ndepth_mesh.multi_source_skins=" << c.multi_source_skins
     << "\nsimplify.depth_error_relative=" << c.depth_error_relative
     << "\nsimplify.boundary_error_px=" << c.boundary_error_px << "\nsimplify.max_triangles=" << c.max_face_triangles << "\nencode.image_format=" << c.image_format
     << "\nencode.quality=" << c.image_quality << "\nencode.mesh_codec=" << c.mesh_codec

@@ -91,6 +91,10 @@ struct BakeConfig {
   // [depth_mesh]
   double skin_angle_deg = 3.0;   // edges within this angle of the eye ray are skins
   double depth_jump = 0.1;       // relative depth jump beyond which an edge is a skin
+  // "on": an edge is also a skin where another sample of the cell sees past its
+  // midpoint (multi-source skins, stages/depth_mesh.h SkinWitness); "off": the
+  // single-source tests above alone.
+  std::string multi_source_skins = "on";
 
   // [simplify]
   // Interior vertices move only along their eye ray, by at most this much.

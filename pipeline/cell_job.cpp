@@ -45,6 +45,16 @@ DepthMeshParams depth_mesh_params(const BakeConfig& config) {
   return p;
 }
 
+// The parameters for meshing sample `i` of `work`: every other sample that
+// kept its depths as taken is a skin witness.
+DepthMeshParams depth_mesh_params(const BakeConfig& config, const CellWork& work, std::size_t i) {
+  DepthMeshParams p = depth_mesh_params(config);
+  for (std::size_t k = 0; k < work.samples.size(); ++k)
+    if (k != i && !work.samples[k].taken_depth[0].empty())
+      p.witnesses.push_back({work.samples[k].cube.eye, &work.samples[k].taken_depth, work.samples[k].cube.faces[0].size});
+  return p;
+}
+
 void hash_vec(Hasher& h, const Vec3d& v) { h.f64(v.x).f64(v.y).f64(v.z); }
 
 void hash_box(Hasher& h, const Box3d& b) {
@@ -81,6 +91,7 @@ CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::str
   if (cell.region >= 0 && std::size_t(cell.region) < c.regions.size())
     hash_box(in, navigable_part(cell.bounds, c.regions[std::size_t(cell.region)]));
   in.text("depth_mesh").u64(StageVersions::depth_mesh).f64(c.skin_angle_deg).f64(c.depth_jump);
+  if (c.multi_source_skins != "off") in.text("multi_source_skins").text(c.multi_source_skins);
   in.text("simplify").u64(StageVersions::simplify).f64(c.depth_error_relative).f64(c.boundary_error_px).u64(c.max_face_triangles);
   in.text("encode").u64(StageVersions::encode).text(c.image_format).u64(c.image_quality).u64(c.position_bits)
       .text(c.mesh_codec).f64(c.mesh_depth_error);
@@ -232,6 +243,9 @@ void run_depth_mesh(CellWork& work, const BakeConfig& config) {
   rp.jump = config.depth_jump;
   rp.keep_margin = config.samples_keep_margin_px;
   rp.min_island = config.samples_min_island_px;
+  if (config.multi_source_skins != "off" && work.samples.size() > 1)
+    for (SampleWork& s : work.samples)
+      for (int f = 0; f < kCubeFaces; ++f) s.taken_depth[std::size_t(f)] = s.cube.faces[std::size_t(f)].depth;
   {
     StageTimer redundancy(work, "redundancy");
     for (std::size_t i : order) {
@@ -263,7 +277,7 @@ std::unique_ptr<FaceSimplification> start_face_simplification(CellWork& work, co
     const auto t0 = Clock::now();
     StageTimer timer(work, "depth_mesh");
     try {
-      dense = build_depth_mesh_face(s.cube, depth_mesh_params(config), face, &work.depth_mesh_scratch);
+      dense = build_depth_mesh_face(s.cube, depth_mesh_params(config, work, sample), face, &work.depth_mesh_scratch);
     } catch (const std::exception& e) {
       throw StageError("depth_mesh", where + e.what());
     }
@@ -359,7 +373,7 @@ void drop_replaced_and_measure_kept(CellWork& work, const BakeConfig& config) {
       if (!ruler) {
         StageTimer timer(work, "depth_mesh");
         try {
-          dense = build_depth_mesh_face(s.cube, depth_mesh_params(config), f, &work.depth_mesh_scratch);
+          dense = build_depth_mesh_face(s.cube, depth_mesh_params(config, work, i), f, &work.depth_mesh_scratch);
         } catch (const std::exception& e) {
           throw StageError("depth_mesh", where + e.what());
         }

@@ -71,6 +71,10 @@ struct SampleWork {
   std::array<SimplifyRuler, kCubeFaces> rulers;
   std::array<double, kCubeFaces> boundary_error_px{};
   std::array<double, kCubeFaces> depth_error{};
+  // Its faces' depths as taken, before redundant pixels were removed: what it
+  // witnesses for the other samples' multi-source skin test (empty when
+  // depth_mesh.multi_source_skins is off or the cell has one sample).
+  std::array<std::vector<float>, kCubeFaces> taken_depth;
 };
 
 // The work in flight for one cell, passed from stage to stage.

@@ -93,6 +93,15 @@ class CubeLattice {
       basis_[f] = b;
       ibasis_[f] = {to_lattice(b.forward), to_lattice(b.right), to_lattice(b.up)};
     }
+    for (const SkinWitness& w : params.witnesses) {
+      if (!w.depth || w.size < 1) throw std::invalid_argument("depth mesh: a skin witness has no depths");
+      for (const auto& face : *w.depth)
+        if (face.size() != std::size_t(w.size) * std::size_t(w.size))
+          throw std::invalid_argument("depth mesh: a skin witness's face is not size^2 depths");
+      witnesses_.push_back({w.eye - sample.eye, w.depth, w.size});
+    }
+    witness_min_jump_ = params.witness_min_jump;
+    witness_margin_ = params.witness_margin;
     angle_limit_ = params.skin_angle_degrees * 3.14159265358979323846 / 180.0;
     jump_limit_ = params.max_relative_depth_jump;
     if (angle_limit_ < 1.5) {
@@ -210,6 +219,9 @@ class CubeLattice {
   // decision is the same as atan2(|e x m|, |e . m|) < limit.
   bool skin_between(const Vec3d& pa, double da, const Vec3d& pb, double db) const {
     if (std::abs(da - db) > jump_limit_ * std::min(da, db)) return true;
+    if (!witnesses_.empty() && std::abs(da - db) > witness_min_jump_ * std::min(da, db) &&
+        witnessed_past((pa + pb) * 0.5))
+      return true;
     const Vec3d e = pb - pa;
     const Vec3d m = (pa + pb) * 0.5;
     const Vec3d c = cross(e, m);
@@ -228,6 +240,40 @@ class CubeLattice {
     if (across < tan_low_ * along) return true;
     if (across > tan_high_ * along) return false;
     return std::atan2(across, along) < angle_limit_;
+  }
+
+  // Whether a witness sees past the point `m` (relative to this sample's eye):
+  // all four of its pixels around m's projection lie beyond m (DepthMeshParams).
+  bool witnessed_past(const Vec3d& m) const {
+    for (const Witness& w : witnesses_) {
+      const Vec3d d = m - w.offset;  // m relative to the witness's eye
+      const int f = major_face(d);
+      const FaceBasis& b = basis_[f];
+      const double z = cellbake::dot(d, b.forward);
+      if (!(z > 0)) continue;
+      const double s = cellbake::dot(d, b.right) / z, t = cellbake::dot(d, b.up) / z;
+      // The 2x2 pixels whose centres surround (s, t); a projection within a
+      // pixel of the face's border is not judged (no block surrounds it).
+      const double x = (s + 1) * 0.5 * w.size - 0.5, y = (1 - t) * 0.5 * w.size - 0.5;
+      if (!(x >= 1 && y >= 1 && x <= w.size - 2 && y <= w.size - 2)) continue;
+      const int i0 = int(std::floor(x)), j0 = int(std::floor(y));
+      const std::vector<float>& depth = (*w.depth)[std::size_t(f)];
+      const double beyond = z * (1 + witness_margin_);
+      const auto past = [&](int i, int j) { return double(depth[std::size_t(j) * w.size + i]) > beyond; };
+      if (past(i0, j0) && past(i0 + 1, j0) && past(i0, j0 + 1) && past(i0 + 1, j0 + 1)) return true;
+    }
+    return false;
+  }
+
+  // The cube face whose frustum holds direction d (the largest component's axis and sign).
+  int major_face(const Vec3d& d) const {
+    int best = 0;
+    double best_dot = -std::numeric_limits<double>::infinity();
+    for (int f = 0; f < kCubeFaces; ++f) {
+      const double v = cellbake::dot(d, basis_[f].forward);
+      if (v > best_dot) best_dot = v, best = f;
+    }
+    return best;
   }
 
   // Lattice direction of corner (ci, cj) of face f.
@@ -264,6 +310,13 @@ class CubeLattice {
   int n_;
   double angle_limit_ = 0, jump_limit_ = 0, tan_low_ = 0, tan_high_ = 0;
   bool squares_decide_ = false;  // skin_between may decide on squared lengths
+  struct Witness {
+    Vec3d offset;  // the witness's eye relative to this sample's
+    const std::array<std::vector<float>, kCubeFaces>* depth;
+    int size;
+  };
+  std::vector<Witness> witnesses_;
+  double witness_min_jump_ = 0, witness_margin_ = 0;
   std::array<FaceBasis, kCubeFaces> basis_;
   std::array<IntBasis, kCubeFaces> ibasis_;
   int cached_face_ = -1;

@@ -9,10 +9,22 @@
 #include <array>
 #include <cstddef>
 #include <memory>
+#include <vector>
 
 #include "stages/cube_map.h"
 
 namespace cellbake {
+
+// Another sample of the same cell, as a witness for the multi-source skin
+// test (§3.4.2.1.1: an edge is a skin when another sample sees past its
+// midpoint): its eye and its faces' planar depths as it took them (before any
+// redundant pixels were removed; faces of `size`^2, order of cube_map.h,
+// kBackgroundDepth where it saw nothing).
+struct SkinWitness {
+  Vec3d eye;
+  const std::array<std::vector<float>, kCubeFaces>* depth = nullptr;
+  int size = 0;
+};
 
 struct DepthMeshParams {
   // An edge between two neighbouring pixels' surface points is a skin when the
@@ -23,6 +35,19 @@ struct DepthMeshParams {
   // exceeds this. At 512^2 a plane must be within ~1.7 degrees of the ray before
   // its neighbouring pixels jump by 10 %.
   double max_relative_depth_jump = 0.1;
+  // Multi-source skins: an edge the two tests above keep, whose relative jump
+  // of eye distances exceeds `witness_min_jump`, is a skin when one of
+  // `witnesses` sees past its midpoint: the witness's depths at the 3x3
+  // pixels around the midpoint's projection all exceed the midpoint's own
+  // planar depth there by more than `witness_margin` (relative). A block, so
+  // that a surface through the midpoint — nearer than it on one side of its
+  // projection — never reads as seen past; only empty space does (the wall
+  // behind a thin pipe, seen past it from elsewhere in the cell). A
+  // projection within a pixel of the witness's face border is not judged.
+  // Empty: the single-source tests alone.
+  std::vector<SkinWitness> witnesses;
+  double witness_min_jump = 0.01;
+  double witness_margin = 0.003;
 };
 
 struct DepthMeshStats {
