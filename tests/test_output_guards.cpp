@@ -1,18 +1,21 @@
 // Output paths are guarded (issue #14, items 1-3): a bake never adopts a
 // geometry store or another file as its cell database, an ingest never
 // replaces a cell database, a device, a directory, a pipe or a symbolic link,
-// and temporaries of killed ingests are cleaned up.
+// and temporaries of killed ingests are cleaned up. Issue #41, item 6: the
+// bake lock follows the database file, not the name it is reached by.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <csignal>
 #include <filesystem>
 #include <sstream>
 
 #include "pipeline/ingest.h"
 #include "storage/cell_db.h"
+#include "storage/cell_db_lock.h"
 #include "storage/geometry_store.h"
 #include "tests/fixture_room_obj.h"
 #include "tests/test_support.h"
@@ -139,6 +142,65 @@ TEST(OutputGuards, TemporariesOfKilledIngestsAreRemovedOnlyWhenStale) {
   EXPECT_TRUE(std::filesystem::exists(recent));
   EXPECT_TRUE(std::filesystem::exists(alive));
   EXPECT_TRUE(std::filesystem::exists(other));
+}
+
+// A child process that holds the bake lock of `database` until it is killed.
+pid_t hold_bake_lock(const std::filesystem::path& database) {
+  int ready[2];
+  if (::pipe(ready) != 0) return -1;
+  const pid_t child = ::fork();
+  if (child == 0) {
+    ::close(ready[0]);
+    try {
+      const CellDbLock held(database, "baked");
+      if (::write(ready[1], "1", 1) != 1) ::_exit(1);
+      ::pause();
+    } catch (...) {
+    }
+    ::_exit(1);
+  }
+  ::close(ready[1]);
+  char byte = 0;
+  const bool locked = ::read(ready[0], &byte, 1) == 1;
+  ::close(ready[0]);
+  return locked ? child : -1;
+}
+
+TEST(OutputGuards, TheBakeLockFollowsTheDatabaseNotItsName) {
+  test::TempDir dir;
+  make_store(dir);
+  ASSERT_EQ(test::run_cellbake(bake_into(dir, dir / "cells.db")).exit_code, 0);
+  std::filesystem::create_symlink(dir / "cells.db", dir / "link.db");
+  std::filesystem::create_hard_link(dir / "cells.db", dir / "hard.db");
+  std::filesystem::create_directory_symlink(dir.path(), dir / "linked_folder");
+  const pid_t holder = hold_bake_lock(dir / "cells.db");
+  ASSERT_GT(holder, 0);
+  for (const auto& name : {dir / "link.db", dir / "hard.db", dir / "linked_folder" / "cells.db"}) {
+    const auto r = test::run_cellbake(bake_into(dir, name));
+    EXPECT_NE(r.exit_code, 0) << name << ": " << r.output;
+    EXPECT_NE(r.output.find("database " + name.string() + " is being baked by pid " + std::to_string(holder)),
+              std::string::npos)
+        << r.output;
+    EXPECT_THROW(CellDbLock(name, "merged into"), std::runtime_error) << name;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "hard.db.lock"));  // a refused opener leaves no lock file
+  ::kill(holder, SIGKILL);                                      // kill -9 releases both locks
+  ::waitpid(holder, nullptr, 0);
+  const auto after = test::run_cellbake(bake_into(dir, dir / "hard.db"));
+  EXPECT_EQ(after.exit_code, 0) << after.output;
+  {  // the other way round: held through the hard link, the original name is refused
+    const CellDbLock held(dir / "hard.db", "merged into");
+    const auto r = test::run_cellbake(bake_into(dir, dir / "cells.db"));
+    EXPECT_NE(r.output.find("is being merged into by pid " + std::to_string(::getpid())), std::string::npos)
+        << r.output;
+  }
+  {  // a database that does not exist yet: created to be locked, removed again while still empty
+    const CellDbLock held(dir / "new.db", "baked");
+    EXPECT_TRUE(std::filesystem::exists(dir / "new.db"));
+    EXPECT_THROW(CellDbLock(dir / "linked_folder" / "new.db", "baked"), std::runtime_error);
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "new.db"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "new.db.lock"));
 }
 
 }  // namespace
