@@ -60,8 +60,9 @@ double cell_median(const VerifyCellResult& c, double VerifyViewResult::*field) {
   return median_of(v);
 }
 
-void write_svg(const std::filesystem::path& file, const std::string& svg, VerifyReportFiles& files) {
-  write_text_file_atomically(file, svg);
+void write_svg(const std::filesystem::path& file, const std::string& svg, VerifyReportFiles& files,
+               const InputFiles& inputs) {
+  write_text_file_atomically(file, svg, inputs);
   files.plots.push_back(file);
 }
 
@@ -332,17 +333,9 @@ nlohmann::json summary_json(const std::vector<VerifyCellResult>& cells) {
   return s;
 }
 
-void write_text_file_atomically(const std::filesystem::path& file, const std::string& text) {
-  const std::filesystem::path tmp = file.string() + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write " + tmp.string());
-    out << text;
-    if (!out.flush()) throw std::runtime_error("cannot write " + tmp.string());
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, file, ec);
-  if (ec) throw std::runtime_error("cannot rename " + tmp.string() + " to " + file.string() + ": " + ec.message());
+void write_text_file_atomically(const std::filesystem::path& file, const std::string& text,
+                                const InputFiles& inputs) {
+  write_output_file(file, text, inputs);
 }
 
 VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const VerifyReportInput& input) {
@@ -356,7 +349,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
   report["cells"] = nlohmann::json::array();
   for (const auto& c : cells) report["cells"].push_back(to_json(c));
   files.json = dir / "report.json";
-  write_text_file_atomically(files.json, report.dump(1));
+  write_text_file_atomically(files.json, report.dump(1), input.inputs);
 
   // Plots.
   const std::string psnr_label = "median PSNR per cell, dB (higher is better)";
@@ -367,7 +360,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
     for (const auto& c : cells)
       if (c.error.empty()) s.points.push_back({x_of(c), cell_median(c, &VerifyViewResult::psnr_db), "cell " + std::to_string(c.id)});
     p.series.push_back(std::move(s));
-    write_svg(dir / "plots" / name, scatter_plot_svg(p), files);
+    write_svg(dir / "plots" / name, scatter_plot_svg(p), files, input.inputs);
   };
   per_cell("psnr_vs_bake_seconds.svg", "Error vs bake time", "bake seconds per cell (all stages)", false,
            [](const VerifyCellResult& c) { return c.bake_seconds_total(); });
@@ -378,21 +371,21 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
                   "PSNR per view, dB (higher is better)", false, 640, 420,
                   per_view_series(cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return double(v.triangles_impostor); },
                                   [](const VerifyViewResult& v) { return v.psnr_db; })};
-    write_svg(dir / "plots" / "psnr_vs_triangles.svg", scatter_plot_svg(p), files);
+    write_svg(dir / "plots" / "psnr_vs_triangles.svg", scatter_plot_svg(p), files, input.inputs);
   }
   {
     ScatterPlot p{"Error vs distance from the sample point", "eye distance from the nearest sample point (model units)",
                   "PSNR per view, dB (higher is better)", false, 640, 420,
                   per_view_series(cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return v.distance_from_sample; },
                                   [](const VerifyViewResult& v) { return v.psnr_db; })};
-    write_svg(dir / "plots" / "psnr_vs_distance.svg", scatter_plot_svg(p), files);
+    write_svg(dir / "plots" / "psnr_vs_distance.svg", scatter_plot_svg(p), files, input.inputs);
   }
   {
     ScatterPlot p{"Holes vs distance from the sample point", "eye distance from the nearest sample point (model units)",
                   "hole fraction per view (lower is better)", false, 640, 420,
                   per_view_series(cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return v.distance_from_sample; },
                                   [](const VerifyViewResult& v) { return v.hole_fraction; })};
-    write_svg(dir / "plots" / "holes_vs_distance.svg", scatter_plot_svg(p), files);
+    write_svg(dir / "plots" / "holes_vs_distance.svg", scatter_plot_svg(p), files, input.inputs);
   }
 
   // Cell map in plan: drop the up axis (the one with the most cells sharing one value is not known
@@ -415,7 +408,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
                          cell_median(*c, &VerifyViewResult::psnr_db)});
   files.cell_map = dir / "cell_map.svg";
   const std::string cell_map = cell_map_svg(map);
-  write_text_file_atomically(files.cell_map, cell_map);
+  write_text_file_atomically(files.cell_map, cell_map, input.inputs);
 
   // report.html
   std::ostringstream h;
@@ -536,7 +529,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
   }
   h << "</table>\n<p class=\"note\">Per-view numbers: <a href=\"report.json\">report.json</a>.</p>\n</body></html>\n";
   files.html = dir / "report.html";
-  write_text_file_atomically(files.html, h.str());
+  write_text_file_atomically(files.html, h.str(), input.inputs);
   return files;
 }
 

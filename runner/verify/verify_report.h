@@ -15,6 +15,7 @@
 
 #include "runner/verify/verify_views.h"
 #include "stages/geometry.h"
+#include "storage/output_file.h"
 
 namespace cellbake {
 
@@ -113,6 +114,7 @@ struct VerifyReportInput {
   nlohmann::json params;   // the verify parameters, shown and stored
   std::vector<VerifyCellResult> cells;  // in id order
   int worst_views = 6;     // triptychs shown (cells with the worst views)
+  InputFiles inputs;       // the files verify read (database, store): no report file may be one of them
 };
 
 // The report's absolute colour scale for a cell's median PSNR, dB: at or below
@@ -137,8 +139,10 @@ struct VerifyReportFiles {
 // std::runtime_error naming a file that cannot be written.
 VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const VerifyReportInput& input);
 
-// Writes `text` to `file` through a temporary file and a rename (readers never
-// see half a file). Throws std::runtime_error naming the file.
-void write_text_file_atomically(const std::filesystem::path& file, const std::string& text);
+// Writes `text` to `file` through an OutputFile: a temporary file and a rename
+// (readers never see half a file), never over a database or one of `inputs`.
+// Throws std::runtime_error naming the file.
+void write_text_file_atomically(const std::filesystem::path& file, const std::string& text,
+                                const InputFiles& inputs);
 
 }  // namespace cellbake
