@@ -1,8 +1,9 @@
 #include "storage/sqlite_db.h"
 
 #include <sqlite3.h>
+#include <unistd.h>
 
-#include <cctype>
+#include <cerrno>
 #include <stdexcept>
 
 namespace cellbake {
@@ -18,7 +19,9 @@ std::string file_uri(const std::filesystem::path& file, const std::string& query
   static const char* kHex = "0123456789ABCDEF";
   for (const char c : ec ? file.string() : path) {
     const auto byte = static_cast<unsigned char>(c);
-    if (std::isalnum(byte) || c == '-' || c == '.' || c == '_' || c == '~' || c == '/') {
+    const bool alnum =
+        (byte >= '0' && byte <= '9') || (byte >= 'A' && byte <= 'Z') || (byte >= 'a' && byte <= 'z');
+    if (alnum || c == '-' || c == '.' || c == '_' || c == '~' || c == '/') {
       uri += c;
     } else {
       uri += '%';
@@ -64,6 +67,15 @@ bool SqliteDb::cannot_create_wal_files(int rc) {
 
 namespace {
 
+// True when this process may not create files beside `file` (permissions, a
+// read-only mount): the only case an immutable open is taken for, so that an
+// unrelated failure (no file descriptors left) never turns into one.
+bool folder_is_read_only(const std::filesystem::path& file) {
+  std::error_code ec;
+  const std::filesystem::path folder = std::filesystem::absolute(file, ec).parent_path();
+  return !ec && ::access(folder.c_str(), W_OK) != 0 && (errno == EACCES || errno == EROFS || errno == EPERM);
+}
+
 // Opens `file` as immutable (no -shm, no locks, no -wal read), which SQLite
 // allows for a database no one changes: used only where the folder cannot hold
 // the WAL's files. Throws naming the file when a -wal file with content is
@@ -102,7 +114,7 @@ SqliteDb::SqliteDb(const std::filesystem::path& file, Mode mode) : file_(file) {
   }
   db_ = open_connection(file, SQLITE_OPEN_READONLY);
   const int rc = read_schema(db_);
-  if (cannot_create_wal_files(rc)) {
+  if (cannot_create_wal_files(rc) && folder_is_read_only(file)) {
     sqlite3_close_v2(db_);
     db_ = nullptr;
     db_ = open_immutable(file, rc);

@@ -106,5 +106,24 @@ TEST_F(ReadOnlyOpen, AWriteAheadLogWithContentInAReadOnlyFolderIsNamedNotIgnored
   EXPECT_EQ(CellDb(dir_ / "ro_wal" / "cells.db", CellDb::Mode::read_only).meta("note"), "in the wal only");
 }
 
+// Every connection opens through a percent-encoded URI: names with URI
+// characters are the files they name, not queries or fragments.
+TEST(SqliteUri, NamesWithUriCharactersOpenAsThemselves) {
+  test::TempDir dir;
+  fs::create_directory(dir / "a b?c#d%41");
+  const fs::path file = dir / "a b?c#d%41" / "x?mode=ro&immutable=1#y.db";
+  {
+    SqliteDb db(file, SqliteDb::Mode::read_write_create);
+    db.exec("CREATE TABLE t(v); INSERT INTO t VALUES(42)");
+  }
+  ASSERT_TRUE(fs::is_regular_file(file));
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator{}), 1);  // nothing else made
+  SqliteDb db(file, SqliteDb::Mode::read_only);
+  EXPECT_FALSE(db.immutable());
+  SqliteStatement s(db, "SELECT v FROM t");
+  ASSERT_TRUE(s.step());
+  EXPECT_EQ(s.column_int(0), 42);
+}
+
 }  // namespace
 }  // namespace cellbake
