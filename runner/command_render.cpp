@@ -9,10 +9,11 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
+#include <sstream>
 
 #include "runner/commands.h"
 #include "storage/database_kind.h"
+#include "storage/output_file.h"
 #include "viewer/camera_path.h"
 #include "viewer/sample_selection.h"
 #include "viewer/png_file.h"
@@ -57,13 +58,22 @@ void print_result(const ViewResult& r, const std::filesystem::path& out) {
                 r.metrics->extra_fraction, r.metrics->depth_error_median);
 }
 
-void write_result_image(const ViewResult& r, ViewMode mode, const std::filesystem::path& out) {
+// Writes the image `mode` names to `out` (never over a database or one of `inputs`).
+void write_result_image(const ViewResult& r, ViewMode mode, const std::filesystem::path& out,
+                        const InputFiles& inputs) {
   if (mode == ViewMode::diff) {
-    write_png(out, r.truth->width, r.truth->height, error_image(*r.impostor, *r.truth));
+    write_png(out, r.truth->width, r.truth->height, error_image(*r.impostor, *r.truth), inputs);
   } else {
     const ViewFrame& f = mode == ViewMode::truth ? *r.truth : *r.impostor;
-    write_png(out, f.width, f.height, f.color);
+    write_png(out, f.width, f.height, f.color, inputs);
   }
+}
+
+// The files a render reads: no output may be one of them.
+InputFiles render_inputs(const ViewSession& session, const std::string& database, const std::string& path) {
+  InputFiles inputs{database, session.store().path()};
+  if (!path.empty()) inputs.push_back(path);
+  return inputs;
 }
 
 std::string csv_number(double v) {
@@ -89,6 +99,8 @@ void render_store(const Options& opt, bool mode_given) {
     throw std::invalid_argument(opt.database + " is a geometry store (not baked): only --mode truth can be drawn");
   if (!opt.path.empty()) throw std::invalid_argument("--path needs a cell database; " + opt.database + " is a geometry store");
   ViewSession session(StoreOnly{}, opt.database);
+  const InputFiles inputs = render_inputs(session, opt.database, opt.path);
+  check_output_target(opt.out, inputs);  // before the drawing
   ViewRequest request;
   default_overview(session.store().model_bounds(), session.up(), request);
   if (!opt.eye.empty()) request.eye = parse_point(opt.eye, "--eye");
@@ -98,7 +110,7 @@ void render_store(const Options& opt, bool mode_given) {
   request.fov_y_deg = opt.fov;
   request.near_plane = opt.near;
   const ViewResult r = session.render(request, ViewMode::truth, stderr);
-  write_result_image(r, ViewMode::truth, opt.out);
+  write_result_image(r, ViewMode::truth, opt.out, inputs);
   if (opt.json) {
     nlohmann::json j = result_json(r);
     j["eye"] = {request.eye.x, request.eye.y, request.eye.z};
@@ -164,6 +176,7 @@ void add_render_command(CLI::App& app) {
     const auto [width, height] = parse_image_size(opt->size);
     const ViewMode mode = parse_view_mode(opt->mode);
     ViewSession session(opt->database, opt->store);
+    const InputFiles inputs = render_inputs(session, opt->database, opt->path);
     ViewRequest request;
     request.fov_y_deg = opt->fov;
     request.width = width;
@@ -174,10 +187,11 @@ void add_render_command(CLI::App& app) {
     if (opt->cell != 0) request.cell = opt->cell;
 
     if (opt->path.empty()) {
+      check_output_target(opt->out, inputs);  // before the drawing
       request.eye = views[0].eye;
       request.look = views[0].look;
       const ViewResult r = session.render(request, mode, stderr);
-      write_result_image(r, mode, opt->out);
+      write_result_image(r, mode, opt->out, inputs);
       if (opt->json)
         std::printf("%s\n", result_json(r).dump(2).c_str());
       else
@@ -189,8 +203,10 @@ void add_render_command(CLI::App& app) {
     // image written is the one --mode names.
     const std::filesystem::path base = opt->out;
     const std::filesystem::path csv_path = base.parent_path() / (base.stem().string() + ".csv");
-    std::ofstream csv(csv_path);
-    if (!csv) throw std::runtime_error("cannot write " + csv_path.string());
+    check_output_target(csv_path, inputs);  // before the drawing
+    for (std::size_t i = 0; i < views.size(); ++i)
+      check_output_target(numbered_path(base, static_cast<int>(i)), inputs);
+    std::ostringstream csv;  // written whole at the end
     csv << "frame,image,cell_id,fallback,eye_x,eye_y,eye_z,psnr_db,ssim,hole_fraction,skin_fraction,extra_fraction,"
            "depth_error_median,triangles_impostor,triangles_truth,ms_impostor,ms_truth\n";
     nlohmann::json frames = nlohmann::json::array();
@@ -199,7 +215,7 @@ void add_render_command(CLI::App& app) {
       request.look = views[i].look;
       const ViewResult r = session.render(request, ViewMode::diff, stderr);
       const std::filesystem::path image = numbered_path(base, static_cast<int>(i));
-      write_result_image(r, mode, image);
+      write_result_image(r, mode, image, inputs);
       const ImageMetrics& m = *r.metrics;
       csv << i << "," << image.filename().string() << "," << r.cell_id << "," << (r.fallback ? 1 : 0) << ","
           << csv_number(request.eye.x) << "," << csv_number(request.eye.y) << "," << csv_number(request.eye.z) << ","
@@ -216,7 +232,7 @@ void add_render_command(CLI::App& app) {
         print_result(r, image);
       }
     }
-    if (!csv.flush()) throw std::runtime_error("cannot write " + csv_path.string());
+    write_output_file(csv_path, csv.str(), inputs);
     if (opt->json) std::printf("%s\n", nlohmann::json{{"frames", frames}, {"csv", csv_path.string()}}.dump(2).c_str());
     else std::printf("%zu frames, metrics in %s\n", views.size(), csv_path.c_str());
   });

@@ -8,12 +8,12 @@
 
 #include <array>
 #include <cstdio>
-#include <fstream>
 #include <sys/wait.h>
 
 #include "runner/bake_command_options.h"
 #include "runner/commands.h"
 #include "runner/slurm_scripts.h"
+#include "storage/output_file.h"
 
 namespace cellbake {
 namespace {
@@ -36,12 +36,6 @@ bool sets_output_database(const std::string& assignment) {
 
 std::string absolute_text(const std::filesystem::path& p) {
   return std::filesystem::absolute(p).lexically_normal().string();
-}
-
-void write_file(const std::filesystem::path& file, const std::string& text) {
-  std::ofstream out(file, std::ios::binary);
-  out << text;
-  if (!out) throw std::runtime_error(file.string() + ": cannot write");
 }
 
 // Runs `sbatch --parsable ARGS SCRIPT` and returns the job id it prints.
@@ -135,8 +129,8 @@ void add_submit_command(CLI::App& app) {
     }
     std::filesystem::create_directories(job.out_dir + "/logs");
     std::filesystem::create_directories(merged.parent_path());
-    write_file(array_file, array_script(job));
-    write_file(merge_file, merge_script(job));
+    write_output_file(array_file, array_script(job), {opt->config_file});
+    write_output_file(merge_file, merge_script(job), {opt->config_file});
     const std::string array_id = sbatch("", array_file);
     std::string merge_id;
     try {

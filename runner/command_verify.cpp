@@ -152,7 +152,7 @@ void add_verify_command(CLI::App& app) {
     ScatterPlot p = scatter_plot_from_csv(text.str(), plot->x, plot->y, plot->series, plot->label);
     p.title = plot->title.empty() ? plot->y + " vs " + plot->x : plot->title;
     p.log_x = plot->log_x;
-    write_text_file_atomically(plot->out, scatter_plot_svg(p));
+    write_text_file_atomically(plot->out, scatter_plot_svg(p), {plot->csv});
     std::printf("%s: %zu points\n", plot->out.c_str(), drawable_points(p));
   });
 }

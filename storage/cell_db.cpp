@@ -195,6 +195,7 @@ CellDb::CellDb(const std::filesystem::path& path, Mode mode) {
 CellDb::~CellDb() = default;
 
 const std::filesystem::path& CellDb::path() const { return db_->file(); }
+std::string CellDb::attach_uri() const { return db_->attach_uri(); }
 
 void CellDb::set_meta(const std::string& key, const std::string& value) {
   SqliteStatement s(*db_, "INSERT INTO meta VALUES(?,?) ON CONFLICT(key) DO UPDATE SET value=excluded.value");

@@ -155,6 +155,9 @@ class CellDb {
   // PRAGMA integrity_check == "ok".
   bool integrity_ok() const;
   const std::filesystem::path& path() const;
+  // The URI that ATTACHes this database read-only as this connection reads it
+  // (SqliteDb::attach_uri: immutable in a read-only folder).
+  std::string attach_uri() const;
   // The schema version of the open file (read-only opens may see an older one).
   int schema_version() const { return schema_version_; }
 

@@ -76,7 +76,7 @@ void copy_rows(CellDb& target, const CellDb& source, const std::vector<std::int6
   db.exec("PRAGMA synchronous=NORMAL");  // as CellDb: WAL stays consistent, a crash loses at most the last cells
   {
     SqliteStatement attach(db, "ATTACH DATABASE ? AS source");
-    attach.bind(1, source.path().string()).run();
+    attach.bind(1, source.attach_uri()).run();  // read-only, and immutable when its folder is
   }
   {
     const bool far_choice = target.schema_version() >= 4;

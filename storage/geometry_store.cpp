@@ -14,6 +14,7 @@
 #include "stages/encode.h"
 #include "stages/hashing.h"
 #include "storage/chunk_codec.h"
+#include "storage/output_file.h"
 #include "storage/sqlite_db.h"
 
 namespace cellbake {
@@ -57,14 +58,10 @@ bool is_geometry_store(const std::filesystem::path& path) {
 // file or an existing geometry store: a device node, a directory, a pipe, a
 // symbolic link, a cell database or any other file stays as it is.
 void check_store_target(const std::filesystem::path& path) {
+  refuse_non_regular_target(path, "a geometry store");
   std::error_code ec;
-  const auto link = std::filesystem::symlink_status(path, ec);
-  if (ec || !std::filesystem::exists(link)) return;
+  if (!std::filesystem::exists(std::filesystem::symlink_status(path, ec))) return;
   const std::string where = path.string() + ": ";
-  if (std::filesystem::is_symlink(link))
-    throw std::runtime_error(where + "is a symbolic link; refusing to replace it with a geometry store (name its target)");
-  if (!std::filesystem::is_regular_file(link))
-    throw std::runtime_error(where + "is not a regular file (a directory, device or pipe); refusing to replace it");
   if (std::filesystem::file_size(path, ec) == 0 && !ec) return;
   if (!is_geometry_store(path))
     throw std::runtime_error(where + "exists and is not a cellbake geometry store (a cell database? another file?); "

@@ -54,7 +54,10 @@ class SqliteDb {
   // Opens `file`; throws naming it. A read-only open of a database whose writer
   // was killed mid-transaction (a hot journal) first lets SQLite roll that
   // transaction back through a short writable connection, as any writable open
-  // would; it throws when the file is not writable then.
+  // would; it throws when the file is not writable then. A read-only open of a
+  // WAL database whose folder (or medium) cannot hold its -shm file opens it
+  // as immutable (every page read from the file itself) when no -wal file with
+  // content is beside it, and throws naming that -wal file when one is.
   SqliteDb(const std::filesystem::path& file, Mode mode);
   ~SqliteDb();
   SqliteDb(const SqliteDb&) = delete;
@@ -65,10 +68,19 @@ class SqliteDb {
   const std::filesystem::path& file() const { return file_; }
   sqlite3* handle() { return db_; }
   [[noreturn]] void fail(const std::string& what) const;
+  // True when this read-only connection reads the file as immutable (a read-only folder).
+  bool immutable() const { return immutable_; }
+  // The URI that ATTACHes this file read-only the way this connection reads it
+  // (immutable in a read-only folder).
+  std::string attach_uri() const;
+  // True for SQLite's (extended) result codes of a first read that failed
+  // because the WAL's -shm file cannot be created beside the database.
+  static bool cannot_create_wal_files(int sqlite_result_code);
 
  private:
   std::filesystem::path file_;
   sqlite3* db_ = nullptr;
+  bool immutable_ = false;
 };
 
 // Begins a transaction on construction; rolls back on destruction unless committed.

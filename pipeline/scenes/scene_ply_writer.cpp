@@ -10,6 +10,8 @@
 #include <type_traits>
 #include <vector>
 
+#include "storage/output_file.h"
+
 namespace cellbake {
 namespace {
 
@@ -113,6 +115,7 @@ struct ScratchFiles {
 }  // namespace
 
 SceneSummary generate_scene_to_ply(const SceneParams& params, const std::filesystem::path& out) {
+  check_output_target(out, {});  // never over a database, a device or a link
   std::filesystem::path tmp = out;
   tmp += ".tmp";
   std::filesystem::path faces_path = out;
@@ -170,6 +173,7 @@ SceneSummary generate_scene_to_ply(const SceneParams& params, const std::filesys
   ply.write(header.data(), header.size());
   ply.close();
 
+  check_output_target(out, {});  // nothing was put there meanwhile that must stay
   std::error_code ec;
   std::filesystem::rename(tmp, out, ec);
   if (ec)

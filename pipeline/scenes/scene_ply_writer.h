@@ -15,7 +15,8 @@ namespace cellbake {
 // The header's counts are padded to a fixed width (trailing spaces) and filled
 // in at the end. Writes `out` + ".tmp" (and a faces scratch file beside it)
 // and renames onto `out` only on success; on failure nothing is left behind
-// and the exception names the file. Same params -> identical bytes. Returns
+// and the exception names the file. Never writes over an SQLite database, a
+// directory, device, pipe or symbolic link (check_output_target). Same params -> identical bytes. Returns
 // the scene summary (triangles == M, vertices == N).
 SceneSummary generate_scene_to_ply(const SceneParams& params, const std::filesystem::path& out);
 

@@ -64,8 +64,9 @@ double cell_median(const VerifyCellResult& c, double VerifyViewResult::*field) {
   return median_of(v);
 }
 
-void write_svg(const std::filesystem::path& file, const std::string& svg, VerifyReportFiles& files) {
-  write_text_file_atomically(file, svg);
+void write_svg(const std::filesystem::path& file, const std::string& svg, VerifyReportFiles& files,
+               const InputFiles& inputs) {
+  write_text_file_atomically(file, svg, inputs);
   files.plots.push_back(file);
 }
 
@@ -371,18 +372,9 @@ nlohmann::json summary_json(const std::vector<VerifyCellResult>& cells) {
   return s;
 }
 
-void write_text_file_atomically(const std::filesystem::path& file, const std::string& text) {
-  const std::filesystem::path tmp = file.string() + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error("cannot write " + tmp.string());
-    out << text;
-    if (!out.flush()) throw std::runtime_error("cannot write " + tmp.string());
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, file, ec);
-  if (ec)
-    throw std::runtime_error("cannot rename " + tmp.string() + " to " + file.string() + ": " + ec.message());
+void write_text_file_atomically(const std::filesystem::path& file, const std::string& text,
+                                const InputFiles& inputs) {
+  write_output_file(file, text, inputs);
 }
 
 VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const VerifyReportInput& input) {
@@ -396,7 +388,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
   report["cells"] = nlohmann::json::array();
   for (const auto& c : cells) report["cells"].push_back(to_json(c));
   files.json = dir / "report.json";
-  write_text_file_atomically(files.json, report.dump(1));
+  write_text_file_atomically(files.json, report.dump(1), input.inputs);
 
   // Plots.
   const std::string psnr_label = "median PSNR per cell, dB (higher is better)";
@@ -409,51 +401,32 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
         s.points.push_back(
             {x_of(c), cell_median(c, &VerifyViewResult::psnr_db), "cell " + std::to_string(c.id)});
     p.series.push_back(std::move(s));
-    write_svg(dir / "plots" / name, scatter_plot_svg(p), files);
+    write_svg(dir / "plots" / name, scatter_plot_svg(p), files, input.inputs);
   };
   per_cell("psnr_vs_bake_seconds.svg", "Error vs bake time", "bake seconds per cell (all stages)", false,
            [](const VerifyCellResult& c) { return c.bake_seconds_total(); });
   per_cell("psnr_vs_bytes.svg", "Error vs stored bytes", "stored bytes per cell", false,
            [](const VerifyCellResult& c) { return double(c.bytes); });
   {
-    ScatterPlot p{
-        "Error vs triangles drawn",
-        "triangles drawn (impostor: near + far field)",
-        "PSNR per view, dB (higher is better)",
-        false,
-        640,
-        420,
-        per_view_series(
-            cells,
-            [](const VerifyViewResult& v, const VerifyCellResult&) { return double(v.triangles_impostor); },
-            [](const VerifyViewResult& v) { return v.psnr_db; })};
-    write_svg(dir / "plots" / "psnr_vs_triangles.svg", scatter_plot_svg(p), files);
+    ScatterPlot p{"Error vs triangles drawn", "triangles drawn (impostor: near + far field)",
+                  "PSNR per view, dB (higher is better)", false, 640, 420,
+                  per_view_series(cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return double(v.triangles_impostor); },
+                                  [](const VerifyViewResult& v) { return v.psnr_db; })};
+    write_svg(dir / "plots" / "psnr_vs_triangles.svg", scatter_plot_svg(p), files, input.inputs);
   }
   {
-    ScatterPlot p{
-        "Error vs distance from the sample point",
-        "eye distance from the nearest sample point (model units)",
-        "PSNR per view, dB (higher is better)",
-        false,
-        640,
-        420,
-        per_view_series(
-            cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return v.distance_from_sample; },
-            [](const VerifyViewResult& v) { return v.psnr_db; })};
-    write_svg(dir / "plots" / "psnr_vs_distance.svg", scatter_plot_svg(p), files);
+    ScatterPlot p{"Error vs distance from the sample point", "eye distance from the nearest sample point (model units)",
+                  "PSNR per view, dB (higher is better)", false, 640, 420,
+                  per_view_series(cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return v.distance_from_sample; },
+                                  [](const VerifyViewResult& v) { return v.psnr_db; })};
+    write_svg(dir / "plots" / "psnr_vs_distance.svg", scatter_plot_svg(p), files, input.inputs);
   }
   {
-    ScatterPlot p{
-        "Holes vs distance from the sample point",
-        "eye distance from the nearest sample point (model units)",
-        "hole fraction per view (lower is better)",
-        false,
-        640,
-        420,
-        per_view_series(
-            cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return v.distance_from_sample; },
-            [](const VerifyViewResult& v) { return v.hole_fraction; })};
-    write_svg(dir / "plots" / "holes_vs_distance.svg", scatter_plot_svg(p), files);
+    ScatterPlot p{"Holes vs distance from the sample point", "eye distance from the nearest sample point (model units)",
+                  "hole fraction per view (lower is better)", false, 640, 420,
+                  per_view_series(cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return v.distance_from_sample; },
+                                  [](const VerifyViewResult& v) { return v.hole_fraction; })};
+    write_svg(dir / "plots" / "holes_vs_distance.svg", scatter_plot_svg(p), files, input.inputs);
   }
 
   // The far-budget sweep's curve, when the views were drawn under several budgets.
@@ -469,7 +442,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
   const double sweep_truth_triangles = median_of(truth_triangles);
   if (!sweep.empty())
     write_svg(dir / "plots" / "psnr_vs_triangles_far_budget.svg",
-              scatter_plot_svg(far_budget_sweep_plot(sweep, sweep_truth_triangles)), files);
+              scatter_plot_svg(far_budget_sweep_plot(sweep, sweep_truth_triangles)), files, input.inputs);
 
   // Cell map in plan: drop the up axis (the one with the most cells sharing one value is not known
   // here, so use the database's up from params when given, else z).
@@ -492,7 +465,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
                          cell_median(*c, &VerifyViewResult::psnr_db)});
   files.cell_map = dir / "cell_map.svg";
   const std::string cell_map = cell_map_svg(map);
-  write_text_file_atomically(files.cell_map, cell_map);
+  write_text_file_atomically(files.cell_map, cell_map, input.inputs);
 
   // report.html
   std::ostringstream h;
@@ -659,7 +632,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
   h << "</table>\n<p class=\"note\">Per-view numbers: <a "
        "href=\"report.json\">report.json</a>.</p>\n</body></html>\n";
   files.html = dir / "report.html";
-  write_text_file_atomically(files.html, h.str());
+  write_text_file_atomically(files.html, h.str(), input.inputs);
   return files;
 }
 

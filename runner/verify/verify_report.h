@@ -16,6 +16,7 @@
 #include "runner/verify/far_budget_sweep.h"
 #include "runner/verify/verify_views.h"
 #include "stages/geometry.h"
+#include "storage/output_file.h"
 
 namespace cellbake {
 
@@ -123,7 +124,8 @@ struct VerifyReportInput {
   std::string database;                 // shown in the report
   nlohmann::json params;                // the verify parameters, shown and stored
   std::vector<VerifyCellResult> cells;  // in id order
-  int worst_views = 6;                  // triptychs shown (cells with the worst views)
+  int worst_views = 6;     // triptychs shown (cells with the worst views)
+  InputFiles inputs;       // the files verify read (database, store): no report file may be one of them
 };
 
 // The report's absolute colour scale for a cell's median PSNR, dB: at or below
@@ -148,8 +150,10 @@ struct VerifyReportFiles {
 // std::runtime_error naming a file that cannot be written.
 VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const VerifyReportInput& input);
 
-// Writes `text` to `file` through a temporary file and a rename (readers never
-// see half a file). Throws std::runtime_error naming the file.
-void write_text_file_atomically(const std::filesystem::path& file, const std::string& text);
+// Writes `text` to `file` through an OutputFile: a temporary file and a rename
+// (readers never see half a file), never over a database or one of `inputs`.
+// Throws std::runtime_error naming the file.
+void write_text_file_atomically(const std::filesystem::path& file, const std::string& text,
+                                const InputFiles& inputs);
 
 }  // namespace cellbake

@@ -83,13 +83,13 @@ std::map<std::int64_t, VerifyCellResult> load_cache(const std::filesystem::path&
 
 // Writes `fresh` and, for cells it lacks, `older` (results of cells not selected this time are kept).
 void save_cache(const std::filesystem::path& file, const std::map<std::int64_t, VerifyCellResult>& fresh,
-                const std::map<std::int64_t, VerifyCellResult>& older) {
+                const std::map<std::int64_t, VerifyCellResult>& older, const InputFiles& inputs) {
   std::map<std::int64_t, const VerifyCellResult*> all;
   for (const auto& [id, c] : older) all[id] = &c;
   for (const auto& [id, c] : fresh) all[id] = &c;
   nlohmann::json j{{"version", kCacheVersion}, {"cells", nlohmann::json::array()}};
   for (const auto& [id, c] : all) j["cells"].push_back(to_json(*c));
-  write_text_file_atomically(file, j.dump());
+  write_text_file_atomically(file, j.dump(), inputs);
 }
 
 // Side by side: truth | impostor | error image.
@@ -161,6 +161,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
   std::sort(specs.begin(), specs.end(), [](const CellSpec& a, const CellSpec& b) { return a.id < b.id; });
   specs = select_cells(specs, options.cells);
 
+  const InputFiles inputs{database, store.path()};  // no report file may be one of them
   std::filesystem::create_directories(report_dir / "views");
   const std::filesystem::path cache_file = report_dir / "verify-cells.json";
   std::map<std::int64_t, VerifyCellResult> cached = load_cache(cache_file);
@@ -305,7 +306,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
       if (result.worst_view >= 0) {
         result.triptych = "views/cell_" + std::to_string(task.id) + ".png";
         write_png(report_dir / result.triptych, 3 * options.width, options.height,
-                  triptych(worst_truth, worst_impostor, error_image(worst_impostor, worst_truth)));
+                  triptych(worst_truth, worst_impostor, error_image(worst_impostor, worst_truth)), inputs);
       }
     } catch (const std::exception& e) {
       result.views.clear();
@@ -336,7 +337,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
     results[task.id] = std::move(result);
     ++summary.cells_rendered;
     if (std::chrono::steady_clock::now() - last_save > std::chrono::seconds(2)) {
-      save_cache(cache_file, results, cached);
+      save_cache(cache_file, results, cached, inputs);
       last_save = std::chrono::steady_clock::now();
     }
     if (!options.quiet) progress.update(++done);
@@ -352,12 +353,13 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
                       });
   });
   if (!options.quiet && !pending.empty()) progress.finish();
-  save_cache(cache_file, results, cached);
+  save_cache(cache_file, results, cached, inputs);
 
   VerifyReportInput input;
   input.database = std::filesystem::absolute(database).string();
   input.params = params;
   input.worst_views = options.worst_views;
+  input.inputs = inputs;
   for (auto& [id, r] : results) input.cells.push_back(r);
   const VerifyReportFiles files = write_verify_report(report_dir, input);
   summary.report_html = files.html;

@@ -345,7 +345,7 @@ int run(const Options& opt) {
         if (!opt.screenshot.empty()) {
           std::vector<Rgba8> pixels;
           read_window(gl, fw, fh, pixels);
-          write_png(opt.screenshot, fw, fh, pixels);
+          write_png(opt.screenshot, fw, fh, pixels, {opt.database, opt.store});
           std::printf("screenshot %s (%dx%d) after %d frames, cell %lld%s\n", opt.screenshot.c_str(), fw, fh,
                       opt.frames, (long long)info.cell_id, info.flag.empty() ? "" : " (ground truth)");
         }
