@@ -164,6 +164,8 @@ void add_render_command(CLI::App& app) {
     const auto [width, height] = parse_image_size(opt->size);
     const ViewMode mode = parse_view_mode(opt->mode);
     ViewSession session(opt->database, opt->store);
+    if (const std::string mismatch = session.store_mismatch(); !mismatch.empty())
+      std::fprintf(stderr, "warning: %s\n", mismatch.c_str());
     ViewRequest request;
     request.fov_y_deg = opt->fov;
     request.width = width;

@@ -28,6 +28,7 @@
 #include "storage/cell_db_lock.h"
 #include "storage/database_kind.h"
 #include "storage/meta_values.h"
+#include "storage/store_check.h"
 
 namespace cellbake {
 namespace {
@@ -142,7 +143,8 @@ void add_status_command(CLI::App& app) {
   cmd->add_flag("--json", opt->json, "Machine-readable output");
   cmd->add_flag("--check", opt->check,
                 "Recompute every cell's content hash from its rows and decode every blob; list damaged cells "
-                "(exit 1 when there are any)");
+                "(exit 1 when there are any). On a geometry store: its content hash recomputed, the R-tree "
+                "against the chunk rows, every chunk blob decoded");
   cmd->add_flag("--repair", opt->repair, "As --check, then mark the damaged cells pending (the next bake redoes them)");
   cmd->callback([opt] {
     // Geometry stores: their summary, and nothing else (a cell database's
@@ -152,13 +154,32 @@ void add_status_command(CLI::App& app) {
     if (stores > 0) {
       if (stores != opt->dbs.size())
         throw std::invalid_argument("give either geometry stores or cell databases, not both");
+      if (opt->repair) throw std::invalid_argument("--repair mends cell databases; a damaged geometry store is re-ingested");
       nlohmann::json list = nlohmann::json::array();
+      std::size_t damaged_stores = 0;
       for (const auto& path : opt->dbs) {
         const GeometryStore store(path);
-        if (opt->json) list.push_back(store_status_json(store));
-        else print_store_status(store, stdout);
+        nlohmann::json j = store_status_json(store);
+        if (!opt->json) print_store_status(store, stdout);
+        if (opt->check) {
+          const std::vector<StoreProblem> problems = check_store(path);
+          nlohmann::json found = nlohmann::json::array();
+          for (const auto& p : problems) {
+            std::fprintf(stderr, "%s: %s\n", path.c_str(), describe(p).c_str());
+            found.push_back({{"chunk", p.chunk_id}, {"reason", p.reason}});
+          }
+          j["problems"] = found;
+          damaged_stores += !problems.empty();
+          if (!opt->json)
+            std::printf("check: %s\n", problems.empty() ? "sound (content hash, R-tree and every chunk blob agree)"
+                                                          : (std::to_string(problems.size()) + " problem(s)").c_str());
+        }
+        list.push_back(std::move(j));
       }
       if (opt->json) std::printf("%s\n", (list.size() == 1 ? list[0] : list).dump(2).c_str());
+      if (damaged_stores > 0)
+        throw std::runtime_error(std::to_string(damaged_stores) +
+                                 " damaged geometry store(s) (problems listed above); re-ingest the model");
       return;
     }
     std::uint64_t bytes = 0, far = 0, samples = 0, delta_covered = 0, delta_removed = 0;
