@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdio>
 
-#include "stages/chunk_subset.h"
 #include "stages/cube_map.h"
 #include "stages/cull_box.h"
 #include "stages/encode.h"
@@ -16,6 +15,7 @@
 #include "stages/far_choice.h"
 #include "storage/cell_content_hash.h"
 #include "storage/chunk_codec.h"
+#include "storage/far_geometry_check.h"
 #include "storage/geometry_store.h"
 #include "storage/sqlite_db.h"
 
@@ -42,7 +42,7 @@ int baked_face_size(const CellDb& db) {
 
 // Equal within rounding of the value's magnitude (bounds recomputed from the
 // same doubles agree exactly; a tolerance keeps the check about damage).
-bool close(double a, double b) { return std::fabs(a - b) <= 1e-9 * std::max({1.0, std::fabs(a), std::fabs(b)}); }
+bool close(double a, double b) { return a == b || std::fabs(a - b) <= 1e-9 * std::max({1.0, std::fabs(a), std::fabs(b)}); }
 bool close(const Vec3d& a, const Vec3d& b) { return close(a.x, b.x) && close(a.y, b.y) && close(a.z, b.z); }
 bool close(const Box3d& a, const Box3d& b) { return close(a.lo, b.lo) && close(a.hi, b.hi); }
 
@@ -141,22 +141,7 @@ std::string check_far_against_store(const CellRow& row, const GeometryStore& sto
     } catch (const std::exception& e) {
       return at + ": " + e.what();
     }
-    if (g.whole) {
-      if (g.triangles != chunk->triangle_count())
-        return at + ": whole, " + std::to_string(g.triangles) + " triangles recorded, the store's chunk has " +
-               std::to_string(chunk->triangle_count());
-      if (!close(g.bounds, chunk->bounds))
-        return at + ": bounds " + text(g.bounds) + " are not the store's chunk's " + text(chunk->bounds);
-      continue;
-    }
-    if (!is_triangle_list_blob(g.geometry)) continue;  // a chunk blob of its own (before far_choice version 3)
-    const std::vector<std::uint32_t> list = decode_triangle_list(g.geometry);  // decoded before: cannot throw
-    if (!list.empty() && list.back() >= chunk->triangle_count())
-      return at + ": triangle " + std::to_string(list.back()) + " is past the chunk's " +
-             std::to_string(chunk->triangle_count()) + " triangles";
-    const Chunk part = chunk_subset(*chunk, list);
-    if (!close(g.bounds, part.bounds) || !close(g.origin, part.origin))
-      return at + ": bounds " + text(g.bounds) + " are not those of its triangles, " + text(part.bounds);
+    if (std::string problem = far_geometry_problem(g, *chunk); !problem.empty()) return problem;
   }
   return "";
 }
