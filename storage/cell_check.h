@@ -55,7 +55,9 @@ struct CellCheckContext {
 // far-choice row's; far geometry rows naming positive chunk ids, ordered
 // bounds, triangles summing to the cell's far_geometry_triangles. With a
 // place: region, grid indices and bounds as the grid has them. With a store:
-// the near list equal to near_field_at(centre, cull_half_size) of the store,
+// the near list against near_field_at(centre, cull_half_size) of the store
+// (non-empty when the cube meets chunks, only chunks it meets, every chunk
+// wholly within it, triangles summing to near_triangles),
 // far geometry naming chunks the store holds, triangle numbers within them and
 // bounds and origin equal to those of the triangles they name. Never throws
 // for a damaged row; SQLite errors (an unreadable file) still throw.
