@@ -384,4 +384,45 @@ std::string describe_bake_config(const BakeConfig& c) {
   return o.str();
 }
 
+DescribedConfig config_from_description(const std::string& text) {
+  DescribedConfig out;
+  out.config.database = "";
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty()) continue;
+    const std::size_t eq = line.find('=');
+    const std::string key = line.substr(0, eq), value = eq == std::string::npos ? "" : line.substr(eq + 1);
+    try {
+      if (eq == std::string::npos) throw std::runtime_error("not a key=value line");
+      if (key == "region") {
+        double v[6];
+        std::istringstream values(value);
+        char comma = ',';
+        for (int i = 0; i < 6; ++i)
+          if ((i > 0 && !(values >> comma)) || comma != ',' || !(values >> v[i]) || !std::isfinite(v[i]))
+            throw std::runtime_error("'" + value + "' is not six finite numbers");
+        if (!(values >> std::ws).eof()) throw std::runtime_error("'" + value + "' is not six finite numbers");
+        const Box3d r{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}};
+        if (r.lo.x > r.hi.x || r.lo.y > r.hi.y || r.lo.z > r.hi.z)
+          throw std::runtime_error("'" + value + "': min must be <= max on every axis");
+        out.config.regions.push_back(r);
+        continue;
+      }
+      // Directions are written bare ("x,y,z"); as an override they are a TOML array.
+      const bool vector = key == "shading.key_direction" || key == "shading.fill_direction";
+      apply_override(out.config, (key == "up" ? std::string("model.up") : key) + "=" +
+                                     (vector ? "[" + value + "]" : value));
+    } catch (const std::exception& e) {
+      std::string what = e.what();
+      for (const std::string& prefix : {"--set " + (key == "up" ? std::string("model.up") : key) + ": ", std::string("--set ")})
+        if (what.rfind(prefix, 0) == 0) {
+          what = what.substr(prefix.size());
+          break;
+        }
+      out.problems.push_back(key + ": " + what);
+    }
+  }
+  return out;
+}
+
 }  // namespace cellbake

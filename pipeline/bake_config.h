@@ -156,4 +156,16 @@ std::string resolve_up_axis(BakeConfig& config, const std::string& store_up, con
 // A canonical text form of every parameter (for hashing and the database meta).
 std::string describe_bake_config(const BakeConfig& config);
 
+// A cell database's meta `config` (describe_bake_config's text) read back
+// with the same rules as a config file: every "key=value" line a known key
+// with a value of its type and range, "region=x0,y0,z0,x1,y1,z1" lines six
+// finite numbers with min <= max. `problems` gets one "KEY: what is wrong"
+// per bad line (the line is then skipped); keys a line does not name keep
+// their defaults.
+struct DescribedConfig {
+  BakeConfig config;
+  std::vector<std::string> problems;
+};
+DescribedConfig config_from_description(const std::string& text);
+
 }  // namespace cellbake

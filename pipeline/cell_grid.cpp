@@ -27,46 +27,92 @@ int cells_along(double extent, double size) {
 
 }  // namespace
 
-std::vector<CellSpec> enumerate_cells(const std::vector<Box3d>& regions, double cell_size, std::uint64_t max_cells) {
+namespace {
+
+struct RegionCells {
+  int nx = 0, ny = 0, nz = 0;
+  std::uint64_t count() const { return std::uint64_t(nx) * std::uint64_t(ny) * std::uint64_t(nz); }
+};
+
+void check_cell_size(double cell_size) {
   if (!(cell_size > 0) || !std::isfinite(cell_size)) throw std::invalid_argument("cell size must be positive");
-  std::vector<CellSpec> cells;
+}
+
+// Every region's cell counts along x, y and z; throws when the total passes `max_cells`.
+std::vector<RegionCells> region_cells(const std::vector<Box3d>& regions, double cell_size, std::uint64_t max_cells) {
+  check_cell_size(cell_size);
+  std::vector<RegionCells> out;
   std::uint64_t total = 0;
   for (const auto& r : regions) {
     if (!is_finite(r.lo) || !is_finite(r.hi)) throw std::invalid_argument("a region has a non-finite corner");
     const Vec3d e = r.extent();
-    const double count = double(cells_along(e.x, cell_size)) * cells_along(e.y, cell_size) * cells_along(e.z, cell_size);
+    const RegionCells n{cells_along(e.x, cell_size), cells_along(e.y, cell_size), cells_along(e.z, cell_size)};
+    const double count = double(n.nx) * n.ny * n.nz;
     if (count > double(max_cells))
       throw std::invalid_argument("regions hold more than " + std::to_string(max_cells) + " cells of size " +
                                   std::to_string(cell_size));
-    total += static_cast<std::uint64_t>(count);
+    total += n.count();
     if (total > max_cells)
       throw std::invalid_argument("regions hold more than " + std::to_string(max_cells) + " cells of size " +
                                   std::to_string(cell_size));
+    out.push_back(n);
   }
+  return out;
+}
+
+CellSpec make_cell(std::int64_t id, std::size_t region_index, const Box3d& r, double cell_size, int x, int y, int z) {
+  const Vec3d e = r.extent();
+  CellSpec c;
+  c.id = id;
+  c.region = static_cast<int>(region_index);
+  c.gx = x;
+  c.gy = y;
+  c.gz = z;
+  // A region thinner than a cell: centre the single layer on the region.
+  Vec3d lo{r.lo.x + x * cell_size, r.lo.y + y * cell_size, r.lo.z + z * cell_size};
+  for (int a = 0; a < 3; ++a)
+    if (e[a] < cell_size) lo[a] = r.center()[a] - 0.5 * cell_size;
+  c.bounds = {lo, lo + Vec3d{cell_size, cell_size, cell_size}};
+  return c;
+}
+
+}  // namespace
+
+std::vector<CellSpec> enumerate_cells(const std::vector<Box3d>& regions, double cell_size, std::uint64_t max_cells) {
+  const std::vector<RegionCells> counts = region_cells(regions, cell_size, max_cells);
+  std::uint64_t total = 0;
+  for (const auto& n : counts) total += n.count();
+  std::vector<CellSpec> cells;
   cells.reserve(total);
   std::int64_t id = 1;
-  for (std::size_t ri = 0; ri < regions.size(); ++ri) {
-    const Box3d& r = regions[ri];
-    const Vec3d e = r.extent();
-    const int nx = cells_along(e.x, cell_size), ny = cells_along(e.y, cell_size), nz = cells_along(e.z, cell_size);
-    for (int z = 0; z < nz; ++z)
-      for (int y = 0; y < ny; ++y)
-        for (int x = 0; x < nx; ++x) {
-          CellSpec c;
-          c.id = id++;
-          c.region = static_cast<int>(ri);
-          c.gx = x;
-          c.gy = y;
-          c.gz = z;
-          // A region thinner than a cell: centre the single layer on the region.
-          Vec3d lo{r.lo.x + x * cell_size, r.lo.y + y * cell_size, r.lo.z + z * cell_size};
-          for (int a = 0; a < 3; ++a)
-            if (e[a] < cell_size) lo[a] = r.center()[a] - 0.5 * cell_size;
-          c.bounds = {lo, lo + Vec3d{cell_size, cell_size, cell_size}};
-          cells.push_back(c);
-        }
-  }
+  for (std::size_t ri = 0; ri < regions.size(); ++ri)
+    for (int z = 0; z < counts[ri].nz; ++z)
+      for (int y = 0; y < counts[ri].ny; ++y)
+        for (int x = 0; x < counts[ri].nx; ++x) cells.push_back(make_cell(id++, ri, regions[ri], cell_size, x, y, z));
   return cells;
+}
+
+std::optional<CellSpec> cell_of_id(const std::vector<Box3d>& regions, double cell_size, std::int64_t id) {
+  if (id < 1) return std::nullopt;
+  const std::vector<RegionCells> counts = region_cells(regions, cell_size, 50'000'000);
+  std::uint64_t k = std::uint64_t(id - 1);
+  for (std::size_t ri = 0; ri < regions.size(); ++ri) {
+    const RegionCells& n = counts[ri];
+    if (k >= n.count()) {
+      k -= n.count();
+      continue;
+    }
+    const int x = int(k % std::uint64_t(n.nx)), y = int(k / std::uint64_t(n.nx) % std::uint64_t(n.ny)),
+              z = int(k / (std::uint64_t(n.nx) * std::uint64_t(n.ny)));
+    return make_cell(id, ri, regions[ri], cell_size, x, y, z);
+  }
+  return std::nullopt;
+}
+
+std::uint64_t count_cells(const std::vector<Box3d>& regions, double cell_size) {
+  std::uint64_t total = 0;
+  for (const auto& n : region_cells(regions, cell_size, 50'000'000)) total += n.count();
+  return total;
 }
 
 std::vector<CellSpec> select_cells(const std::vector<CellSpec>& cells, const std::string& selection) {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,15 @@ std::vector<CellSpec> enumerate_cells(const std::vector<Box3d>& regions, double 
 // `model_bounds` grown by one `cell_size` on every side (its cells would see
 // nothing nearby). An empty model (empty bounds) passes: nothing to compare.
 void check_regions_meet_model(const std::vector<Box3d>& regions, const Box3d& model_bounds, double cell_size);
+
+// The cell `id` of enumerate_cells(regions, cell_size) without enumerating
+// the others (region, grid indices and bounds computed alike), or nullopt
+// when the regions hold fewer cells. Throws as enumerate_cells for a bad cell
+// size or region.
+std::optional<CellSpec> cell_of_id(const std::vector<Box3d>& regions, double cell_size, std::int64_t id);
+
+// How many cells enumerate_cells(regions, cell_size) gives; throws alike.
+std::uint64_t count_cells(const std::vector<Box3d>& regions, double cell_size);
 
 // Parses a cell selection like "1-10,15,20-" (ranges inclusive, open end = to the
 // last id) and keeps only the cells it names. Throws std::invalid_argument on bad

@@ -31,6 +31,9 @@ void add_bake_options(CLI::App& cmd, BakeCommandOptions& opt) {
       ->capture_default_str();
   cmd.add_option("--cells", opt.run.cells, "Only these cell ids, e.g. 1-10,15,20-");
   cmd.add_flag("--force", opt.run.force, "Recompute cells even when their stored hash matches");
+  cmd.add_flag("--check-store", opt.run.check_store,
+               "Check the geometry store fully first (content hash recomputed, R-tree, every chunk decoded); "
+               "by default only its row counts are compared with what ingest recorded");
   cmd.add_option("--shard", opt.shard, "Bake only shard I of N (I/N, 0-based)");
   cmd.add_flag("--json", opt.json, "Print the summary as JSON (progress still goes to stderr; -q hides it)");
 }

@@ -23,6 +23,7 @@
 #include "storage/cell_db.h"
 #include "storage/cell_db_lock.h"
 #include "storage/geometry_store.h"
+#include "storage/store_check.h"
 
 namespace cellbake {
 namespace {
@@ -100,6 +101,7 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
   // multi-threaded one (measured, MISSION.md); respect a user's own setting.
   if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", threads > 1 ? "1" : "2", 1);
 
+  require_sound_store(given.store, options.check_store);  // a damaged store bakes nothing
   GeometryStore store(given.store);
   BakePlan plan = plan_bake(given, options, store);
   const BakeConfig& config = plan.config;

@@ -23,6 +23,10 @@ struct BakeOptions {
   int shard_index = 0, shard_count = 1;  // bake only this shard's cells
   bool quiet = false;           // no progress output
   bool verbose = false;         // a line per written cell: status, stage seconds, samples, triangles, bytes
+  // The store is checked before anything is read from it: its row counts
+  // against the ones ingest recorded, or with check_store the full check
+  // (content hash recomputed, R-tree, every chunk decoded; storage/store_check.h).
+  bool check_store = false;
 };
 
 struct BakeSummary {
@@ -54,7 +58,8 @@ BakePlan plan_bake(const BakeConfig& config, const BakeOptions& options, const G
 
 // Bakes the configured cells into config.database. Failed cells are recorded
 // (status + message) and do not stop the others. Deterministic cell rows
-// whatever `threads` is. Throws only for setup errors (bad store, bad config).
+// whatever `threads` is. Throws only for setup errors (bad store, bad config;
+// a store that fails require_sound_store).
 BakeSummary run_bake(const BakeConfig& config, const BakeOptions& options);
 
 }  // namespace cellbake

@@ -14,6 +14,7 @@
 #include "runner/console.h"
 #include "runner/interrupt.h"
 #include "storage/geometry_store.h"
+#include "storage/store_check.h"
 
 namespace cellbake {
 
@@ -46,6 +47,7 @@ namespace {
 // `bake --dry-run`: what the bake would do (plan_bake), and nothing written.
 void print_dry_run(const BakeConfig& given, const BakeOptions& options, bool json) {
   validate_bake_config(given);
+  require_sound_store(given.store, options.check_store);
   const GeometryStore store(given.store);
   const BakePlan plan = plan_bake(given, options, store);
   const BakeConfig& c = plan.config;

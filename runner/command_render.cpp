@@ -177,6 +177,8 @@ void add_render_command(CLI::App& app) {
     const ViewMode mode = parse_view_mode(opt->mode);
     ViewSession session(opt->database, opt->store);
     const InputFiles inputs = render_inputs(session, opt->database, opt->path);
+    if (const std::string mismatch = session.store_mismatch(); !mismatch.empty())
+      std::fprintf(stderr, "warning: %s\n", mismatch.c_str());
     ViewRequest request;
     request.fov_y_deg = opt->fov;
     request.width = width;

@@ -2,7 +2,9 @@
 // (with each failed cell's error) and pending of the configuration's cells, the
 // bake's parameters (the main ones; every one with -v or --json), totals, time
 // per stage and a content hash over every finished cell. --check recomputes each cell's
-// content hash from its rows and decodes every blob; --repair marks the
+// content hash from its rows and decodes every blob, validates the meta values
+// and checks each cell against its grid place and the store it was baked from
+// (pipeline/cell_database_check.h); --repair marks the
 // damaged cells pending so the next bake redoes them. A geometry store given
 // instead prints what it holds (runner/store_status.h).
 #include <CLI/CLI.hpp>
@@ -23,11 +25,13 @@
 #include "runner/console.h"
 #include "runner/store_status.h"
 #include "stages/hashing.h"
+#include "pipeline/cell_database_check.h"
 #include "storage/cell_check.h"
 #include "storage/cell_db.h"
 #include "storage/cell_db_lock.h"
 #include "storage/database_kind.h"
 #include "storage/meta_values.h"
+#include "storage/store_check.h"
 
 namespace cellbake {
 namespace {
@@ -142,7 +146,8 @@ void add_status_command(CLI::App& app) {
   cmd->add_flag("--json", opt->json, "Machine-readable output");
   cmd->add_flag("--check", opt->check,
                 "Recompute every cell's content hash from its rows and decode every blob; list damaged cells "
-                "(exit 1 when there are any)");
+                "(exit 1 when there are any). On a geometry store: its content hash recomputed, the R-tree "
+                "against the chunk rows, every chunk blob decoded");
   cmd->add_flag("--repair", opt->repair, "As --check, then mark the damaged cells pending (the next bake redoes them)");
   cmd->callback([opt] {
     // Geometry stores: their summary, and nothing else (a cell database's
@@ -152,13 +157,32 @@ void add_status_command(CLI::App& app) {
     if (stores > 0) {
       if (stores != opt->dbs.size())
         throw std::invalid_argument("give either geometry stores or cell databases, not both");
+      if (opt->repair) throw std::invalid_argument("--repair mends cell databases; a damaged geometry store is re-ingested");
       nlohmann::json list = nlohmann::json::array();
+      std::size_t damaged_stores = 0;
       for (const auto& path : opt->dbs) {
         const GeometryStore store(path);
-        if (opt->json) list.push_back(store_status_json(store));
-        else print_store_status(store, stdout);
+        nlohmann::json j = store_status_json(store);
+        if (!opt->json) print_store_status(store, stdout);
+        if (opt->check) {
+          const std::vector<StoreProblem> problems = check_store(path);
+          nlohmann::json found = nlohmann::json::array();
+          for (const auto& p : problems) {
+            std::fprintf(stderr, "%s: %s\n", path.c_str(), describe(p).c_str());
+            found.push_back({{"chunk", p.chunk_id}, {"reason", p.reason}});
+          }
+          j["problems"] = found;
+          damaged_stores += !problems.empty();
+          if (!opt->json)
+            std::printf("check: %s\n", problems.empty() ? "sound (content hash, R-tree and every chunk blob agree)"
+                                                          : (std::to_string(problems.size()) + " problem(s)").c_str());
+        }
+        list.push_back(std::move(j));
       }
       if (opt->json) std::printf("%s\n", (list.size() == 1 ? list[0] : list).dump(2).c_str());
+      if (damaged_stores > 0)
+        throw std::runtime_error(std::to_string(damaged_stores) +
+                                 " damaged geometry store(s) (problems listed above); re-ingest the model");
       return;
     }
     std::uint64_t bytes = 0, far = 0, samples = 0, delta_covered = 0, delta_removed = 0;
@@ -167,6 +191,10 @@ void add_status_command(CLI::App& app) {
     std::map<std::string, double> stage_seconds;
     std::map<std::string, ConfigCells> configs;
     std::vector<Damaged> damaged;
+    struct DamagedMeta {
+      std::string database, key, reason;
+    };
+    std::vector<DamagedMeta> damaged_meta;
     std::vector<FailedCell> failed_cells;
     std::map<std::string, BakeParameters> parameters;  // by config text
     // Per-cell content hashes from every database, combined in id order, so a
@@ -194,8 +222,16 @@ void add_status_command(CLI::App& app) {
       delta_removed += t.delta_removed_pixels;
       for (const auto& [k, v] : t.stage_seconds) stage_seconds[k] += v;
       std::map<std::int64_t, std::string> reasons;  // this database's damaged cells
-      if (check)
-        for (auto& p : check_cells(db)) reasons[p.id] = std::move(p.reason);
+      if (check) {
+        // Meta values a reader uses, then each cell against its grid place and the store it was baked from.
+        for (const MetaProblem& p : check_database_meta(db)) {
+          std::fprintf(stderr, "%s: meta '%s': %s\n", path.c_str(), p.key.c_str(), p.reason.c_str());
+          damaged_meta.push_back({path, p.key, p.reason});
+        }
+        const CellCheckSetup setup = cell_check_setup(db);
+        if (!setup.note.empty()) std::fprintf(stderr, "%s: note: %s\n", path.c_str(), setup.note.c_str());
+        for (auto& p : check_cells(db, setup.context)) reasons[p.id] = std::move(p.reason);
+      }
       for (const auto& [id, stamp] : db.stamps()) {
         if (!stamp.error.empty() && !reasons.count(id)) reasons[id] = stamp.error.substr(stamp.error.find("near_chunks"));
         const bool bad = reasons.count(id) > 0;
@@ -273,6 +309,9 @@ void add_status_command(CLI::App& app) {
       nlohmann::json list = nlohmann::json::array();
       for (const auto& d : damaged) list.push_back({{"database", d.database}, {"cell", d.id}, {"reason", d.reason}});
       j["damaged"] = list;
+      nlohmann::json meta_list = nlohmann::json::array();
+      for (const auto& d : damaged_meta) meta_list.push_back({{"database", d.database}, {"key", d.key}, {"reason", d.reason}});
+      j["damaged_meta"] = meta_list;
       nlohmann::json failed_list = nlohmann::json::array();
       for (const auto& f : failed_cells)
         failed_list.push_back({{"database", f.database}, {"cell", f.id}, {"error", f.error}});
@@ -319,6 +358,10 @@ void add_status_command(CLI::App& app) {
     if (check && !opt->repair && !damaged.empty())
       throw std::runtime_error(std::to_string(damaged.size()) +
                                " damaged cell(s) (listed above); `cellbake status --repair` marks them pending");
+    if (check && !damaged_meta.empty())
+      throw std::runtime_error(std::to_string(damaged_meta.size()) +
+                               " damaged meta value(s) (listed above): the database's parameters cannot be trusted; "
+                               "rebake it");
   });
 }
 

@@ -56,6 +56,9 @@ void add_verify_command(CLI::App& app) {
   cmd->add_option("--worst", opt->verify.worst_views, "Worst views shown as triptychs")
       ->capture_default_str();
   cmd->add_option("--store", opt->verify.store, "Geometry store (default: the one the database names)");
+  cmd->add_flag("--check-store", opt->verify.check_store,
+                "Check the geometry store fully first (content hash recomputed, R-tree, every chunk decoded); by "
+                "default only its row counts are compared with what ingest recorded");
   cmd->add_flag("--json", opt->json,
                 "Print the summary as JSON (progress still goes to stderr; -q hides it)");
   cmd->add_option(

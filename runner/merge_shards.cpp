@@ -10,6 +10,7 @@
 #include "pipeline/cell_grid.h"
 #include "storage/cell_db.h"
 #include "storage/cell_db_lock.h"
+#include "pipeline/cell_database_check.h"
 #include "storage/cell_db_merge.h"
 #include "storage/meta_values.h"
 
@@ -148,7 +149,14 @@ MergeSummary merge_shards(const std::filesystem::path& out, const std::vector<st
     ref_store_hash = *inputs.front().store_hash;
     ref_config = inputs.front().config.value_or("");
   }
-  for (const auto& s : inputs) check_compatible(s, ref_name, ref_store_hash, ref_config);
+  for (const auto& s : inputs) {
+    check_compatible(s, ref_name, ref_store_hash, ref_config);
+    const std::vector<MetaProblem> problems = check_database_meta(*s.db);
+    if (!problems.empty())
+      throw std::runtime_error(s.path.string() + ": meta '" + problems.front().key + "': " + problems.front().reason +
+                               (problems.size() > 1 ? " (and " + std::to_string(problems.size() - 1) + " more)" : "") +
+                               "; refusing to merge this shard");
+  }
 
   if (!out.parent_path().empty()) std::filesystem::create_directories(std::filesystem::absolute(out).parent_path());
   CellDb merged(out, CellDb::Mode::read_write);
@@ -159,7 +167,10 @@ MergeSummary merge_shards(const std::filesystem::path& out, const std::vector<st
       if (auto v = first.meta(key)) merged.set_meta(key, *v);
   }
   for (auto& s : inputs) {
-    const CellCopyCounts c = copy_cells(merged, *s.db);
+    // Each shard's cells checked against their grid places and the store they were baked from.
+    const CellCheckSetup setup = cell_check_setup(*s.db);
+    if (!setup.note.empty()) warn(s.path.string() + ": " + setup.note);
+    const CellCopyCounts c = copy_cells(merged, *s.db, setup.context);
     summary.cells_copied += c.copied;
     summary.cells_unchanged += c.unchanged;
     summary.cells_kept_done += c.kept_done;

@@ -272,29 +272,11 @@ double select_threshold(std::vector<Candidate>& cands, const Vec3d& center, std:
   }
 }
 
-}  // namespace
-
-CullBoxResult find_cull_box(const Vec3d& cell_center, const CullBoxParams& params,
-                            const ChunkSource& source) {
-  validate(cell_center, params);
-  const double min_half = params.min_half_size;
-  const Box3d model = source.model_bounds();
-  const double max_half =
-      model.empty() ? min_half
-                    : std::max(min_half, std::min(params.max_half_size, box_linf_reach(cell_center, model)));
-
-  CullBoxResult result;
-  std::vector<Candidate> cands =
-      gather_candidates(cell_center, min_half, max_half, params.triangle_budget, source);
-  result.chunks_queried = cands.size();
-  const double threshold = select_threshold(cands, cell_center, params.triangle_budget, min_half, max_half,
-                                            source, result.chunks_loaded);
-  const double half = threshold <= max_half
-                          ? std::clamp(threshold - safety_gap(cell_center, threshold), min_half, max_half)
-                          : max_half;
-  result.half_size = half;
-
-  // Exact evaluation at the chosen half size.
+// The near field at `half` from candidates covering the cube: the triangles
+// whose Chebyshev distance to the centre is at most `half`, per chunk, sorted
+// by chunk id (find_cull_box's final evaluation and near_field_at).
+void evaluate_near_field(std::vector<Candidate>& cands, const Vec3d& cell_center, double half, const ChunkSource& source,
+                         CullBoxResult& result) {
   for (Candidate& c : cands) {
     std::uint64_t n = 0;
     if (!c.chunk && c.hi <= half) {
@@ -318,7 +300,49 @@ CullBoxResult find_cull_box(const Vec3d& cell_center, const CullBoxParams& param
   }
   std::sort(result.near_field.begin(), result.near_field.end(),
             [](const NearChunk& a, const NearChunk& b) { return a.chunk_id < b.chunk_id; });
+}
+
+}  // namespace
+
+CullBoxResult find_cull_box(const Vec3d& cell_center, const CullBoxParams& params,
+                            const ChunkSource& source) {
+  validate(cell_center, params);
+  const double min_half = params.min_half_size;
+  const Box3d model = source.model_bounds();
+  const double max_half =
+      model.empty() ? min_half
+                    : std::max(min_half, std::min(params.max_half_size, box_linf_reach(cell_center, model)));
+
+  CullBoxResult result;
+  std::vector<Candidate> cands =
+      gather_candidates(cell_center, min_half, max_half, params.triangle_budget, source);
+  result.chunks_queried = cands.size();
+  const double threshold = select_threshold(cands, cell_center, params.triangle_budget, min_half, max_half,
+                                            source, result.chunks_loaded);
+  const double half = threshold <= max_half
+                          ? std::clamp(threshold - safety_gap(cell_center, threshold), min_half, max_half)
+                          : max_half;
+  result.half_size = half;
+
+  // Exact evaluation at the chosen half size.
+  evaluate_near_field(cands, cell_center, half, source, result);
   result.budget_exceeded_at_min = result.triangle_count > params.triangle_budget;
+  return result;
+}
+
+CullBoxResult near_field_at(const Vec3d& cell_center, double half_size, const ChunkSource& source) {
+  CullBoxParams params;
+  params.min_half_size = params.max_half_size = half_size;
+  validate(cell_center, params);
+  CullBoxResult result;
+  result.half_size = half_size;
+  // Candidates from a slightly larger cube, so no chunk touching the cube is
+  // missed by rounding; the evaluation counts exactly at half_size.
+  const double reach = half_size + 1e-9 * (half_size + std::max({std::fabs(cell_center.x), std::fabs(cell_center.y),
+                                                                     std::fabs(cell_center.z)}));
+  std::vector<Candidate> cands = gather_candidates(cell_center, reach, reach, 0, source);
+  result.chunks_queried = cands.size();
+  evaluate_near_field(cands, cell_center, half_size, source, result);
   return result;
 }
 

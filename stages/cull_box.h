@@ -62,4 +62,11 @@ struct CullBoxResult {
 // deterministic source.
 CullBoxResult find_cull_box(const Vec3d& cell_center, const CullBoxParams& params, const ChunkSource& source);
 
+// The near field of the cube of `half_size` (>= 0, finite) around
+// `cell_center`, evaluated as find_cull_box evaluates it at the half size it
+// chose: `triangle_count` and `near_field` (half_size = the given one). What
+// a stored cell's near list must equal (`status --check`, merge). Throws as
+// find_cull_box.
+CullBoxResult near_field_at(const Vec3d& cell_center, double half_size, const ChunkSource& source);
+
 }  // namespace cellbake

@@ -4,10 +4,19 @@
 #include <exception>
 #include <set>
 
+#include <array>
+#include <cmath>
+#include <cstdio>
+
+#include "stages/cube_map.h"
+#include "stages/cull_box.h"
 #include "stages/encode.h"
-#include "storage/cell_content_hash.h"
 #include "stages/encode_triangle_list.h"
+#include "stages/far_choice.h"
+#include "storage/cell_content_hash.h"
 #include "storage/chunk_codec.h"
+#include "storage/far_geometry_check.h"
+#include "storage/geometry_store.h"
 #include "storage/sqlite_db.h"
 
 namespace cellbake {
@@ -31,9 +40,147 @@ int baked_face_size(const CellDb& db) {
   return end > from ? size : 0;
 }
 
+// Equal within rounding of the value's magnitude (bounds recomputed from the
+// same doubles agree exactly; a tolerance keeps the check about damage).
+bool close(double a, double b) { return a == b || std::fabs(a - b) <= 1e-9 * std::max({1.0, std::fabs(a), std::fabs(b)}); }
+bool close(const Vec3d& a, const Vec3d& b) { return close(a.x, b.x) && close(a.y, b.y) && close(a.z, b.z); }
+bool close(const Box3d& a, const Box3d& b) { return close(a.lo, b.lo) && close(a.hi, b.hi); }
+
+std::string text(const Box3d& b) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "(%.9g, %.9g, %.9g)..(%.9g, %.9g, %.9g)", b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z);
+  return buf;
+}
+
+// The cell's region, grid indices and bounds against its place in the grid.
+std::string check_place(const CellRow& row, const CellCheckContext& context) {
+  if (!context.place) return "";
+  const std::optional<CellPlace> place = context.place(row.id);
+  if (!place) return "cell id " + std::to_string(row.id) + " is not in the configured grid";
+  if (row.region != place->region || row.gx != place->gx || row.gy != place->gy || row.gz != place->gz)
+    return "grid place region " + std::to_string(row.region) + " (" + std::to_string(row.gx) + ", " +
+           std::to_string(row.gy) + ", " + std::to_string(row.gz) + ") is not the grid's region " +
+           std::to_string(place->region) + " (" + std::to_string(place->gx) + ", " + std::to_string(place->gy) + ", " +
+           std::to_string(place->gz) + ")";
+  if (!close(row.bounds, place->bounds))
+    return "bounds " + text(row.bounds) + " are not the grid's " + text(place->bounds) +
+           " (a viewer would draw this cell elsewhere)";
+  return "";
+}
+
+// Per face: recorded triangles, a grid-coded mesh coded for its own face, none
+// wholly within a geometry tile, and the samples' triangles summing to the
+// far-choice row's.
+std::string check_faces_against_far_choice(const CellRow& row) {
+  std::array<const FarChoiceRow*, kCubeFaces> choice{};
+  for (const FarChoiceRow& c : row.far_choice) {
+    if (c.face < 0 || c.face >= kCubeFaces) return "far choice row for face " + std::to_string(c.face) + " (0..5)";
+    if (choice[std::size_t(c.face)]) return "two far choice rows for face " + std::to_string(c.face);
+    choice[std::size_t(c.face)] = &c;
+  }
+  std::array<std::uint64_t, kCubeFaces> kept{};
+  for (const SampleRow& s : row.samples)
+    for (const FaceRow& f : s.faces) {
+      const std::string at = "sample " + std::to_string(s.index) + " face " + std::to_string(f.face);
+      FaceMesh mesh = decode_face_mesh(f.mesh);  // decoded once before: cannot throw here
+      if (mesh.triangle_count() != f.triangles)
+        return at + " mesh: " + std::to_string(mesh.triangle_count()) + " triangles, " + std::to_string(f.triangles) +
+               " recorded";
+      kept[std::size_t(f.face)] += f.triangles;
+      // A grid-coded mesh (blob version 2) names its face in byte 5 and
+      // decodes onto that face's pixel rays: a mesh of another face swapped
+      // in says so. (Version 1 meshes carry no face; not checked.)
+      if (f.mesh.size() > 5 && f.mesh[4] == 2 && f.mesh[5] != f.face)
+        return at + " mesh: the mesh of face " + std::to_string(f.mesh[5]) + " (swapped between faces?)";
+      if (const FarChoiceRow* c = choice[std::size_t(f.face)]; c && c->geometry_tiles != 0)
+        if (const std::size_t inside = drop_geometry_tiles(mesh, c->geometry_tiles))
+          return at + " mesh: " + std::to_string(inside) +
+                 " triangles lie within the face's geometry tiles (the far choice row says geometry is drawn there)";
+    }
+  if (row.far_choice.empty()) return "";  // baked before the far choice, or nothing to draw
+  for (int f = 0; f < kCubeFaces; ++f) {
+    const std::uint64_t recorded = choice[std::size_t(f)] ? choice[std::size_t(f)]->tdm_triangles : 0;
+    if (kept[std::size_t(f)] != recorded)
+      return "face " + std::to_string(f) + ": the samples' meshes hold " + std::to_string(kept[std::size_t(f)]) +
+             " triangles, its far choice row " + std::to_string(recorded);
+  }
+  return "";
+}
+
+// Far geometry rows against themselves: positive chunk ids, ordered finite
+// bounds, triangles summing to the cell's figure.
+std::string check_far_rows(const CellRow& row) {
+  std::uint64_t triangles = 0;
+  bool geometry_tiles = false;
+  for (const FarChoiceRow& c : row.far_choice) geometry_tiles |= c.geometry_tiles != 0;
+  for (const FarGeometryRow& g : row.far_geometry) {
+    const std::string at = "far geometry of chunk " + std::to_string(g.chunk_id);
+    if (g.chunk_id <= 0) return at + ": chunk ids are positive";
+    const Box3d& b = g.bounds;
+    if (!is_finite(b.lo) || !is_finite(b.hi) || b.lo.x > b.hi.x || b.lo.y > b.hi.y || b.lo.z > b.hi.z)
+      return at + ": bounds " + text(b) + " are inverted or not finite";
+    if (g.whole && !g.geometry.empty()) return at + ": a whole chunk with a geometry blob";
+    triangles += g.triangles;
+  }
+  if (triangles != row.far_geometry_triangles)
+    return "far geometry rows hold " + std::to_string(triangles) + " triangles, the cell records " +
+           std::to_string(row.far_geometry_triangles) + " (rows deleted or added)";
+  if (geometry_tiles && row.far_geometry.empty())
+    return "far choice draws geometry tiles but the cell has no far geometry rows";
+  return "";
+}
+
+// Far geometry against the store: chunks present, triangle numbers within
+// them, bounds and origin those of the triangles named.
+std::string check_far_against_store(const CellRow& row, const GeometryStore& store) {
+  for (const FarGeometryRow& g : row.far_geometry) {
+    const std::string at = "far geometry of chunk " + std::to_string(g.chunk_id);
+    std::shared_ptr<const Chunk> chunk;
+    try {
+      chunk = store.load(g.chunk_id);
+    } catch (const std::exception& e) {
+      return at + ": " + e.what();
+    }
+    if (std::string problem = far_geometry_problem(g, *chunk); !problem.empty()) return problem;
+  }
+  return "";
+}
+
+// The near list against the cull box's content in the store.
+std::string check_near_list(const CellRow& row, const Box3d& bounds, const GeometryStore& store) {
+  CullBoxResult expected;
+  try {
+    expected = near_field_at(bounds.center(), row.cull_half_size, store);
+  } catch (const std::exception& e) {
+    return std::string("near list: the cull box cannot be evaluated in the store: ") + e.what();
+  }
+  // Chunks at the cube's boundary may differ by rounding between the bake's
+  // search and this evaluation: the list must name only chunks the cube
+  // meets and every chunk lying wholly within it.
+  if (row.near_chunks.empty() && !expected.near_field.empty())
+    return "near list is empty, the cull box meets " + std::to_string(expected.near_field.size()) +
+           " chunks in the store";
+  std::set<std::int64_t> meets, listed;
+  for (const NearChunk& e : expected.near_field) meets.insert(e.chunk_id);
+  std::uint64_t sum = 0;
+  for (const NearChunkRow& n : row.near_chunks) {
+    if (!meets.count(n.chunk_id))
+      return "near list names chunk " + std::to_string(n.chunk_id) + ", which the cull box does not meet in the store";
+    listed.insert(n.chunk_id);
+    sum += n.triangles;
+  }
+  if (sum != row.near_triangles)
+    return "near list holds " + std::to_string(sum) + " triangles, the cell records " + std::to_string(row.near_triangles);
+  for (const NearChunk& e : expected.near_field)
+    if (e.whole && !listed.count(e.chunk_id))
+      return "near list lacks chunk " + std::to_string(e.chunk_id) + " (" + std::to_string(e.triangles) +
+             " triangles), which lies wholly within the cull box";
+  return "";
+}
+
 }  // namespace
 
-std::string check_cell(const CellDb& db, std::int64_t id) {
+std::string check_cell(const CellDb& db, std::int64_t id, const CellCheckContext& context) {
   std::optional<CellRow> row;
   try {
     row = db.get_cell(id, true);
@@ -99,13 +246,29 @@ std::string check_cell(const CellDb& db, std::int64_t id) {
   const std::string hash = cell_content_hash(*row);
   if (hash != row->content_hash)
     return "content hash mismatch (stored " + row->content_hash + ", its rows hash to " + hash + ")";
+  // What the hash cannot tell: columns outside it, and content a hostile or
+  // buggy shard restamped.
+  try {
+    if (std::string problem = check_place(*row, context); !problem.empty()) return problem;
+    if (std::string problem = check_faces_against_far_choice(*row); !problem.empty()) return problem;
+    if (std::string problem = check_far_rows(*row); !problem.empty()) return problem;
+    if (context.store) {
+      if (std::string problem = check_far_against_store(*row, *context.store); !problem.empty()) return problem;
+      const std::optional<CellPlace> place = context.place ? context.place(row->id) : std::nullopt;
+      if (std::string problem = check_near_list(*row, place ? place->bounds : row->bounds, *context.store);
+          !problem.empty())
+        return problem;
+    }
+  } catch (const std::exception& e) {
+    return e.what();
+  }
   return "";
 }
 
-std::vector<CellProblem> check_cells(const CellDb& db) {
+std::vector<CellProblem> check_cells(const CellDb& db, const CellCheckContext& context) {
   std::vector<CellProblem> problems;
   for (std::int64_t id : db.cell_ids())
-    if (std::string reason = check_cell(db, id); !reason.empty()) problems.push_back({id, std::move(reason)});
+    if (std::string reason = check_cell(db, id, context); !reason.empty()) problems.push_back({id, std::move(reason)});
   return problems;
 }
 

@@ -27,7 +27,7 @@ void copy_rows(CellDb& target, const CellDb& source, const std::vector<std::int6
 
 }  // namespace
 
-CellCopyCounts copy_cells(CellDb& target, const CellDb& source) {
+CellCopyCounts copy_cells(CellDb& target, const CellDb& source, const CellCheckContext& context) {
   if (source.schema_version() != target.schema_version())
     throw std::runtime_error(source.path().string() + ": cell database schema version " +
                              std::to_string(source.schema_version()) + " differs from " + target.path().string() +
@@ -50,7 +50,7 @@ CellCopyCounts copy_cells(CellDb& target, const CellDb& source) {
   std::string damaged;
   std::size_t n_damaged = 0;
   for (std::int64_t id : to_copy)
-    if (const std::string reason = check_cell(source, id); !reason.empty() && ++n_damaged <= 5)
+    if (const std::string reason = check_cell(source, id, context); !reason.empty() && ++n_damaged <= 5)
       damaged += "\n  cell " + std::to_string(id) + ": " + reason;
   if (n_damaged)
     throw std::runtime_error(source.path().string() + ": " + std::to_string(n_damaged) +

@@ -7,6 +7,7 @@
 #include <map>
 #include <string>
 
+#include "storage/cell_check.h"
 #include "storage/cell_db.h"
 
 namespace cellbake {
@@ -23,11 +24,12 @@ struct CellCopyCounts {
 // source twice changes nothing; a done cell is never replaced by a failed one;
 // otherwise the source's row replaces the target's. Both databases must be of
 // this cellbake's schema (CellDb checks on open). Metadata is not copied.
-// Every cell to be copied is verified first (check_cell: content hash
-// recomputed, blobs decoded); a damaged one throws std::runtime_error naming
-// the source file and the cells, before anything is written. Other errors
-// throw naming the source file too.
-CellCopyCounts copy_cells(CellDb& target, const CellDb& source);
+// Every cell to be copied is verified first (check_cell with `context`:
+// content hash recomputed, blobs decoded, place in the grid and content
+// against the store where the context has them); a damaged one throws
+// std::runtime_error naming the source file and the cells, before anything is
+// written. Other errors throw naming the source file too.
+CellCopyCounts copy_cells(CellDb& target, const CellDb& source, const CellCheckContext& context = {});
 
 // Every metadata entry whose key starts with `prefix` (key -> value; may be empty).
 std::map<std::string, std::string> metas_with_prefix(const CellDb& db, const std::string& prefix);

@@ -168,6 +168,7 @@ void GeometryStoreWriter::add_material(std::uint32_t index, const Material& m) {
   s.bind(5, std::int64_t(m.color.b)).bind(6, std::int64_t(m.color.a)).bind(7, m.texture);
   s.bind(8, m.texture_id).bind(9, std::int64_t(m.alpha_test ? 1 : 0));
   s.run();
+  ++material_rows_;
   hash_material(*materials_hash_, std::int64_t(index), m.name, {m.color.r, m.color.g, m.color.b, m.color.a}, m.texture,
                 m.texture_id, m.alpha_test ? 1 : 0);
 }
@@ -249,6 +250,9 @@ void GeometryStoreWriter::finish(const StoreSummary& sum) {
   put("skipped_duplicate", std::to_string(sum.skipped_duplicate));
   put("units", sum.units);
   put("content_hash", sum.content_hash);
+  const std::uint64_t chunk_rows = std::uint64_t(next_id_ - 1), texture_rows = std::uint64_t(next_texture_id_ - 1);
+  put("rows", "chunks=" + std::to_string(chunk_rows) + " chunk_rtree=" + std::to_string(chunk_rows) +
+                  " materials=" + std::to_string(material_rows_) + " textures=" + std::to_string(texture_rows));
   if (!sum.up.empty()) put("up", sum.up);
   if (!sum.up.empty() && !sum.up_source.empty()) put("up_source", sum.up_source);
   db_->exec("COMMIT");

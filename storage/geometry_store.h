@@ -75,7 +75,9 @@ class GeometryStoreWriter {
   // texture's texels), and only that. stored_content_hash() recomputes it
   // from a finished store.
   std::string content_hash() const;
-  // Writes the metadata, commits, and atomically renames onto the final path.
+  // Writes the metadata (with the row counts of chunks, R-tree entries,
+  // materials and textures: meta `rows`, checked by check_store_rows before a
+  // bake), commits, and atomically renames onto the final path.
   void finish(const StoreSummary& summary);
 
  private:
@@ -84,6 +86,7 @@ class GeometryStoreWriter {
   std::unique_ptr<SqliteStatement> insert_chunk_, insert_rtree_;
   std::int64_t next_id_ = 1;
   std::int64_t next_texture_id_ = 1;
+  std::uint64_t material_rows_ = 0;
   std::unique_ptr<Hasher> textures_hash_, materials_hash_, chunks_hash_;
   std::size_t pending_ = 0;
   bool finished_ = false;
@@ -146,5 +149,9 @@ class GeometryStore : public ChunkSource {
 // Throws std::runtime_error naming the path when the file is not a schema 2
 // store or a texture does not decode.
 std::string stored_content_hash(const std::filesystem::path& path);
+
+// The table names and row counts meta `rows` records ("chunks=N chunk_rtree=N
+// materials=N textures=N"), in that order.
+inline constexpr const char* kStoreCountedTables[] = {"chunks", "chunk_rtree", "materials", "textures"};
 
 }  // namespace cellbake

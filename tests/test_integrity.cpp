@@ -172,6 +172,7 @@ TEST_F(Integrity, CutOrWrongSizedFaceImagesAreDamagedThoughTheHashIsRestamped) {
     CellRow empty_face = sound_cell(7);  // a face without triangles keeps a 1 x 1 image: sound
     for (FaceRow& f : empty_face.samples[0].faces) f.image = encode_image(pixels, 32, 32, {"png", 80});
     empty_face.samples[0].faces[1].triangles = 0;
+    empty_face.samples[0].faces[1].mesh = encode_face_mesh(FaceMesh{}, {});  // and no mesh (status --check counts them)
     empty_face.samples[0].faces[1].image = encode_image({Rgba8{0, 0, 0, 0}}, 1, 1, {"png", 80});
     empty_face.content_hash = cell_content_hash(empty_face);
     cells.put_cell(empty_face);

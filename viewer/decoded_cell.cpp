@@ -91,7 +91,26 @@ DecodedCell decode_cell(const CellRow& row, const ChunkSource* source) {
   for (std::size_t k = 0; k < row.far_geometry.size(); ++k) {
     const FarGeometryRow& g = row.far_geometry[k];
     cell.far_geometry_triangles += g.triangles;
+    const std::string far = where + " far geometry of chunk " + std::to_string(g.chunk_id) + ": ";
+    if (!is_finite(g.bounds.lo) || !is_finite(g.bounds.hi) || g.bounds.lo.x > g.bounds.hi.x ||
+        g.bounds.lo.y > g.bounds.hi.y || g.bounds.lo.z > g.bounds.hi.z)
+      throw std::runtime_error(far + "bounds are inverted or not finite (culled, it would never be drawn)");
     if (g.whole) {
+      // The store's chunk, where the row's bounds say, with the row's triangles
+      // (the index entry alone: the chunk is loaded when it is drawn).
+      if (source) {
+        bool found = false;
+        for (const ChunkRef& r : source->query(g.bounds))
+          if (r.id == g.chunk_id) {
+            if (r.triangle_count != g.triangles)
+              throw std::runtime_error(far + "whole, " + std::to_string(g.triangles) + " triangles, the store's chunk has " +
+                                       std::to_string(r.triangle_count) + " (the cell does not belong to this geometry store?)");
+            found = true;
+          }
+        if (!found)
+          throw std::runtime_error(far + "the store holds no such chunk within the row's bounds (the cell does not "
+                                         "belong to this geometry store?)");
+      }
       cell.far_whole_ids.push_back(g.chunk_id);
       continue;
     }
@@ -114,9 +133,10 @@ DecodedCell decode_cell(const CellRow& row, const ChunkSource* source) {
       if (source && !piece.chunk) {
         piece.chunk = far_piece_chunk(piece, *source->load(piece.chunk_id));
         piece.triangles = {};
+        piece.bounds = piece.chunk->bounds;  // of the triangles cut out, whatever the row says
       }
     } catch (const std::exception& e) {
-      throw std::runtime_error(where + " far geometry of chunk " + std::to_string(g.chunk_id) + ": " + e.what());
+      throw std::runtime_error(far + e.what());
     }
     cell.far_pieces.push_back(std::move(piece));
   }

@@ -69,11 +69,13 @@ struct DecodedCell {
 
 // Decodes `row` (loaded with blobs). Throws std::runtime_error naming the cell,
 // sample and face when the cell is not "done", a face index is out of range,
-// or a blob is corrupt or truncated (the validated decoders of stages/encode.h).
-// With `source` (the cell's geometry store), the far pieces are also cut out
-// of their stored chunks here (far_piece_chunk), off the drawing thread, and a
-// triangle number out of range is an error naming the cell; without it they
-// are cut when first drawn.
+// a blob is corrupt or truncated (the validated decoders of stages/encode.h),
+// or far geometry bounds are inverted or not finite: the caller then falls
+// back for this cell alone. With `source` (the cell's geometry store), the far
+// pieces are also cut out of their stored chunks here (far_piece_chunk), off
+// the drawing thread, with bounds of the triangles cut; a triangle number out
+// of range, a chunk the store lacks or a whole chunk not where and as the row
+// says is an error naming the cell; without it they are cut when first drawn.
 DecodedCell decode_cell(const CellRow& row, const ChunkSource* source = nullptr);
 
 }  // namespace cellbake

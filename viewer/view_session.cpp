@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "stages/render/gl_context.h"
+#include "storage/store_check.h"
 #include "viewer/view_camera.h"
 
 namespace cellbake {
@@ -63,6 +64,11 @@ void default_overview(const Box3d& bounds, const Vec3d& up, ViewRequest& request
 }
 
 ViewSession::~ViewSession() = default;
+
+std::string ViewSession::store_mismatch() const {
+  if (!db_) return "";
+  return cellbake::store_mismatch(db_->path(), db_->meta("store_hash"), store_->path(), store_->summary().content_hash);
+}
 
 const DecodedCell* ViewSession::load_cell(std::int64_t id, std::string& reason, std::FILE* warn) {
   if (auto it = decoded_.find(id); it != decoded_.end()) return it->second.get();

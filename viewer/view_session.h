@@ -74,6 +74,10 @@ class ViewSession {
   const CellIndex& cells() const { return index_; }
   const Vec3d& up() const { return up_; }
   const GeometryStore& store() const { return *store_; }
+  // "" when the store is the one the database was baked from (meta
+  // `store_hash`) or a store-only session; else a sentence naming both
+  // (storage/store_check.h store_mismatch).
+  std::string store_mismatch() const;
   bool store_only() const { return !db_; }
 
  private:

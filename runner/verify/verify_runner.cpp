@@ -23,6 +23,7 @@
 #include "stages/sample_points.h"
 #include "storage/cell_db.h"
 #include "storage/geometry_store.h"
+#include "storage/store_check.h"
 #include "storage/meta_values.h"
 #include "viewer/baked_config_text.h"
 #include "viewer/cell_index.h"
@@ -123,7 +124,13 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
   const auto store_meta = db.meta("store");
   if (options.store.empty() && !store_meta)
     throw std::runtime_error("verify: " + database.string() + " has no meta 'store' (not a cell database?)");
-  GeometryStore store(options.store.empty() ? std::filesystem::path(*store_meta) : options.store);
+  const std::filesystem::path store_path = options.store.empty() ? std::filesystem::path(*store_meta) : options.store;
+  require_sound_store(store_path, options.check_store);
+  GeometryStore store(store_path);
+  // Cells baked from another store name chunks of another model: nothing of them can be verified.
+  if (const std::string mismatch = store_mismatch(database, db.meta("store_hash"), store_path, store.summary().content_hash);
+      !mismatch.empty())
+    throw std::runtime_error("verify: " + mismatch);
   const std::string up_name = db.meta("up").value_or("z");
   const Vec3d up = up_axis(up_name);
   meta_double(db, "cell_size", 0);  // not used here, but a damaged value fails the run naming the key

@@ -27,6 +27,7 @@ struct VerifyOptions {
   int threads = 0;              // 0 = all cores
   int worst_views = 8;          // triptychs shown in the report
   std::filesystem::path store;  // geometry store override ("" = the database's meta `store`)
+  bool check_store = false;     // the store's full check first (else its row counts; storage/store_check.h)
   bool quiet = false;           // no progress output
   bool verbose = false;         // a line per verified cell: views, median and worst PSNR
   // Far field drawn per view (viewer/sample_selection.h); every view is also

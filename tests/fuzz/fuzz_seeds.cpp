@@ -105,6 +105,17 @@ int main(int argc, char** argv) {
 
   write(root / "fuzz_triangle_list", "empty", encode_triangle_list(std::vector<std::uint32_t>{}));
   write(root / "fuzz_triangle_list", "runs", encode_triangle_list(std::vector<std::uint32_t>{0, 1, 2, 7, 9, 10, 4095}));
+  {  // fuzz_far_geometry: chunk triangles, flags, recorded count, triangle list
+    const auto row = [](std::uint8_t triangles, std::uint8_t flags, std::uint8_t recorded, std::vector<std::uint32_t> list) {
+      std::vector<std::uint8_t> bytes = {triangles, flags, recorded};
+      const std::vector<std::uint8_t> blob = encode_triangle_list(list);
+      bytes.insert(bytes.end(), blob.begin(), blob.end());
+      return bytes;
+    };
+    write(root / "fuzz_far_geometry", "sound", row(40, 0, 4, {0, 1, 7, 39}));
+    write(root / "fuzz_far_geometry", "past_end", row(8, 0, 2, {3, 8}));
+    write(root / "fuzz_far_geometry", "whole", row(12, 1, 12, {}));
+  }
 
   const fs::path obj = root / "fuzz_obj_reader";
   write(obj, "triangle.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");

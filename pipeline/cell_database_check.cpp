@@ -1,0 +1,103 @@
+#include "pipeline/cell_database_check.h"
+
+#include <cmath>
+
+#include "pipeline/bake_config.h"
+#include "pipeline/cell_grid.h"
+#include "storage/meta_values.h"
+
+namespace cellbake {
+namespace {
+
+// A store's content hash as a bake records it: a word of printable ASCII
+// (32 hex digits from ingest; test stores name theirs), nothing a reader or a
+// printed command could trip over.
+bool is_store_hash(const std::string& s) {
+  if (s.empty() || s.size() > 128) return false;
+  for (char c : s)
+    if (c <= ' ' || c > '~') return false;
+  return true;
+}
+
+}  // namespace
+
+std::vector<MetaProblem> check_database_meta(const CellDb& db) {
+  std::vector<MetaProblem> problems;
+  std::optional<DescribedConfig> config;
+  if (const auto text = db.meta("config")) {
+    config = config_from_description(*text);
+    for (const std::string& p : config->problems) problems.push_back({"config", p});
+    if (config->problems.empty() && !config->config.regions.empty()) try {
+        count_cells(config->config.regions, config->config.cell_size);
+      } catch (const std::exception& e) {
+        problems.push_back({"config", std::string("regions: ") + e.what()});
+      }
+  }
+  if (const auto v = db.meta("cell_size")) try {
+      const double size = parse_meta_double(db.path(), "cell_size", *v);
+      if (!(size > 0)) throw std::runtime_error("'" + *v + "' is not a positive cell size");
+      if (config && std::fabs(size - config->config.cell_size) > 5e-7 + 1e-6 * config->config.cell_size)
+        throw std::runtime_error("'" + *v + "' is not the config's cells.size " +
+                                 std::to_string(config->config.cell_size));
+    } catch (const std::exception& e) {
+      problems.push_back({"cell_size", e.what()});
+    }
+  if (const auto v = db.meta("up")) {
+    if (*v != "z" && *v != "y")
+      problems.push_back({"up", "'" + *v + "' is not z or y"});
+    else if (config && *v != config->config.up)
+      problems.push_back({"up", "'" + *v + "' is not the config's up=" + config->config.up});
+  }
+  if (const auto v = db.meta("store_hash"); v && !is_store_hash(*v))
+    problems.push_back({"store_hash", "'" + *v + "' is not a content hash (a word of printable characters)"});
+  for (const char* key : {"cells_total", "cells_selected"})
+    if (const auto v = db.meta(key)) try {
+        parse_meta_u64(db.path(), key, *v);
+      } catch (const std::exception& e) {
+        problems.push_back({key, e.what()});
+      }
+  return problems;
+}
+
+CellCheckSetup cell_check_setup(const CellDb& db, const std::filesystem::path& store_path) {
+  CellCheckSetup setup;
+  if (const auto text = db.meta("config")) {
+    DescribedConfig config = config_from_description(*text);
+    if (config.problems.empty() && !config.config.regions.empty()) {
+      const std::vector<Box3d> regions = config.config.regions;
+      const double cell_size = config.config.cell_size;
+      setup.context.place = [regions, cell_size](std::int64_t id) -> std::optional<CellPlace> {
+        const std::optional<CellSpec> c = cell_of_id(regions, cell_size, id);
+        if (!c) return std::nullopt;
+        return CellPlace{c->region, c->gx, c->gy, c->gz, c->bounds};
+      };
+    }
+  }
+  const std::filesystem::path store =
+      !store_path.empty() ? store_path : std::filesystem::path(db.meta("store").value_or(""));
+  const auto baked_from = db.meta("store_hash");
+  if (store.empty() || !baked_from) {
+    setup.note = "no geometry store recorded: near lists and far geometry not compared with the store";
+    return setup;
+  }
+  if (!std::filesystem::exists(store)) {
+    setup.note = store.string() + " does not exist: near lists and far geometry not compared with the store";
+    return setup;
+  }
+  try {
+    auto opened = std::make_unique<GeometryStore>(store);
+    if (opened->summary().content_hash != *baked_from) {
+      setup.note = store.string() + " is not the store the cells were baked from (content hash " +
+                   opened->summary().content_hash + ", not " + *baked_from +
+                   "): near lists and far geometry not compared with it";
+      return setup;
+    }
+    setup.store = std::move(opened);
+    setup.context.store = setup.store.get();
+  } catch (const std::exception& e) {
+    setup.note = std::string(e.what()) + ": near lists and far geometry not compared with the store";
+  }
+  return setup;
+}
+
+}  // namespace cellbake

@@ -1,0 +1,57 @@
+#include "storage/far_geometry_check.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+
+#include "stages/chunk_subset.h"
+#include "stages/encode_triangle_list.h"
+
+namespace cellbake {
+namespace {
+
+bool close(double a, double b) {
+  return a == b || std::fabs(a - b) <= 1e-9 * std::max({1.0, std::fabs(a), std::fabs(b)});
+}
+bool close(const Vec3d& a, const Vec3d& b) { return close(a.x, b.x) && close(a.y, b.y) && close(a.z, b.z); }
+bool close(const Box3d& a, const Box3d& b) { return close(a.lo, b.lo) && close(a.hi, b.hi); }
+
+std::string text(const Box3d& b) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "(%.9g, %.9g, %.9g)..(%.9g, %.9g, %.9g)", b.lo.x, b.lo.y, b.lo.z, b.hi.x,
+                b.hi.y, b.hi.z);
+  return buf;
+}
+
+}  // namespace
+
+std::string far_geometry_problem(const FarGeometryRow& g, const Chunk& stored) {
+  const std::string at = "far geometry of chunk " + std::to_string(g.chunk_id);
+  try {
+    if (g.whole) {
+      if (g.triangles != stored.triangle_count())
+        return at + ": whole, " + std::to_string(g.triangles) +
+               " triangles recorded, the store's chunk has " + std::to_string(stored.triangle_count());
+      if (!close(g.bounds, stored.bounds))
+        return at + ": bounds " + text(g.bounds) + " are not the store's chunk's " + text(stored.bounds);
+      return "";
+    }
+    if (!is_triangle_list_blob(g.geometry)) return "";  // a chunk blob of its own: checked by decoding
+    const std::vector<std::uint32_t> list = decode_triangle_list(g.geometry);
+    if (list.size() != g.triangles)
+      return at + ": " + std::to_string(list.size()) + " triangles, " + std::to_string(g.triangles) +
+             " recorded";
+    if (!list.empty() && list.back() >= stored.triangle_count())
+      return at + ": triangle " + std::to_string(list.back()) + " is past the chunk's " +
+             std::to_string(stored.triangle_count()) + " triangles";
+    const Chunk part = chunk_subset(stored, list);
+    if (!close(g.bounds, part.bounds) || !close(g.origin, part.origin))
+      return at + ": bounds " + text(g.bounds) + " are not those of its triangles, " + text(part.bounds);
+    return "";
+  } catch (const std::exception& e) {
+    return at + ": " + e.what();
+  }
+}
+
+}  // namespace cellbake

@@ -1,0 +1,21 @@
+// One far geometry row of a cell checked against the stored chunk it names
+// (issue #37, item 3): check_cell's store-aware part, pure, so the fuzz target
+// fuzz_far_geometry can drive it with arbitrary rows.
+#pragma once
+
+#include <string>
+
+#include "stages/geometry.h"
+#include "storage/cell_db.h"
+
+namespace cellbake {
+
+// "" when `row` is sound against `stored` (the store's chunk `row.chunk_id`),
+// else what is wrong: a whole row must have the chunk's triangle count and
+// bounds; a triangle-list row's numbers must decode and lie within the
+// chunk, number row.triangles, and its bounds and origin be those of the
+// triangles named (chunk_subset). Rows holding a chunk blob of their own
+// (baked before far_choice version 3) pass here. Never throws.
+std::string far_geometry_problem(const FarGeometryRow& row, const Chunk& stored);
+
+}  // namespace cellbake
