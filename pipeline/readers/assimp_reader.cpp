@@ -80,6 +80,16 @@ void check_glb_lengths(const std::string& name, std::uint64_t size, Read&& read)
   }
 }
 
+// The decompressed size a gzip file's trailer states (ISIZE: the size modulo
+// 2^32, exact for the single-member files gzip writes under 4 GiB); 0 when
+// unreadable. Only a hint for reserving memory.
+std::uint64_t gzip_size_hint(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  unsigned char trailer[4];
+  if (!in.seekg(-4, std::ios::end) || !in.read(reinterpret_cast<char*>(trailer), 4)) return 0;
+  return u32_le(trailer);
+}
+
 // Formats assimp reads as XML, whose importers recurse per element level.
 bool xml_format(const std::string& extension) {
   for (const char* xml : {"dae", "x3d", "xml", "irr", "irrmesh", "amf", "xgl"})
@@ -428,7 +438,9 @@ ModelInfo read_with_assimp(const std::filesystem::path& file, const std::string&
   const aiScene* scene = nullptr;
   if (gzipped) {
     std::vector<char> bytes;
-    BufferedInput in(file);
+    BufferedInput in(file);  // refuses decompression bombs (kMaxGzipRatio)
+    const std::uint64_t allowed = std::max(kGzipFloorBytes, std::filesystem::file_size(file) * kMaxGzipRatio);
+    bytes.reserve(std::min({gzip_size_hint(file), kMaxDecompressedBytes, allowed}));  // no regrowth copies
     while (const char* p = in.fetch(1)) {
       const std::size_t n = in.buffered();
       if (bytes.size() + n > kMaxDecompressedBytes)
