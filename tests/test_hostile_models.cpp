@@ -86,6 +86,20 @@ TEST(HostileModels, GltfSharedChildren30LevelsAreCountedAndRefusedBeforeTheWalk)
   EXPECT_NE(error.find("more than 1000000"), std::string::npos) << error;
 }
 
+// Found by fuzz_gltf_reader: a byte of invalid UTF-8 in a string made the
+// strict JSON parser give up while assimp's lenient one read the 2^30 paths.
+TEST(HostileModels, InvalidUtf8InAStringDoesNotHideTheNodeGraph) {
+  TempDir dir;
+  std::string json = test::gltf_node_chain(30, 2);
+  json.insert(json.find("octet-stream") + 5, "I\xC9\xD5\x9C");
+  write_text(dir / "dag.gltf", json);
+  const std::string error = read_error(dir / "dag.gltf");
+  EXPECT_NE(error.find("dag.gltf: node graph places 2147483647 node instances"), std::string::npos) << error;
+  write_text(dir / "broken.gltf", R"({"asset":{"version":"2.0"},"nodes":[{"children":[1]},)");
+  EXPECT_NE(read_error(dir / "broken.gltf").find("broken.gltf:byte "), std::string::npos);
+  EXPECT_NE(read_error(dir / "broken.gltf").find("not valid glTF JSON"), std::string::npos);
+}
+
 TEST(HostileModels, GltfSharedChildrenWithinTheLimitArePlacedOncePerPath) {
   TempDir dir;
   write_text(dir / "dag.gltf", test::gltf_node_chain(10, 2));

@@ -76,9 +76,21 @@ std::pair<std::size_t, std::size_t> glb_json_chunk(const unsigned char* bytes, s
 }
 
 GltfNodeGraph measure_gltf_node_graph(const std::string& name, const char* text, std::size_t size) {
-  // (nlohmann's parser is iterative; the nesting was checked before, so
-  // destroying the document recurses at most kMaxMarkupNesting levels.)
-  const json doc = json::parse(text, text + size, nullptr, /*allow_exceptions=*/false);
+  // nlohmann's parser is strict about UTF-8, rapidjson (assimp's) is not: a
+  // copy with every byte >= 0x80 (valid only inside strings) made ASCII has
+  // the same structure and parses wherever assimp's does. JSON that does not
+  // parse even so is refused, so no graph reaches assimp unmeasured.
+  // (The parser is iterative; the nesting was checked before, so destroying
+  // the document recurses at most kMaxMarkupNesting levels.)
+  std::string ascii(text, size);
+  for (char& c : ascii)
+    if (static_cast<unsigned char>(c) >= 0x80) c = '?';
+  json doc;
+  try {
+    doc = json::parse(ascii);
+  } catch (const json::parse_error& e) {
+    throw InputError(name, at_byte(e.byte), std::string("not valid glTF JSON: ") + e.what());
+  }
   GltfNodeGraph graph;
   if (!doc.is_object()) return graph;
   const json& nodes = array_of(doc, "nodes");

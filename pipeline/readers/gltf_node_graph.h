@@ -29,9 +29,10 @@ struct GltfNodeGraph {
 
 // Measures the node graph of the glTF JSON `json` (a .gltf file or a GLB's
 // JSON chunk). Roots are every scene's nodes, or with no scenes every node no
-// other node lists as a child. Child and mesh indices out of range, and JSON
-// that does not parse, are left to the importer (counted as nothing). Throws
-// InputError naming `name` when a node is its own ancestor (a cycle).
+// other node lists as a child. Child and mesh indices out of range are left
+// to the importer (counted as nothing). Throws InputError naming `name` when
+// the JSON does not parse (bytes >= 0x80 are accepted anywhere, as assimp's
+// parser does) or a node is its own ancestor (a cycle).
 GltfNodeGraph measure_gltf_node_graph(const std::string& name, const char* json, std::size_t size);
 
 // measure_gltf_node_graph, then throws InputError naming `name` and the figure
