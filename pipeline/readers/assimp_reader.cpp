@@ -24,8 +24,8 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
-#include <assimp/Importer.hpp>
 #include <algorithm>
+#include <assimp/Importer.hpp>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -38,6 +38,8 @@
 #include "pipeline/readers/colour_math.h"
 #include "pipeline/readers/contained_paths.h"
 #include "pipeline/readers/format_readers.h"
+#include "pipeline/readers/gltf_node_graph.h"
+#include "pipeline/readers/markup_nesting.h"
 
 namespace cellbake {
 namespace {
@@ -50,7 +52,9 @@ constexpr int kMaxNodeDepth = 1024;
 // A ".gz" model is decompressed into memory for assimp: at most this much.
 constexpr std::uint64_t kMaxDecompressedBytes = std::uint64_t{4} << 30;
 
-std::uint32_t u32_le(const unsigned char* p) { return p[0] | p[1] << 8 | p[2] << 16 | std::uint32_t(p[3]) << 24; }
+std::uint32_t u32_le(const unsigned char* p) {
+  return p[0] | p[1] << 8 | p[2] << 16 | std::uint32_t(p[3]) << 24;
+}
 
 // Throws InputError unless the GLB's header length and every chunk length fit
 // in the `size` bytes it has; `read(offset, n, dst)` reads bytes of the file.
@@ -61,17 +65,77 @@ void check_glb_lengths(const std::string& name, std::uint64_t size, Read&& read)
   if (size < 12 || !read(0, 12, head) || std::memcmp(head, "glTF", 4) != 0) return;  // assimp reports it
   const std::uint64_t declared = u32_le(head + 8);
   if (declared > size)
-    throw InputError(name, at_byte(8), "GLB header declares " + std::to_string(declared) + " bytes but the file has " +
-                                           std::to_string(size));
+    throw InputError(name, at_byte(8),
+                     "GLB header declares " + std::to_string(declared) + " bytes but the file has " +
+                         std::to_string(size));
   for (std::uint64_t at = 12; at + 8 <= declared;) {
     unsigned char chunk[8];
     if (!read(at, 8, chunk)) break;
     const std::uint64_t length = u32_le(chunk);
     if (at + 8 + length > declared)
-      throw InputError(name, at_byte(at), "GLB chunk declares " + std::to_string(length) + " bytes but only " +
-                                              std::to_string(declared - at - 8) + " follow in the file");
+      throw InputError(name, at_byte(at),
+                       "GLB chunk declares " + std::to_string(length) + " bytes but only " +
+                           std::to_string(declared - at - 8) + " follow in the file");
     at += 8 + length;
   }
+}
+
+// The decompressed size a gzip file's trailer states (ISIZE: the size modulo
+// 2^32, exact for the single-member files gzip writes under 4 GiB); 0 when
+// unreadable. Only a hint for reserving memory.
+std::uint64_t gzip_size_hint(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  unsigned char trailer[4];
+  if (!in.seekg(-4, std::ios::end) || !in.read(reinterpret_cast<char*>(trailer), 4)) return 0;
+  return u32_le(trailer);
+}
+
+// Formats assimp reads as XML, whose importers recurse per element level.
+bool xml_format(const std::string& extension) {
+  for (const char* xml : {"dae", "x3d", "xml", "irr", "irrmesh", "amf", "xgl"})
+    if (extension == xml) return true;
+  return false;
+}
+
+// The checks before import over the whole file's bytes `data` (a decompressed
+// ".gz", or a glTF read whole): JSON or XML nesting (markup_nesting.h) and a
+// glTF's node graph (gltf_node_graph.h). Throws InputError naming `name`.
+void check_before_import(const std::string& name, const std::string& extension, const char* data,
+                         std::size_t size) {
+  if (extension == "gltf") {
+    check_markup_nesting(name, data, size);
+    check_gltf_node_graph(name, data, size);
+  } else if (extension == "glb") {
+    const auto [at, length] = glb_json_chunk(reinterpret_cast<const unsigned char*>(data), size);
+    check_markup_nesting(name, data + at, length);
+    check_gltf_node_graph(name, data + at, length);
+  } else if (xml_format(extension)) {
+    check_markup_nesting(name, data, size);
+  }
+}
+
+// check_before_import for a plain file: XML is scanned as it is read; glTF
+// JSON (a .gltf file, a GLB's JSON chunk) is read whole for its node graph.
+void check_file_before_import(const std::string& name, const std::string& extension,
+                              const std::filesystem::path& file) {
+  if (xml_format(extension)) return check_markup_nesting_of_file(name, file);
+  if (extension != "gltf" && extension != "glb") return;
+  std::ifstream in(file, std::ios::binary);
+  std::vector<char> bytes;
+  if (extension == "gltf") {
+    bytes.resize(std::filesystem::file_size(file));
+  } else {  // the 20-byte header and the JSON chunk (check_glb_lengths has checked the lengths)
+    unsigned char head[20];
+    if (!in.read(reinterpret_cast<char*>(head), 20)) return;
+    bytes.assign(head, head + 20);
+    const std::size_t length = glb_json_chunk(head, 20 + std::size_t(u32_le(head + 12))).second;
+    if (length == 0) return;
+    bytes.resize(20 + length);
+  }
+  in.read(bytes.data() + (extension == "glb" ? 20 : 0),
+          std::streamsize(bytes.size() - (extension == "glb" ? 20 : 0)));
+  if (!in) return;  // assimp reports what it cannot read
+  check_before_import(name, extension, bytes.data(), bytes.size());
 }
 
 // The files assimp opens, checked against the model's folder. Relative names
@@ -194,7 +258,8 @@ ColourVariation scene_colour_variation(const aiScene& scene) {
 struct Affine {
   double m[3][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}};
   Vec3d point(double x, double y, double z) const {
-    return {m[0][0] * x + m[0][1] * y + m[0][2] * z + m[0][3], m[1][0] * x + m[1][1] * y + m[1][2] * z + m[1][3],
+    return {m[0][0] * x + m[0][1] * y + m[0][2] * z + m[0][3],
+            m[1][0] * x + m[1][1] * y + m[1][2] * z + m[1][3],
             m[2][0] * x + m[2][1] * y + m[2][2] * z + m[2][3]};
   }
 };
@@ -311,7 +376,8 @@ bool emit_mesh(const std::string& file, unsigned mesh_index, const aiMesh& mesh,
       t.p[i] = world.point(mesh.mVertices[v].x, mesh.mVertices[v].y, mesh.mVertices[v].z);
       Rgba8 vertex_colour;
       if (colours) vertex_colour = vertex_colour_of(colours[v]);
-      t.color[i] = corner_colour(material_colour, t.material, colours ? &vertex_colour : nullptr, colours_vary);
+      t.color[i] =
+          corner_colour(material_colour, t.material, colours ? &vertex_colour : nullptr, colours_vary);
       ignored |= colours && t.material != 0 && !colours_vary;
       if (texcoords) t.uv[i] = {texcoords[v].x, texcoords[v].y};
       if (mesh.mNormals) {
@@ -372,12 +438,15 @@ ModelInfo read_with_assimp(const std::filesystem::path& file, const std::string&
   const aiScene* scene = nullptr;
   if (gzipped) {
     std::vector<char> bytes;
-    BufferedInput in(file);
+    BufferedInput in(file);  // refuses decompression bombs (kMaxGzipRatio)
+    const std::uint64_t allowed = std::max(kGzipFloorBytes, std::filesystem::file_size(file) * kMaxGzipRatio);
+    bytes.reserve(std::min({gzip_size_hint(file), kMaxDecompressedBytes, allowed}));  // no regrowth copies
     while (const char* p = in.fetch(1)) {
       const std::size_t n = in.buffered();
       if (bytes.size() + n > kMaxDecompressedBytes)
-        throw InputError(name, "", "decompresses to more than " + std::to_string(kMaxDecompressedBytes >> 30) +
-                                       " GiB, the cap for compressed models read whole");
+        throw InputError(name, "",
+                         "decompresses to more than " + std::to_string(kMaxDecompressedBytes >> 30) +
+                             " GiB, the cap for compressed models read whole");
       bytes.insert(bytes.end(), p, p + n);
       in.consume(n);
     }
@@ -387,25 +456,30 @@ ModelInfo read_with_assimp(const std::filesystem::path& file, const std::string&
         std::memcpy(dst, bytes.data() + at, n);
         return true;
       });
+    check_before_import(name, extension, bytes.data(), bytes.size());
     scene = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags, extension.c_str());
   } else {
     require_regular_file(file);
     if (extension == "glb") {
       std::ifstream in(file, std::ios::binary);
-      check_glb_lengths(name, std::filesystem::file_size(file), [&](std::uint64_t at, std::size_t n, unsigned char* dst) {
-        in.seekg(std::streamoff(at));
-        return bool(in.read(reinterpret_cast<char*>(dst), std::streamsize(n)));
-      });
+      check_glb_lengths(name, std::filesystem::file_size(file),
+                        [&](std::uint64_t at, std::size_t n, unsigned char* dst) {
+                          in.seekg(std::streamoff(at));
+                          return bool(in.read(reinterpret_cast<char*>(dst), std::streamsize(n)));
+                        });
     }
+    check_file_before_import(name, extension, file);
     scene = importer.ReadFile(name, kImportFlags);
   }
   if (!scene && !io->refused().empty())
-    throw InputError(name, "", "needs '" + io->refused().front() + "', " + kOutsideFolder + " (assimp: " +
-                                   importer.GetErrorString() + ")");
+    throw InputError(name, "",
+                     "needs '" + io->refused().front() + "', " + kOutsideFolder +
+                         " (assimp: " + importer.GetErrorString() + ")");
   if (!scene) throw InputError(name, "", std::string("assimp: ") + importer.GetErrorString());
 
   ModelInfo info;
-  for (const std::string& refused : io->refused()) info.warnings.push_back(" reference '" + refused + "': " + kOutsideFolder);
+  for (const std::string& refused : io->refused())
+    info.warnings.push_back(" reference '" + refused + "': " + kOutsideFolder);
   for (std::string& said : messages.warnings()) info.warnings.push_back(std::move(said));
   info.format = "assimp:" + extension;
   detect_up_axis(*scene, extension, info);
@@ -427,8 +501,8 @@ ModelInfo read_with_assimp(const std::filesystem::path& file, const std::string&
   std::vector<bool> used(scene->mNumMeshes, false);
   for (const MeshInstance& instance : placed) {
     used[instance.mesh] = true;
-    ignored |= emit_mesh(name, instance.mesh, *scene->mMeshes[instance.mesh], instance.world, variation.varies, info,
-                         emit);
+    ignored |= emit_mesh(name, instance.mesh, *scene->mMeshes[instance.mesh], instance.world,
+                         variation.varies, info, emit);
   }
   if (const auto unplaced = std::count(used.begin(), used.end(), false); unplaced > 0)
     info.warnings.push_back(" " + std::to_string(unplaced) + " of " + std::to_string(scene->mNumMeshes) +

@@ -29,6 +29,8 @@ BufferedInput::BufferedInput(const std::filesystem::path& file) : name_(file.str
     gz_ = gzopen(name_.c_str(), "rb");
     if (!gz_) throw InputError(name_, "", std::string("cannot open: ") + std::strerror(errno));
     gzbuffer(gz_, 1u << 18);
+    const auto compressed = std::filesystem::file_size(file, ec);
+    gzip_limit_ = std::max(kGzipFloorBytes, ec ? 0 : compressed * kMaxGzipRatio);
   } else {
     plain_ = std::fopen(name_.c_str(), "rb");
     if (!plain_) throw InputError(name_, "", std::string("cannot open: ") + std::strerror(errno));
@@ -65,6 +67,13 @@ std::size_t BufferedInput::read_raw(char* dst, std::size_t n) {
       throw InputError(name_, at_byte(offset_ + buffered()),
                        "gzip error: compressed data ends early (truncated file)");
   }
+  decompressed_ += static_cast<std::uint64_t>(got);
+  if (decompressed_ > gzip_limit_)
+    throw InputError(name_, at_byte(offset_ + buffered()),
+                     "gzip data decompresses to more than " + std::to_string(gzip_limit_) +
+                         " bytes (the larger of 64 MiB and " + std::to_string(kMaxGzipRatio) +
+                         " times the compressed file): refused as a decompression bomb; a real model this "
+                         "compressible can be decompressed first");
   return static_cast<std::size_t>(got);
 }
 

@@ -2,7 +2,10 @@
 // streaming model readers: lines for text formats, contiguous byte windows for
 // binary formats, both from the same buffer so a text header can be followed by
 // binary data. Memory is bounded by the buffer (1 MiB, grown only for a single
-// longer line, up to 256 MiB).
+// longer line, up to 256 MiB). Gzip input may decompress to at most
+// kMaxGzipRatio times its compressed size (and always to kGzipFloorBytes): a
+// decompression bomb (4 GB of zeros in a 4 MB file) is refused before the
+// tables a reader builds from it (PLY or OFF vertices) can exhaust memory.
 #pragma once
 
 #include <cstddef>
@@ -18,10 +21,19 @@ struct gzFile_s;
 
 namespace cellbake {
 
+// Model files compress about 2 to 10 times (binary floats less, ASCII more);
+// zeros compress about 1000 times. The vertex table a reader holds is about
+// twice the decompressed bytes (briefly three times while it grows), so a
+// reader's memory stays within about 100 times the .gz file's size.
+inline constexpr std::uint64_t kMaxGzipRatio = 32;
+inline constexpr std::uint64_t kGzipFloorBytes = std::uint64_t{64} << 20;
+
 class BufferedInput {
  public:
   // Opens `file`; a name ending in ".gz" (any case) is decompressed on the fly
-  // with zlib. Throws InputError naming the file when it cannot be opened.
+  // with zlib. Throws InputError naming the file when it cannot be opened, and
+  // while reading when gzip data decompresses to more than
+  // max(kGzipFloorBytes, kMaxGzipRatio x the compressed file's size).
   explicit BufferedInput(const std::filesystem::path& file);
   ~BufferedInput();
   BufferedInput(const BufferedInput&) = delete;
@@ -74,6 +86,8 @@ class BufferedInput {
 
   std::string name_;
   std::optional<std::uint64_t> plain_size_;
+  std::uint64_t gzip_limit_ = 0;    // decompressed bytes a gzip file may yield
+  std::uint64_t decompressed_ = 0;  // yielded so far
   std::FILE* plain_ = nullptr;
   gzFile_s* gz_ = nullptr;
   std::vector<char> buf_;

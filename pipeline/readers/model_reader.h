@@ -42,8 +42,10 @@ struct TextureInput {
 
 struct ModelInfo {
   std::vector<Material> materials;  // index 0 is always the default material
-  // Textures by material index, for materials whose `texture` names one.
-  // Materials with a texture but no entry here refer to the file
+  // Textures by material index, for materials whose `texture` names one; an
+  // external file is already resolved against the folder of the file that
+  // names it (the MTL library, the glTF), as a path usable from the working
+  // directory. Materials with a texture but no entry here refer to the file
   // Material::texture (absolute or relative to the model's folder).
   std::unordered_map<std::uint32_t, TextureInput> textures;
   VertexColourUse vertex_colours = VertexColourUse::none;

@@ -73,6 +73,11 @@ class ObjReader {
       }
     }
     record_vertex_colour_use(info_, seen_colours_, ignored_colours_);
+    // map_Kd paths are already resolved against their MTL's folder (read_mtl):
+    // handed over as files, so ingest does not resolve them a second time
+    // against the OBJ's folder (issue #41: "ingest sub/m.obj" looked in sub/sub/).
+    for (std::uint32_t m = 1; m < info_.materials.size(); ++m)
+      if (!info_.materials[m].texture.empty()) info_.textures[m].file = info_.materials[m].texture;
     return std::move(info_);
   }
 
@@ -253,7 +258,8 @@ class ObjReader {
   }
 
   bool contained(const std::string& library) const {
-    return options_.allow_outside_paths || path_inside_folder(file_.parent_path(), file_.parent_path() / library);
+    return options_.allow_outside_paths ||
+           path_inside_folder(file_.parent_path(), file_.parent_path() / library);
   }
 
   std::filesystem::path file_;
@@ -264,9 +270,9 @@ class ObjReader {
   std::vector<Vec3d> positions_;
   std::vector<Rgba8> vertex_colours_;  // empty until the first coloured vertex
   std::vector<std::uint8_t> has_colour_;
-  ColourVariation seen_colours_;             // every vertex colour read so far
-  std::optional<bool> file_colours_vary_;    // settled by scan_vertex_colours()
-  bool ignored_colours_ = false;             // some corner's uniform colour gave way to its material's
+  ColourVariation seen_colours_;           // every vertex colour read so far
+  std::optional<bool> file_colours_vary_;  // settled by scan_vertex_colours()
+  bool ignored_colours_ = false;           // some corner's uniform colour gave way to its material's
   std::vector<Uv> texcoords_;
   std::vector<Vec3f> normals_;
   std::unordered_map<std::string, std::uint32_t> material_by_name_;
@@ -275,7 +281,8 @@ class ObjReader {
 
 }  // namespace
 
-ModelInfo read_obj(const std::filesystem::path& file, const TriangleCallback& emit, const ReadOptions& options) {
+ModelInfo read_obj(const std::filesystem::path& file, const TriangleCallback& emit,
+                   const ReadOptions& options) {
   return ObjReader(file, emit, options).run();
 }
 

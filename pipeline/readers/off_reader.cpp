@@ -69,10 +69,12 @@ class OffReader {
     std::int64_t vertex_count = 0, face_count = 0;
     if (!scan.integer(vertex_count) || !scan.integer(face_count) || vertex_count < 0 || face_count < 0)
       fail("expected '<vertices> <faces> [<edges>]'");
+    counts_ = " (vertex count " + std::to_string(vertex_count) + ", face count " +
+              std::to_string(face_count) + ", " + at_line(in_.line_number()) + ")";
 
     read_vertices(static_cast<std::uint64_t>(vertex_count), layout);
     for (std::int64_t f = 0; f < face_count; ++f) {
-      if (!next_significant(line)) fail("unexpected end of file in face " + std::to_string(f));
+      if (!next_significant(line)) fail("unexpected end of file in face " + std::to_string(f) + counts_);
       read_face(line);
     }
     // OFF has no material colours: vertex colours are the colour, even all equal.
@@ -99,7 +101,7 @@ class OffReader {
     positions_.reserve(std::min<std::uint64_t>(count, std::uint64_t{1} << 24));
     std::string_view line;
     for (std::uint64_t i = 0; i < count; ++i) {
-      if (!next_significant(line)) fail("unexpected end of file in vertex " + std::to_string(i));
+      if (!next_significant(line)) fail("unexpected end of file in vertex " + std::to_string(i) + counts_);
       TextScan scan(line);
       Vec3d p;
       if (!scan.number(p.x) || !scan.number(p.y) || !scan.number(p.z)) fail("malformed vertex");
@@ -173,6 +175,7 @@ class OffReader {
   }
 
   BufferedInput in_;
+  std::string counts_;  // " (vertex count V, face count F, line N)" for end-of-file errors
   const TriangleCallback& emit_;
   ModelInfo info_;
   std::vector<Vec3d> positions_;

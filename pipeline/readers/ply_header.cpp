@@ -73,6 +73,7 @@ PlyHeader read_ply_header(BufferedInput& in) {
       if (element.name.empty() || !scan.integer(count) || count < 0 || !scan.at_end())
         fail("expected 'element <name> <count>'");
       element.count = static_cast<std::uint64_t>(count);
+      element.line = in.line_number();
       header.elements.push_back(std::move(element));
     } else if (key == "property") {
       if (header.elements.empty()) fail("property before any element");

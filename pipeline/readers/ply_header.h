@@ -24,6 +24,7 @@ struct PlyProperty {
 struct PlyElement {
   std::string name;
   std::uint64_t count = 0;
+  std::uint64_t line = 0;  // of its "element" line in the header
   std::vector<PlyProperty> properties;
   bool has_lists() const;
   // Bytes of one binary record; meaningful only when !has_lists().

@@ -143,7 +143,7 @@ class BinarySource {
     return p;
   }
   [[noreturn]] void truncated() const {
-    throw InputError(in_.name(), describe(position()), "unexpected end of file");
+    throw InputError(in_.name(), describe(position()), "unexpected end of file" + context_);
   }
 
  public:
@@ -151,9 +151,15 @@ class BinarySource {
   void end_record(const PlyElement&, std::uint64_t, std::uint64_t) const {}
 
  private:
-
   BufferedInput& in_;
   bool swap_;
+
+ public:
+  // Names the element being read in end-of-file errors (ply_element_context).
+  void set_context(std::string context) { context_ = std::move(context); }
+
+ private:
+  std::string context_;
 };
 
 // Values of an ASCII body: blank-separated tokens across lines. Every read
@@ -202,7 +208,8 @@ class AsciiSource {
   void end_record(const PlyElement& element, std::uint64_t index, std::uint64_t start) const {
     if (in_.line_number() != start)
       throw InputError(in_.name(), describe(start),
-                       element.name + " " + std::to_string(index) + ": fewer values on the line than the element's " +
+                       element.name + " " + std::to_string(index) +
+                           ": fewer values on the line than the element's " +
                            std::to_string(element.properties.size()) + " properties");
   }
 
@@ -217,7 +224,7 @@ class AsciiSource {
     return true;
   }
   void next_token() {
-    if (!advance()) fail("unexpected end of file");
+    if (!advance()) fail("unexpected end of file" + context_);
   }
   [[noreturn]] void fail(const std::string& what) const {
     throw InputError(in_.name(), describe(in_.line_number()), what);
@@ -225,6 +232,11 @@ class AsciiSource {
 
   BufferedInput& in_;
   TextScan scan_;
+  std::string context_;
+
+ public:
+  // Names the element being read in end-of-file errors (ply_element_context).
+  void set_context(std::string context) { context_ = std::move(context); }
 };
 
 // What a vertex property feeds.
@@ -252,6 +264,13 @@ inline std::uint8_t colour_byte(double value, PlyType type) {
   if (ply_type_is_float(type)) return unit_to_byte(value);
   if (type == PlyType::uint16 || type == PlyType::int16) return unit_to_byte(value / 65535.0);
   return static_cast<std::uint8_t>(std::clamp(value, 0.0, 255.0));
+}
+
+// " in element vertex (count 99999999999999, line 3)": where an end of file
+// was met, so a count the file cannot hold is named with its header line.
+std::string ply_element_context(const PlyElement& element) {
+  return " in element " + element.name + " (count " + std::to_string(element.count) + ", " +
+         at_line(element.line) + ")";
 }
 
 struct VertexTable {
@@ -323,6 +342,7 @@ class PlyReader {
     const std::size_t last = std::max(vertices.value_or(0), faces.value_or(0));
     for (std::size_t e = 0; e <= last; ++e) {
       const PlyElement& element = header.elements[e];
+      source.set_context(ply_element_context(element));
       if (e == vertices) {
         read_vertices(source, in, element);
       } else if (e == faces) {

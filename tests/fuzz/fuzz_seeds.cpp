@@ -15,6 +15,7 @@
 #include "stages/encode_triangle_list.h"
 #include "storage/cell_db.h"
 #include "storage/chunk_codec.h"
+#include "tests/fixture_hostile_models.h"
 
 namespace {
 
@@ -91,7 +92,8 @@ int main(int argc, char** argv) {
   write(root / "fuzz_face_mesh", "mesh-v1-ordered", encode_face_mesh(ray_grid_mesh(4, 3), v1));
 
   std::vector<Rgba8> pixels;
-  for (int i = 0; i < 8 * 6; ++i) pixels.push_back({std::uint8_t(i * 5), std::uint8_t(255 - i), 90, std::uint8_t(128 + i)});
+  for (int i = 0; i < 8 * 6; ++i)
+    pixels.push_back({std::uint8_t(i * 5), std::uint8_t(255 - i), 90, std::uint8_t(128 + i)});
   for (const char* format : {"png", "jpeg", "webp", "avif", "jxl"}) {
     try {
       write(root / "fuzz_image_decode", format, encode_image(pixels, 8, 6, {format, 70}));
@@ -101,7 +103,8 @@ int main(int argc, char** argv) {
   }
 
   write(root / "fuzz_near_chunks", "empty", pack_near_chunks({}));
-  write(root / "fuzz_near_chunks", "rows", pack_near_chunks({{1, 10, true}, {7, 3, false}, {1000000, 4096, true}}));
+  write(root / "fuzz_near_chunks", "rows",
+        pack_near_chunks({{1, 10, true}, {7, 3, false}, {1000000, 4096, true}}));
 
   write(root / "fuzz_triangle_list", "empty", encode_triangle_list(std::vector<std::uint32_t>{}));
   write(root / "fuzz_triangle_list", "runs", encode_triangle_list(std::vector<std::uint32_t>{0, 1, 2, 7, 9, 10, 4095}));
@@ -130,43 +133,63 @@ int main(int argc, char** argv) {
 
   const fs::path ply = root / "fuzz_ply_reader";
   write(ply, "ascii.ply",
-        "ply\nformat ascii 1.0\ncomment c\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+        "ply\nformat ascii 1.0\ncomment c\nelement vertex 3\nproperty float x\nproperty float y\nproperty "
+        "float z\n"
         "property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 1\n"
-        "property list uchar int vertex_indices\nend_header\n0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n3 0 1 2\n");
+        "property list uchar int vertex_indices\nend_header\n0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n3 "
+        "0 1 2\n");
   {
-    std::string b = "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
-                    "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
-                    "element face 1\nproperty list uchar uint vertex_indices\nend_header\n";
+    std::string b =
+        "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+        "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+        "element face 1\nproperty list uchar uint vertex_indices\nend_header\n";
     for (int i = 0; i < 4; ++i) {
       for (float v : {float(i & 1), float(i >> 1), 0.0f, 0.0f, 0.0f, 1.0f}) put(b, v);
     }
     put<std::uint8_t>(b, 4);
     for (std::uint32_t i : {0u, 1u, 3u, 2u}) put(b, i);
     write(ply, "binary-le.ply", b);
-    std::string be = "ply\nformat binary_big_endian 1.0\nelement face 1\nproperty list uchar int vertex_index\n"
-                     "element vertex 3\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
+    std::string be =
+        "ply\nformat binary_big_endian 1.0\nelement face 1\nproperty list uchar int vertex_index\n"
+        "element vertex 3\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
     be += std::string("\x03\0\0\0\0\0\0\0\x01\0\0\0\x02", 13);
     for (int i = 0; i < 9; ++i) be += std::string(8, i % 4 == 0 ? '\x3f' : '\0');
     write(ply, "binary-be.ply", be);
   }
 
-  write(root / "fuzz_off_reader", "plain.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3 255 0 0\n");
+  write(root / "fuzz_off_reader", "plain.off",
+        "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3 255 0 0\n");
   write(root / "fuzz_off_reader", "coloured.off",
         "COFF\n# comment\n3 1 3\n0 0 0 1 0 0 1\n1 0 0 0 1 0 1\n0 1 0 0 0 1 1\n3 0 1 2\n");
-  write(root / "fuzz_off_reader", "stn.off", "STNOFF\n3 1 0\n0 0 0 0 0 1 0 0\n1 0 0 0 0 1 1 0\n0 1 0 0 0 1 0 1\n3 0 1 2\n");
+  write(root / "fuzz_off_reader", "stn.off",
+        "STNOFF\n3 1 0\n0 0 0 0 0 1 0 0\n1 0 0 0 0 1 1 0\n0 1 0 0 0 1 0 1\n3 0 1 2\n");
 
-  write(root / "fuzz_stl_reader", "ascii.stl",
-        "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n"
-        "endsolid s\n");
+  write(
+      root / "fuzz_stl_reader", "ascii.stl",
+      "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n"
+      "endsolid s\n");
   {
     std::string b(80, ' ');
     put<std::uint32_t>(b, 2);
     for (int t = 0; t < 2; ++t) {
-      for (float v : {0.0f, 0.0f, 1.0f, 0.0f, 0.0f, float(t), 1.0f, 0.0f, float(t), 0.0f, 1.0f, float(t)}) put(b, v);
+      for (float v : {0.0f, 0.0f, 1.0f, 0.0f, 0.0f, float(t), 1.0f, 0.0f, float(t), 0.0f, 1.0f, float(t)})
+        put(b, v);
       put<std::uint16_t>(b, 0);
     }
     write(root / "fuzz_stl_reader", "binary.stl", b);
   }
+
+  // The node-tree walkers: small scenes (a chain, a shared child, nesting)
+  // and ones past the limits checked before import (deep nesting, a chain
+  // too deep, a cycle; the 2^30-path DAG is left to HostileModels: its
+  // mutants are valid DAGs of up to a million nodes, seconds each).
+  write(root / "fuzz_gltf_reader", "chain.gltf", test::gltf_node_chain(3));
+  write(root / "fuzz_gltf_reader", "shared.gltf", test::gltf_node_chain(4, 2));
+  write(root / "fuzz_gltf_reader", "deep_chain.gltf", test::gltf_node_chain(1100));
+  write(root / "fuzz_gltf_reader", "cycle.gltf",
+        test::gltf_with_nodes(R"({"children":[1]},{"children":[0],"mesh":0})"));
+  write(root / "fuzz_x3d_reader", "nested.x3d", test::x3d_nested_transforms(3));
+  write(root / "fuzz_x3d_reader", "deep.x3d", test::x3d_nested_transforms(2100));
 
   write(root / "fuzz_bake_config", "minimal.toml",
         "[input]\nstore = \"model.db\"\n[cells]\nsize = 2.0\nregions = [[0, 0, 0, 4, 4, 2]]\n");
