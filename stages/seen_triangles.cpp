@@ -1,6 +1,7 @@
 #include "stages/seen_triangles.h"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -25,10 +26,24 @@ std::vector<SeenChunk> seen_triangles(std::span<const std::int64_t> chunk,
     throw std::invalid_argument("seen_triangles: " + std::to_string(pixels) + " pixel chunks, " +
                                 std::to_string(triangle.size()) + " triangles and " +
                                 std::to_string(tile.size()) + " tiles differ");
-  for (const std::uint32_t t : tile)
-    if (t >= std::uint32_t(kFarTilesPerFace))
-      throw std::invalid_argument("seen_triangles: tile " + std::to_string(t) + " out of range");
+  if (const auto worst = std::max_element(tile.begin(), tile.end());
+      worst != tile.end() && *worst >= std::uint32_t(kFarTilesPerFace))
+    throw std::invalid_argument("seen_triangles: tile " + std::to_string(*worst) + " out of range");
   scratch.ranges.clear();
+  // Runs alternate between a few chunks (a pipe in front of a wall): a small
+  // direct-mapped cache of ranges spares most map lookups.
+  constexpr std::size_t kCache = 64;
+  std::array<std::int64_t, kCache> cached_id;
+  std::array<SeenScratch::Range*, kCache> cached_range{};
+  cached_id.fill(-1);
+  const auto range_of = [&](std::int64_t id, std::uint32_t t) {
+    const std::size_t slot = std::size_t(id) % kCache;
+    if (cached_id[slot] != id) {
+      cached_id[slot] = id;
+      cached_range[slot] = &scratch.ranges.try_emplace(id, SeenScratch::Range{t, t}).first->second;
+    }
+    return cached_range[slot];
+  };
   // The span of triangles each chunk drew. A run of pixels on one chunk keeps
   // its span in registers and stores it when the run ends.
   std::int64_t last = -1;
@@ -43,7 +58,7 @@ std::vector<SeenChunk> seen_triangles(std::span<const std::int64_t> chunk,
     const std::uint32_t t = triangle[p];
     if (id != last) {
       store();
-      range = &scratch.ranges.try_emplace(id, SeenScratch::Range{t, t}).first->second;
+      range = range_of(id, t);
       last = id;
       lo = hi = t;
     }
@@ -67,7 +82,7 @@ std::vector<SeenChunk> seen_triangles(std::span<const std::int64_t> chunk,
     const std::int64_t id = chunk[p];
     if (id < 0) continue;
     if (id != last) {
-      const SeenScratch::Range& r = scratch.ranges.find(id)->second;
+      const SeenScratch::Range& r = *range_of(id, 0);  // every id is in the map by now
       base = r.offset - std::size_t(r.lo);
       last = id;
     }
