@@ -18,6 +18,7 @@
 // no discard box, occlusion tests, lighting or per-chunk uniforms), then the
 // same RGBA8 + R32F read-back (argument 1) or a glFinish instead (argument 0).
 // BM_CubeMapStore / BM_RawGlCubeMapStore/1 is the sampler's overhead there.
+// BM_PrimitiveIdPassStore/1 against /0: what the seen triangles (issue #35) add.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -38,6 +39,7 @@
 #include "stages/render/gl_context.h"
 #include "stages/render/gl_functions.h"
 #include "stages/sample.h"
+#include "stages/seen_triangles.h"
 #include "storage/geometry_store.h"
 
 namespace cellbake {
@@ -112,6 +114,63 @@ void BM_CubeMapStore(benchmark::State& state) {
 BENCHMARK(BM_CubeMapStore)
     ->Arg(static_cast<int>(GlBackend::osmesa))
     ->Arg(static_cast<int>(GlBackend::egl))
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime()
+    ->Iterations(1);
+
+// The cost of the primitive-id pass (issue #35): the sampler's faces of the
+// same cells (chunks_in_face(), drawn through draw_unoccluded() and read
+// back) without (argument 0) and with (argument 1) the primitive-id
+// attachment, its read-back and the seen triangles made from it. OSMesa.
+void BM_PrimitiveIdPassStore(benchmark::State& state) {
+  const bool primitive_ids = state.range(0) != 0;
+  const char* path = bench_store_path(state);
+  if (!path) return;
+  if (!gl_backend_compiled(GlBackend::osmesa)) {
+    state.SkipWithError("OSMesa not in this build");
+    return;
+  }
+  const GeometryStore store(path);
+  const std::vector<std::pair<Vec3d, Box3d>> cells = bench_cells(store);
+  constexpr int kSize = 512;
+  ChunkRenderer renderer(create_gl_context(GlBackend::osmesa, 1, 1));
+  renderer.use_materials_of(store);
+  const ChunkLoader load = [&store](std::int64_t id) { return store.load(id); };
+  std::vector<std::vector<ChunkRef>> faces;
+  for (const auto& [eye, cull_box] : cells)
+    for (int face = 0; face < kCubeFaces; ++face)
+      faces.push_back(chunks_in_face(face, eye, cull_box, 0.01, store));
+  const std::vector<std::uint32_t> tiles = pixel_tiles(kSize);
+  SeenScratch scratch;
+  std::vector<Rgba8> color;
+  std::vector<float> depth;
+  std::vector<std::int64_t> chunk;
+  std::vector<std::uint32_t> triangle;
+  std::size_t seen = 0;
+  const auto pass = [&] {
+    std::size_t k = 0;
+    for (const auto& [eye, cull_box] : cells)
+      for (int face = 0; face < kCubeFaces; ++face) {
+        renderer.begin_frame(kSize, kSize, primitive_ids);
+        renderer.draw_unoccluded(cube_face_camera(eye, face), cull_box, faces[k++], load);
+        renderer.read_frame(color, depth);
+        if (!primitive_ids) continue;
+        renderer.read_primitive_ids(chunk, triangle);
+        seen += seen_triangles(chunk, triangle, tiles, scratch).size();
+      }
+  };
+  pass();  // warm caches
+  for (auto _ : state) pass();
+  const double cube_maps = static_cast<double>(state.iterations() * cells.size());
+  state.SetLabel(primitive_ids ? "with primitive ids" : "without");
+  state.counters["s_per_cube"] =
+      benchmark::Counter(cube_maps, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  benchmark::DoNotOptimize(seen);
+}
+BENCHMARK(BM_PrimitiveIdPassStore)
+    ->Arg(0)
+    ->Arg(1)
     ->Unit(benchmark::kMillisecond)
     ->MeasureProcessCPUTime()
     ->UseRealTime()

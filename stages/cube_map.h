@@ -55,9 +55,10 @@ inline int pixel_tile(int col, int row, int size) {
 }
 
 // A chunk a cube face shows, with the tiles (bits pixel_tile) it may reach:
-// either the whole chunk (`triangles` empty: a rasteriser knows which chunks
-// it drew, not which of their triangles) or the triangles that drew pixels,
-// ascending, each with the tiles it drew in (a ray caster knows).
+// either the whole chunk (`triangles` empty: a source that knows only which
+// chunks it drew) or the triangles that drew pixels, ascending, each with the
+// tiles it drew in (both sampling backends know: the ray caster's hits, the
+// rasteriser's primitive ids; stages/seen_triangles.h).
 struct SeenChunk {
   std::int64_t id = 0;
   std::uint32_t tiles = 0;

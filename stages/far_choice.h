@@ -80,7 +80,8 @@ struct FarChoiceSample {
 // Chooses each face tile's representation. `far_chunks` are the chunks
 // outside the near field (sorted by id; seen chunks not among them are near
 // field, drawn anyway, and cost nothing). A tile's geometry is what the
-// samples saw through it: the triangles a ray caster saw, or whole chunks. Without samples every tile takes the chunks its
+// samples saw through it: the triangles that drew its pixels (SeenChunk),
+// or whole chunks. Without samples every tile takes the chunks its
 // frustum from `eyes` (every eye the viewer may draw the cell from) can
 // reach (tiles_seeing_box), whatever `mode` says. Greedy and deterministic:
 // the whole cell, then each face, then each tile takes geometry when the

@@ -5,13 +5,13 @@
 // per-face frustum culling of chunks so that only visible chunks are loaded.
 #include "stages/sample.h"
 
-#include "stages/far_choice.h"
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+
+#include "stages/seen_triangles.h"
 
 namespace cellbake {
 namespace {
@@ -137,6 +137,10 @@ CubeSample sample_cube(const Vec3d& eye, const Box3d& cull_box, const SamplePara
   sample.eye = eye;
   std::vector<Rgba8> color;
   std::vector<float> depth;
+  std::vector<std::int64_t> pixel_chunk;
+  std::vector<std::uint32_t> pixel_triangle;
+  const std::vector<std::uint32_t> tiles = pixel_tiles(render_size);
+  SeenScratch scratch;
   for (int face = 0; face < kCubeFaces; ++face) {
     const FaceBasis b = cube_face_basis(face);
     // Nearest first (by the nearest forward distance of the bounds, then id),
@@ -150,19 +154,15 @@ CubeSample sample_cube(const Vec3d& eye, const Box3d& cull_box, const SamplePara
     nearest_first.reserve(refs.size());
     for (const auto& [distance, i] : order) nearest_first.push_back(refs[i]);
     const RenderCamera camera = cube_face_camera(eye, face, params.near_plane);
-    renderer.begin_frame(render_size, render_size);
-    std::vector<std::int64_t> drawn;
-    renderer.draw_unoccluded(camera, cull_box, nearest_first, load, &drawn);
+    renderer.begin_frame(render_size, render_size, /*primitive_ids=*/true);
+    renderer.draw_unoccluded(camera, cull_box, nearest_first, load);
     renderer.read_frame(color, depth);
+    renderer.read_primitive_ids(pixel_chunk, pixel_triangle);
     CubeFace& out = sample.faces[static_cast<std::size_t>(face)];
     out = finish_face(color, depth, params);
-    // Seen: every chunk drawn, on the tiles its bounds may reach (a superset
-    // of the chunks with pixels: hidden chunks the box test kept count too).
-    std::sort(drawn.begin(), drawn.end());
-    for (const ChunkRef& c : refs)
-      if (std::binary_search(drawn.begin(), drawn.end(), c.id))
-        if (const std::uint32_t tiles = tiles_seeing_box(face, Box3d::cube(eye, 0), c.bounds))
-          out.seen.push_back({c.id, tiles});
+    // Seen: the triangles that drew pixels, each with the tiles of its
+    // (render-resolution) pixels, as the ray-casting backend reports them.
+    out.seen = seen_triangles(pixel_chunk, pixel_triangle, tiles, scratch);
   }
   return sample;
 }

@@ -54,7 +54,9 @@ std::vector<ChunkRef> chunks_in_face(int face, const Vec3d& eye, const Box3d& cu
 // by id) through ChunkRenderer::draw_unoccluded(), which skips chunks provably
 // hidden behind those already drawn; a chunk is loaded from `source` only when
 // some face's frustum needs it, it is not hidden there, and `renderer` has not
-// cached it. Throws
+// cached it. Each face's `seen` lists the triangles that drew its pixels
+// (ChunkRenderer's primitive ids, turned into SeenChunks by
+// stages/seen_triangles.h as the ray-casting backend's hits are). Throws
 // std::invalid_argument for bad parameters and passes on load and GL errors.
 // Deterministic for the same inputs, renderer settings and Mesa version.
 CubeSample sample_cube(const Vec3d& eye, const Box3d& cull_box, const SampleParams& params,

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <thread>
 
@@ -409,6 +410,95 @@ TEST(ChunkRenderer, OneContextPerThreadGivesIdenticalResults) {
       EXPECT_EQ(r.faces[face].depth, reference.faces[face].depth) << "face " << face;
       EXPECT_EQ(r.faces[face].color, reference.faces[face].color) << "face " << face;
     }
+}
+
+// Face 0 (+X) from the origin sees (s, t) = (-y / x, z / x). Chunk 1, a wall
+// at x = 5 over the face's left half, hides chunk 2's triangle 0 (x = 10);
+// chunk 2's triangles 1 (tiles 6, 7, 10, 11) and 2 (tile 3 alone) are seen.
+// Chunk 2's materials make the renderer draw its triangles in another order
+// (grouped by material); chunk 3's triangle 1, a floor, crosses the near
+// plane, so the rasteriser clips it into pieces; its triangle 0 lies behind
+// the eye. Chunk 2's box is visible, so a list of drawn chunks would hold it
+// whole; the primitive ids name the triangles that drew pixels.
+TEST(Sample, SeenListsTheTrianglesThatDrewPixelsWithTheirTiles) {
+  InMemoryChunkSource source;
+  const Rgba8 grey{128, 128, 128, 255};
+  source.add(chunk_from_triangles(1, {flat_triangle({5, 0, -6}, {5, 6, -6}, {5, 6, 6}, grey),
+                                      flat_triangle({5, 0, -6}, {5, 6, 6}, {5, 0, 6}, grey)}));
+  Chunk behind = chunk_from_triangles(2, {flat_triangle({10, 2, -3}, {10, 8, -3}, {10, 5, 3}, grey),
+                                          flat_triangle({10, -2, -3}, {10, -8, -3}, {10, -5, 3}, grey),
+                                          flat_triangle({10, -6, 6}, {10, -9, 6}, {10, -6, 9}, grey)});
+  behind.materials = {1, 0, 0};  // drawn as triangles 1, 2, 0
+  source.add(std::move(behind));
+  source.add(chunk_from_triangles(3, {flat_triangle({-9, -1, -8}, {-6, -1, -8}, {-6, -3, -8}, grey),
+                                      flat_triangle({-3, -1, -8}, {20, -1, -8}, {20, -20, -8}, grey)}));
+  auto renderer = make_renderer();
+  for (int supersample : {1, 2}) {
+    const CubeSample sample =
+        sample_cube({0, 0, 0}, Box3d::cube({0, 0, 0}, 0.1), small_params(32, supersample), source, *renderer);
+    const std::vector<SeenChunk>& seen = sample.faces[0].seen;
+    ASSERT_EQ(seen.size(), 3u) << "supersample " << supersample;
+    EXPECT_EQ(seen[0].id, 1);
+    EXPECT_EQ(seen[0].triangles, (std::vector<std::uint32_t>{0, 1}));
+    EXPECT_EQ(seen[0].tiles, 0x3333u) << "the face's left half";
+    EXPECT_EQ(seen[1].id, 2);
+    EXPECT_EQ(seen[1].triangles, (std::vector<std::uint32_t>{1, 2})) << "triangle 0 is hidden";
+    EXPECT_EQ(seen[1].triangle_tiles, (std::vector<std::uint16_t>{0x0CC0, 0x0008}));
+    EXPECT_EQ(seen[1].tiles, 0x0CC8u);
+    EXPECT_EQ(seen[2].id, 3);
+    EXPECT_EQ(seen[2].triangles, (std::vector<std::uint32_t>{1}));
+    ASSERT_EQ(seen[2].triangle_tiles.size(), 1u);
+    EXPECT_EQ(seen[2].triangle_tiles[0] & ~0xCC00u, 0u) << "the floor shows in the bottom right only";
+    EXPECT_EQ(seen[2].triangle_tiles[0] & 0xC000u, 0xC000u);
+    // Every seen triangle of every face drew a pixel of that face: its tiles are those of covered pixels.
+    for (const CubeFace& f : sample.faces) {
+      std::uint32_t covered = 0;
+      for (int row = 0; row < f.size; ++row)
+        for (int col = 0; col < f.size; ++col)
+          if (std::isfinite(f.depth[pixel(f.size, col, row)])) covered |= 1u << pixel_tile(col, row, f.size);
+      for (const SeenChunk& c : f.seen) {
+        EXPECT_FALSE(c.whole());
+        EXPECT_TRUE(std::is_sorted(c.triangles.begin(), c.triangles.end()));
+        EXPECT_EQ(c.tiles & ~covered, 0u);
+      }
+    }
+  }
+}
+
+// The primitive-id attachment changes no colour or depth bit; a frame begun
+// without it cannot be asked for ids.
+TEST(ChunkRenderer, PrimitiveIdsChangeNoPixel) {
+  InMemoryChunkSource source;
+  add_closed_box(source, {0, 0, 0});
+  source.add(blocker_chunk(10, {10, 20, 30, 255}));
+  auto renderer = make_renderer();
+  const auto load = [&](std::int64_t id) { return source.load(id); };
+  const std::vector<std::int64_t> ids = {10, 1, 2, 3, 4, 5, 6};
+  std::vector<Rgba8> color[2];
+  std::vector<float> depth[2];
+  std::vector<std::int64_t> chunk;
+  std::vector<std::uint32_t> triangle;
+  for (int pass = 0; pass < 3; ++pass) {  // without, with, without again
+    const bool with_ids = pass == 1;
+    renderer->begin_frame(48, 40, with_ids);
+    renderer->draw(cube_face_camera({0, 0, 0}, 0), Box3d::cube({0, 0, 0}, 0.1), ids, load);
+    renderer->read_frame(color[with_ids], depth[with_ids]);
+    if (with_ids) {
+      renderer->read_primitive_ids(chunk, triangle);
+      ASSERT_EQ(chunk.size(), std::size_t{48 * 40});
+      for (std::size_t i = 0; i < chunk.size(); ++i) {
+        EXPECT_EQ(chunk[i] == 10, color[1][i] == (Rgba8{10, 20, 30, 255})) << "pixel " << i;
+        EXPECT_TRUE(chunk[i] == 10 || chunk[i] == 1) << "pixel " << i;  // the blocker or the +X wall
+      }
+    } else {
+      EXPECT_THROW(renderer->read_primitive_ids(chunk, triangle), std::logic_error);
+    }
+    if (pass == 2) {
+      EXPECT_EQ(color[0], color[1]);
+      EXPECT_EQ(depth[0].size(), depth[1].size());
+      EXPECT_EQ(std::memcmp(depth[0].data(), depth[1].data(), depth[0].size() * sizeof(float)), 0);
+    }
+  }
 }
 
 TEST(Sample, RejectsBadParameters) {

@@ -9,13 +9,12 @@
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <stdexcept>
-#include <unordered_map>
 
 #include "stages/raycast/instance_scene.h"
 #include "stages/raycast/ray_segments.h"
+#include "stages/seen_triangles.h"
 
 namespace cellbake {
 namespace {
@@ -76,94 +75,6 @@ struct FaceHits {
   std::vector<std::int64_t> chunk;  // -1: none
   std::vector<std::uint32_t> triangle;
 };
-
-// Reused buffers of seen_chunks().
-struct SeenScratch {
-  struct Range {
-    std::uint32_t lo, hi;    // of the chunk's triangles hit
-    std::size_t offset = 0;  // of its masks in `masks`
-  };
-  std::unordered_map<std::int64_t, Range> ranges;
-  std::vector<std::pair<std::int64_t, Range*>> by_id;
-  std::vector<std::uint16_t> masks;  // per triangle in each range: tiles it was hit in
-};
-
-// What a face saw, sorted by chunk id: per chunk, the triangles of the
-// nearest hits (ascending) with the tiles they were hit in. Only the span of
-// triangle indices a chunk was hit in is cleared and scanned (a chunk a face
-// sees only in part), and coherent rays hit the same chunk in runs, so the
-// chunk lookups are few.
-std::vector<SeenChunk> seen_chunks(const FaceHits& hits, const std::vector<std::uint32_t>& tile_of,
-                                   SeenScratch& scratch) {
-  scratch.ranges.clear();
-  const std::size_t pixels = hits.chunk.size();
-  // The span of triangles each chunk was hit in. A run of pixels on one chunk
-  // keeps its span in registers and stores it when the run ends.
-  std::int64_t last = -1;
-  SeenScratch::Range* range = nullptr;
-  std::uint32_t lo = 0, hi = 0;
-  const auto store = [&] {
-    if (range) range->lo = std::min(range->lo, lo), range->hi = std::max(range->hi, hi);
-  };
-  for (std::size_t p = 0; p < pixels; ++p) {
-    const std::int64_t id = hits.chunk[p];
-    if (id < 0) continue;
-    const std::uint32_t t = hits.triangle[p];
-    if (id != last) {
-      store();
-      range = &scratch.ranges.try_emplace(id, SeenScratch::Range{t, t}).first->second;
-      last = id;
-      lo = hi = t;
-    }
-    lo = std::min(lo, t);
-    hi = std::max(hi, t);
-  }
-  store();
-  scratch.by_id.clear();
-  for (auto& [id, r] : scratch.ranges) scratch.by_id.emplace_back(id, &r);
-  std::sort(scratch.by_id.begin(), scratch.by_id.end());
-  std::size_t total = 0;
-  for (auto& [id, r] : scratch.by_id) {
-    r->offset = total;
-    total += std::size_t(r->hi - r->lo) + 1;
-  }
-  // Padded to whole 64-bit words of masks for the scan below.
-  scratch.masks.assign(total + 4, 0);
-  last = -1;
-  std::size_t base = 0;  // of the current run's chunk: its triangle t's mask is masks[base + t] (modulo 2^64)
-  for (std::size_t p = 0; p < pixels; ++p) {
-    const std::int64_t id = hits.chunk[p];
-    if (id < 0) continue;
-    if (id != last) {
-      const SeenScratch::Range& r = scratch.ranges.find(id)->second;
-      base = r.offset - std::size_t(r.lo);
-      last = id;
-    }
-    scratch.masks[base + hits.triangle[p]] |= std::uint16_t(1u << tile_of[p]);
-  }
-  // Each chunk's span, four masks at a time: faces see chunks in part, so
-  // most of a span is zero.
-  std::vector<SeenChunk> seen(scratch.by_id.size());
-  for (std::size_t c = 0; c < seen.size(); ++c) {
-    const auto& [id, r] = scratch.by_id[c];
-    SeenChunk& out = seen[c];
-    out.id = id;
-    const std::uint16_t* span = scratch.masks.data() + r->offset;
-    const std::uint32_t count = r->hi - r->lo + 1;
-    for (std::uint32_t i = 0; i < count; i += 4) {
-      std::uint64_t word;
-      std::memcpy(&word, span + i, sizeof word);
-      if (word == 0) continue;
-      for (std::uint32_t j = i; j < std::min(count, i + 4); ++j)
-        if (const std::uint16_t m = span[j]) {
-          out.triangles.push_back(r->lo + j);
-          out.triangle_tiles.push_back(m);
-          out.tiles |= m;
-        }
-    }
-  }
-  return seen;
-}
 
 // True when no ray of the size x size faces can hit anything inside `box`
 // (world) nearer than what it already hit. Per face, in the face's frame
@@ -268,9 +179,7 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
       coordinate_[std::size_t(i)] = 2.0 * (i + 0.5) / size - 1.0;  // 0 (odd sizes): slab_interval handles it
       inverse_coordinate_[std::size_t(i)] = 1.0 / coordinate_[std::size_t(i)];
     }
-    tile_of_.resize(std::size_t(size) * std::size_t(size));
-    for (std::size_t p = 0; p < tile_of_.size(); ++p)
-      tile_of_[p] = std::uint32_t(pixel_tile(int(p % std::size_t(size)), int(p / std::size_t(size)), size));
+    tile_of_ = pixel_tiles(size);
     order_size_ = size;
   }
   const EyeBox box = eye_relative_box(cull_box, eye);
@@ -426,7 +335,7 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
     FaceHits& hits = faces[std::size_t(face)];
     CubeFace& out = sample.faces[std::size_t(face)];
     out = finish_face(hits.color, hits.depth, params);
-    out.seen = seen_chunks(hits, tile_of_, scratch);
+    out.seen = seen_triangles(hits.chunk, hits.triangle, tile_of_, scratch);
   }
   stats_.trace_seconds += seconds_since(t0);
   ++stats_.cube_maps;

@@ -51,7 +51,11 @@ void main() {
 // material has a texture; alpha-tested materials drop texels below 0.5 alpha.
 // Built twice: with APPEARANCE 1 for chunks with texture coordinates or
 // normals, and with APPEARANCE 0 (no texture lookup, flat normals only) for
-// the rest, where llvmpipe would otherwise pay for the unused paths.
+// the rest, where llvmpipe would otherwise pay for the unused paths; and each
+// again with PRIMITIVE_IDS 1 for frames that record which triangle drew each
+// pixel: (draw number + 1, triangle within the draw's index buffer) into an
+// integer attachment. gl_PrimitiveID counts from 0 in each glDrawElements, so
+// u_primitive_base adds the draw's first triangle.
 constexpr const char* kFragmentShader = R"(
 in vec3 v_relative;
 in float v_view_depth;
@@ -70,6 +74,11 @@ uniform int u_alpha_test;   // 1: drop fragments whose texel alpha < 0.5
 uniform sampler2D u_texture;
 layout(location = 0) out vec4 o_color;
 layout(location = 1) out float o_view_depth;
+#if PRIMITIVE_IDS
+uniform int u_draw;            // the draw's number in the frame + 1
+uniform int u_primitive_base;  // its first triangle in the chunk's index buffer
+layout(location = 2) out uvec2 o_primitive;
+#endif
 void main() {
   // Derivatives and texture lookups before any discard (uniform control flow;
   // an if on a uniform, not a select, so untextured draws skip the lookup).
@@ -96,6 +105,9 @@ void main() {
   }
   o_color = vec4(color, base.a);
   o_view_depth = v_view_depth;
+#if PRIMITIVE_IDS
+  o_primitive = uvec2(uint(u_draw), uint(u_primitive_base + gl_PrimitiveID));
+#endif
 }
 )";
 
@@ -148,10 +160,14 @@ std::uint32_t pack_normal_2_10_10_10(const Vec3f& n) {
   return component(n.x) | (component(n.y) << 10) | (component(n.z) << 20);
 }
 
-// Triangle order of a chunk's draw: grouped by material (stable), as ranges.
-std::vector<std::uint32_t> order_by_material(const Chunk& chunk, std::vector<ChunkDrawRange>& ranges) {
+// Triangle order of a chunk's draw: grouped by material (stable), as ranges;
+// `triangle_of` the chunk's triangle number of each triangle drawn, left
+// empty when that is the chunk's own order.
+std::vector<std::uint32_t> order_by_material(const Chunk& chunk, std::vector<ChunkDrawRange>& ranges,
+                                             std::vector<std::uint32_t>& triangle_of) {
   const std::size_t triangles = chunk.indices.size() / 3;
   ranges.clear();
+  triangle_of.clear();
   if (chunk.materials.empty()) {
     ranges.push_back({0, 0, static_cast<int>(chunk.indices.size())});
     return chunk.indices;
@@ -169,6 +185,7 @@ std::vector<std::uint32_t> order_by_material(const Chunk& chunk, std::vector<Chu
     for (int c = 0; c < 3; ++c) indices.push_back(chunk.indices[3 * t + c]);
     ranges.back().count += 3;
   }
+  if (!std::is_sorted(order.begin(), order.end())) triangle_of = std::move(order);
   return indices;
 }
 
@@ -244,7 +261,7 @@ ChunkRenderer::ChunkRenderer(std::unique_ptr<GlContext> context, ChunkRendererPa
       params_(params),
       gl_functions_(std::make_unique<GlFunctions>(load_current_functions(context_.get()))),
       gl_(*gl_functions_) {
-  build_program();
+  build_program(false);
   build_occlusion_program();
   textures_ = std::make_unique<GlTextureCache>(gl_, params_.texture_cache_bytes);
   if (const auto* name = reinterpret_cast<const char*>(gl_.GetString(GL_RENDERER))) gl_renderer_ = name;
@@ -256,8 +273,9 @@ ChunkRenderer::~ChunkRenderer() {
     clear_cache();
     textures_.reset();
     release_framebuffer();
-    for (const DrawProgram& p : programs_)
-      if (p.id) gl_.DeleteProgram(p.id);
+    for (const auto& set : programs_)
+      for (const DrawProgram& p : set)
+        if (p.id) gl_.DeleteProgram(p.id);
     if (occlusion_program_) {
       gl_.DeleteProgram(occlusion_program_);
       gl_.DeleteVertexArrays(1, &occlusion_vertex_array_);
@@ -274,10 +292,12 @@ ChunkRenderer::~ChunkRenderer() {
 // with OSMesaGetCurrentContext cannot tell a reused address apart).
 void ChunkRenderer::make_current() { context_->make_current(); }
 
-void ChunkRenderer::build_program() {
+void ChunkRenderer::build_program(bool primitive_ids) {
   for (int appearance = 0; appearance < 2; ++appearance) {
-    const std::string header = std::string("#version 330 core\n#define APPEARANCE ") + (appearance ? "1" : "0") + "\n";
-    DrawProgram& p = programs_[appearance];
+    const std::string header = std::string("#version 330 core\n#define APPEARANCE ") +
+                               (appearance ? "1" : "0") + "\n#define PRIMITIVE_IDS " +
+                               (primitive_ids ? "1" : "0") + "\n";
+    DrawProgram& p = programs_[primitive_ids ? 1 : 0][appearance];
     p.id = build_gl_program(gl_, (header + kVertexShader).c_str(), (header + kFragmentShader).c_str(), "chunk_renderer");
     const auto at = [&](const char* name) { return gl_.GetUniformLocation(p.id, name); };
     p.u_offset = at("u_offset");
@@ -293,6 +313,8 @@ void ChunkRenderer::build_program() {
     p.u_textured = at("u_textured");
     p.u_alpha_test = at("u_alpha_test");
     p.u_texture = at("u_texture");
+    p.u_draw = at("u_draw");
+    p.u_primitive_base = at("u_primitive_base");
   }
   check_gl_error(gl_, "chunk_renderer: build_program");
 }
@@ -300,7 +322,7 @@ void ChunkRenderer::build_program() {
 void ChunkRenderer::use_program(int appearance) {
   if (active_program_ == appearance) return;
   active_program_ = appearance;
-  gl_.UseProgram(programs_[appearance].id);
+  gl_.UseProgram(program(appearance).id);
 }
 
 void ChunkRenderer::build_occlusion_program() {
@@ -335,10 +357,10 @@ void ChunkRenderer::build_occlusion_program() {
 
 void ChunkRenderer::release_framebuffer() {
   if (framebuffer_) gl_.DeleteFramebuffers(1, &framebuffer_);
-  const GLuint buffers[] = {color_buffer_, view_depth_buffer_, depth_buffer_};
+  const GLuint buffers[] = {color_buffer_, view_depth_buffer_, depth_buffer_, primitive_id_buffer_};
   for (GLuint b : buffers)
     if (b) gl_.DeleteRenderbuffers(1, &b);
-  framebuffer_ = color_buffer_ = view_depth_buffer_ = depth_buffer_ = 0;
+  framebuffer_ = color_buffer_ = view_depth_buffer_ = depth_buffer_ = primitive_id_buffer_ = 0;
   frame_width_ = frame_height_ = 0;
 }
 
@@ -357,24 +379,42 @@ void ChunkRenderer::resize_framebuffer(int width, int height) {
   color_buffer_ = make_buffer(GL_RGBA8, GL_COLOR_ATTACHMENT0);
   view_depth_buffer_ = make_buffer(GL_R32F, GL_COLOR_ATTACHMENT1);
   depth_buffer_ = make_buffer(GL_DEPTH_COMPONENT32F, GL_DEPTH_ATTACHMENT);
-  const GLenum status = gl_.CheckFramebufferStatus(GL_FRAMEBUFFER);
-  if (status != GL_FRAMEBUFFER_COMPLETE)
-    throw std::runtime_error("chunk_renderer: framebuffer " + std::to_string(width) + "x" + std::to_string(height) +
-                             " incomplete (status " + std::to_string(status) + ")");
-  const GLenum draw_buffers[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-  gl_.DrawBuffers(2, draw_buffers);
+  check_framebuffer(width, height);
   frame_width_ = width;
   frame_height_ = height;
   check_gl_error(gl_, "chunk_renderer: resize_framebuffer");
 }
 
-void ChunkRenderer::begin_frame(int width, int height) {
+void ChunkRenderer::check_framebuffer(int width, int height) {
+  const GLenum status = gl_.CheckFramebufferStatus(GL_FRAMEBUFFER);
+  if (status != GL_FRAMEBUFFER_COMPLETE)
+    throw std::runtime_error("chunk_renderer: framebuffer " + std::to_string(width) + "x" +
+                             std::to_string(height) + " incomplete (status " + std::to_string(status) + ")");
+}
+
+void ChunkRenderer::add_primitive_id_buffer() {
+  gl_.GenRenderbuffers(1, &primitive_id_buffer_);
+  gl_.BindRenderbuffer(GL_RENDERBUFFER, primitive_id_buffer_);
+  gl_.RenderbufferStorage(GL_RENDERBUFFER, GL_RG32UI, frame_width_, frame_height_);
+  gl_.FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT2, GL_RENDERBUFFER, primitive_id_buffer_);
+  check_framebuffer(frame_width_, frame_height_);
+  check_gl_error(gl_, "chunk_renderer: primitive-id attachment");
+}
+
+void ChunkRenderer::begin_frame(int width, int height, bool primitive_ids) {
   if (width < 1 || height < 1)
     throw std::invalid_argument("chunk_renderer: frame size must be at least 1x1, got " + std::to_string(width) +
                                 "x" + std::to_string(height));
   make_current();
+  in_frame_ = false;
   if (width != frame_width_ || height != frame_height_ || !framebuffer_) resize_framebuffer(width, height);
   gl_.BindFramebuffer(GL_FRAMEBUFFER, framebuffer_);
+  if (primitive_ids && !primitive_id_buffer_) add_primitive_id_buffer();
+  if (primitive_ids && !programs_[1][0].id) build_program(true);
+  primitive_ids_ = primitive_ids;
+  frame_draws_.clear();
+  const GLenum draw_buffers[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+  gl_.DrawBuffers(primitive_ids ? 3 : 2, draw_buffers);
   gl_.Viewport(0, 0, width, height);
   gl_.Enable(GL_DEPTH_TEST);
   gl_.DepthMask(GL_TRUE);
@@ -392,6 +432,10 @@ void ChunkRenderer::begin_frame(int width, int height) {
   gl_.ClearBufferfv(GL_COLOR, 0, clear_color);
   gl_.ClearBufferfv(GL_COLOR, 1, clear_view_depth);
   gl_.ClearBufferfv(GL_DEPTH, 0, &clear_depth);
+  if (primitive_ids) {
+    const GLuint clear_ids[4] = {0, 0, 0, 0};
+    gl_.ClearBufferuiv(GL_COLOR, 2, clear_ids);
+  }
   check_gl_error(gl_, "chunk_renderer: begin_frame");
   in_frame_ = true;
 }
@@ -474,7 +518,11 @@ const ChunkRenderer::CachedChunk& ChunkRenderer::upload(const Chunk& chunk) {
     }
   }
   CachedChunk entry;
-  const std::vector<std::uint32_t> ordered = order_by_material(chunk, entry.ranges);
+  std::vector<std::uint32_t> triangle_of;
+  const std::vector<std::uint32_t> ordered = order_by_material(chunk, entry.ranges, triangle_of);
+  if (!triangle_of.empty())
+    entry.triangle_of = std::make_shared<const std::vector<std::uint32_t>>(std::move(triangle_of));
+  entry.triangle_count = static_cast<std::uint32_t>(chunk.indices.size() / 3);
   const bool short_indices = n <= 65536;
   std::vector<std::uint16_t> indices16;
   if (short_indices) indices16.assign(ordered.begin(), ordered.end());
@@ -542,7 +590,7 @@ void ChunkRenderer::set_camera_uniforms(const RenderCamera& camera, const Box3d&
     gl_.Uniform3f(location, static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z));
   };
   for (int appearance = 1; appearance >= 0; --appearance) {
-    const DrawProgram& p = programs_[appearance];
+    const DrawProgram& p = program(appearance);
     gl_.UseProgram(p.id);
     gl_.UniformMatrix4fv(p.u_view_projection, 1, GL_FALSE, matrix.data());
     gl_.Uniform1i(p.u_keep_inside, clip == BoxClip::keep_inside ? 1 : 0);
@@ -563,15 +611,24 @@ void ChunkRenderer::set_camera_uniforms(const RenderCamera& camera, const Box3d&
   bound_texture_ = 0;
 }
 
-void ChunkRenderer::draw_cached(const CachedChunk& entry, const Vec3d& eye) {
+void ChunkRenderer::draw_cached(std::int64_t id, const CachedChunk& entry, const Vec3d& eye) {
   use_program(entry.appearance ? 1 : 0);
+  const DrawProgram& p = program(active_program_);
   const Vec3d offset = entry.origin - eye;  // double, then float: eye-relative
-  gl_.Uniform3f(programs_[active_program_].u_offset, static_cast<float>(offset.x), static_cast<float>(offset.y), static_cast<float>(offset.z));
+  gl_.Uniform3f(p.u_offset, static_cast<float>(offset.x), static_cast<float>(offset.y),
+                static_cast<float>(offset.z));
+  if (primitive_ids_) {
+    if (frame_draws_.size() >= static_cast<std::size_t>(std::numeric_limits<GLint>::max()))
+      throw std::runtime_error("chunk_renderer: too many draws in one frame for primitive ids");
+    frame_draws_.push_back({id, entry.triangle_count, entry.triangle_of});
+    gl_.Uniform1i(p.u_draw, static_cast<GLint>(frame_draws_.size()));
+  }
   if (entry.index_count > 0) {
     gl_.BindVertexArray(entry.vertex_array);
     const std::size_t index_size = entry.index_type == GL_UNSIGNED_SHORT ? 2 : 4;
     for (const ChunkDrawRange& range : entry.ranges) {
       if (entry.appearance) apply_material(range.material);
+      if (primitive_ids_) gl_.Uniform1i(p.u_primitive_base, range.first / 3);
       gl_.DrawElements(GL_TRIANGLES, range.count, entry.index_type,
                        reinterpret_cast<const void*>(static_cast<std::uintptr_t>(range.first) * index_size));
     }
@@ -590,11 +647,11 @@ void ChunkRenderer::apply_material(std::uint32_t index) {
   }
   if ((texture > 0) != textured_uniform_) {
     textured_uniform_ = texture > 0;
-    gl_.Uniform1i(programs_[1].u_textured, textured_uniform_ ? 1 : 0);
+    gl_.Uniform1i(program(1).u_textured, textured_uniform_ ? 1 : 0);
   }
   if (alpha_test != alpha_test_uniform_) {
     alpha_test_uniform_ = alpha_test;
-    gl_.Uniform1i(programs_[1].u_alpha_test, alpha_test ? 1 : 0);
+    gl_.Uniform1i(program(1).u_alpha_test, alpha_test ? 1 : 0);
   }
 }
 
@@ -626,7 +683,7 @@ void ChunkRenderer::draw_ids(const RenderCamera& camera, std::span<const std::in
     auto it = cache_.find(id);
     if (it != cache_.end()) {
       lru_.splice(lru_.begin(), lru_, it->second.recency);
-      draw_cached(it->second, camera.eye);
+      draw_cached(id, it->second, camera.eye);
       continue;
     }
     const std::shared_ptr<const Chunk> chunk = load(id);
@@ -634,7 +691,7 @@ void ChunkRenderer::draw_ids(const RenderCamera& camera, std::span<const std::in
     if (chunk->id != id)
       throw std::runtime_error("chunk_renderer: loader returned chunk " + std::to_string(chunk->id) + " for id " +
                                std::to_string(id));
-    draw_cached(upload(*chunk), camera.eye);
+    draw_cached(id, upload(*chunk), camera.eye);
   }
   gl_.BindVertexArray(0);
   check_gl_error(gl_, "chunk_renderer: draw");
@@ -674,7 +731,7 @@ void ChunkRenderer::test_boxes(const RenderCamera& camera, const std::vector<flo
                        visible.data());
   gl_.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   gl_.DepthMask(GL_TRUE);
-  gl_.UseProgram(programs_[active_program_].id);
+  gl_.UseProgram(program(active_program_).id);
   stats_.occlusion_tests += n;
   check_gl_error(gl_, "chunk_renderer: occlusion test");
 }
@@ -787,6 +844,53 @@ void ChunkRenderer::read_frame(std::vector<Rgba8>& color, std::vector<float>& de
     const std::size_t src = (h - 1 - row) * w;
     std::memcpy(color.data() + row * w, readback_color_.data() + src, w * sizeof(Rgba8));
     std::memcpy(depth.data() + row * w, readback_depth_.data() + src, w * sizeof(float));
+  }
+}
+
+void ChunkRenderer::read_primitive_ids(std::vector<std::int64_t>& chunk,
+                                       std::vector<std::uint32_t>& triangle) {
+  require_frame("read_primitive_ids");
+  if (!primitive_ids_)
+    throw std::logic_error("chunk_renderer: read_primitive_ids on a frame begun without primitive ids");
+  make_current();
+  const std::size_t w = static_cast<std::size_t>(frame_width_), h = static_cast<std::size_t>(frame_height_);
+  readback_ids_.resize(2 * w * h);
+  gl_.BindFramebuffer(GL_READ_FRAMEBUFFER, framebuffer_);
+  gl_.PixelStorei(GL_PACK_ALIGNMENT, 4);
+  gl_.ReadBuffer(GL_COLOR_ATTACHMENT2);
+  gl_.ReadPixels(0, 0, frame_width_, frame_height_, GL_RG_INTEGER, GL_UNSIGNED_INT, readback_ids_.data());
+  check_gl_error(gl_, "chunk_renderer: read_primitive_ids");
+  chunk.resize(w * h);
+  triangle.resize(w * h);
+  // GL's row 0 is the bottom; ours is the top. Neighbouring pixels mostly
+  // share a draw, so its entry is looked up once per run.
+  std::uint32_t last = 0;
+  const FrameDraw* draw = nullptr;
+  for (std::size_t row = 0; row < h; ++row) {
+    const std::uint32_t* src = readback_ids_.data() + 2 * (h - 1 - row) * w;
+    std::int64_t* chunk_row = chunk.data() + row * w;
+    std::uint32_t* triangle_row = triangle.data() + row * w;
+    for (std::size_t col = 0; col < w; ++col) {
+      const std::uint32_t number = src[2 * col], drawn = src[2 * col + 1];
+      if (number == 0) {
+        chunk_row[col] = -1;
+        triangle_row[col] = 0;
+        continue;
+      }
+      if (number != last) {
+        if (number > frame_draws_.size())
+          throw std::runtime_error("chunk_renderer: primitive-id attachment names draw " +
+                                   std::to_string(number) + " of " + std::to_string(frame_draws_.size()));
+        draw = &frame_draws_[number - 1];
+        last = number;
+      }
+      if (drawn >= draw->triangle_count)
+        throw std::runtime_error("chunk_renderer: primitive-id attachment names triangle " +
+                                 std::to_string(drawn) + " of chunk " + std::to_string(draw->id) +
+                                 ", which has " + std::to_string(draw->triangle_count));
+      chunk_row[col] = draw->id;
+      triangle_row[col] = draw->triangle_of ? (*draw->triangle_of)[drawn] : drawn;
+    }
   }
 }
 

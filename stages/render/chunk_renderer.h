@@ -155,8 +155,11 @@ class ChunkRenderer {
   void clear_cache();
 
   // Starts a frame of `width` x `height` pixels (>= 1): colour cleared to
-  // (0, 0, 0, 0), depth to +infinity.
-  void begin_frame(int width, int height);
+  // (0, 0, 0, 0), depth to +infinity. With `primitive_ids`, every draw of the
+  // frame also records which chunk triangle drew each pixel (an integer
+  // attachment, read with read_primitive_ids()); colour and depth are the
+  // same either way, and frames without it pay nothing for it.
+  void begin_frame(int width, int height, bool primitive_ids = false);
   // Draws the chunks `ids` in the given order, uploading through `load` those
   // not cached, with fragments strictly inside `discard_box` (world
   // coordinates; an empty box discards nothing) dropped, or with `clip` =
@@ -189,6 +192,15 @@ class ChunkRenderer {
   // planar view depth in metres (+infinity where nothing was drawn). Resizes
   // both vectors to width * height.
   void read_frame(std::vector<Rgba8>& color, std::vector<float>& depth);
+  // Reads back which triangle drew each pixel of a frame begun with
+  // primitive_ids, row-major with row 0 at the top: `chunk` the id of its
+  // chunk (-1 where nothing was drawn) and `triangle` its number within the
+  // chunk (the index into Chunk::indices / 3, whatever order the renderer
+  // draws the chunk's triangles in; 0 where nothing was drawn). Resizes both
+  // to width * height. Throws std::logic_error without such a frame,
+  // std::runtime_error when the attachment holds a draw or triangle the frame
+  // did not make.
+  void read_primitive_ids(std::vector<std::int64_t>& chunk, std::vector<std::uint32_t>& triangle);
 
   // True when the z-test uses reversed-Z (glClipControl was available).
   bool reversed_z() const;
@@ -205,6 +217,10 @@ class ChunkRenderer {
     std::size_t bytes = 0;
     std::list<std::int64_t>::iterator recency;  // position in lru_ (front = most recent)
     std::vector<ChunkDrawRange> ranges;         // the index buffer's runs per material
+    // The chunk's triangle number of each triangle in the index buffer (null:
+    // the same order), for primitive ids.
+    std::shared_ptr<const std::vector<std::uint32_t>> triangle_of;
+    std::uint32_t triangle_count = 0;
     bool appearance = false;                    // has uvs or normals: drawn with the full program
   };
   // One build of the drawing shaders and its uniform locations.
@@ -212,19 +228,33 @@ class ChunkRenderer {
     unsigned id = 0;
     int u_offset = -1, u_view_projection = -1, u_forward = -1, u_discard_lo = -1, u_discard_hi = -1,
         u_keep_inside = -1, u_lit = -1, u_key = -1, u_fill = -1, u_ambient = -1, u_textured = -1,
-        u_alpha_test = -1, u_texture = -1;
+        u_alpha_test = -1, u_texture = -1, u_draw = -1, u_primitive_base = -1;
+  };
+  // A draw of a frame begun with primitive ids: its number (+ 1) is what the
+  // id attachment holds.
+  struct FrameDraw {
+    std::int64_t id = 0;
+    std::uint32_t triangle_count = 0;
+    std::shared_ptr<const std::vector<std::uint32_t>> triangle_of;  // as CachedChunk's
   };
 
   void make_current();
-  void build_program();
+  // Builds programs_[primitive_ids] (both appearances).
+  void build_program(bool primitive_ids);
+  // The drawing program of the current frame's kind for `appearance` (0 or 1).
+  const DrawProgram& program(int appearance) const { return programs_[primitive_ids_ ? 1 : 0][appearance]; }
   void use_program(int appearance);
   void resize_framebuffer(int width, int height);
+  // Throws std::runtime_error unless the bound framebuffer is complete.
+  void check_framebuffer(int width, int height);
+  // Adds the primitive-id attachment to the current framebuffer.
+  void add_primitive_id_buffer();
   void release_framebuffer();
   const CachedChunk& upload(const Chunk& chunk);
   void evict_beyond_cap();
   void release(CachedChunk& entry);
   void set_camera_uniforms(const RenderCamera& camera, const Box3d& discard_box, BoxClip clip);
-  void draw_cached(const CachedChunk& entry, const Vec3d& eye);
+  void draw_cached(std::int64_t id, const CachedChunk& entry, const Vec3d& eye);
   // Sets the texture and alpha-test state of material `index` (unknown = untextured).
   void apply_material(std::uint32_t index);
   void draw_ids(const RenderCamera& camera, std::span<const std::int64_t> ids, const ChunkLoader& load);
@@ -239,7 +269,10 @@ class ChunkRenderer {
   ChunkRendererParams params_;
   std::unique_ptr<GlFunctions> gl_functions_;
   const GlFunctions& gl_;  // *gl_functions_
-  DrawProgram programs_[2];  // [0]: plain (flat normals, no textures), [1]: with uvs and normals
+  // [primitive ids][appearance]: appearance 0 plain (flat normals, no
+  // textures), 1 with uvs and normals; the primitive-id builds are made on
+  // the first frame that asks for them.
+  DrawProgram programs_[2][2];
   int active_program_ = 0;
   std::vector<Material> materials_;
   TextureLoader load_texture_;
@@ -249,8 +282,12 @@ class ChunkRenderer {
   bool textured_uniform_ = false, alpha_test_uniform_ = false;
   ShadingLights lights_ = shading_lights(ShadingParams{}, Vec3d{0, 0, 1});
   unsigned framebuffer_ = 0, color_buffer_ = 0, view_depth_buffer_ = 0, depth_buffer_ = 0;
+  unsigned primitive_id_buffer_ =
+      0;  // GL_RG32UI (draw number + 1, triangle in the draw's buffer); 0: none yet
   int frame_width_ = 0, frame_height_ = 0;
   bool in_frame_ = false;
+  bool primitive_ids_ = false;  // the current frame records primitive ids
+  std::vector<FrameDraw> frame_draws_;
   std::unordered_map<std::int64_t, CachedChunk> cache_;
   std::list<std::int64_t> lru_;
   std::size_t cached_bytes_ = 0;
@@ -262,6 +299,7 @@ class ChunkRenderer {
   std::size_t occlusion_capacity_ = 0;  // boxes the instance and flag buffers hold
   std::vector<float> readback_depth_;
   std::vector<Rgba8> readback_color_;
+  std::vector<std::uint32_t> readback_ids_;
 };
 
 }  // namespace cellbake

@@ -22,6 +22,7 @@ namespace cellbake {
   X(PFNGLDEPTHFUNCPROC, DepthFunc, "glDepthFunc")                                       \
   X(PFNGLDEPTHMASKPROC, DepthMask, "glDepthMask")                                       \
   X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv, "glClearBufferfv")                           \
+  X(PFNGLCLEARBUFFERUIVPROC, ClearBufferuiv, "glClearBufferuiv")                        \
   X(PFNGLFINISHPROC, Finish, "glFinish")                                                \
   X(PFNGLGENFRAMEBUFFERSPROC, GenFramebuffers, "glGenFramebuffers")                     \
   X(PFNGLDELETEFRAMEBUFFERSPROC, DeleteFramebuffers, "glDeleteFramebuffers")            \
