@@ -12,6 +12,7 @@
 #include "pipeline/readers/markup_nesting.h"
 #include "pipeline/readers/model_reader.h"
 #include "tests/fixture_hostile_models.h"
+#include "tests/fixture_read_error.h"
 #include "tests/test_support.h"
 
 namespace cellbake {
@@ -20,16 +21,7 @@ namespace {
 using test::TempDir;
 using test::write_text;
 
-// The message of the InputError read_model throws for `file`, or "" when it reads.
-std::string read_error(const std::filesystem::path& file, std::uint64_t* triangles = nullptr) {
-  try {
-    const ModelInfo info = read_model(file, [](const Triangle&) {});
-    if (triangles) *triangles = info.triangles_emitted;
-    return "";
-  } catch (const InputError& e) {
-    return e.what();
-  }
-}
+using test::read_error;
 
 void write_gz(const std::filesystem::path& file, const std::string& text) {
   gzFile gz = gzopen(file.c_str(), "wb");

@@ -10,6 +10,7 @@
 
 #include "pipeline/input_error.h"
 #include "pipeline/readers/model_reader.h"
+#include "tests/fixture_read_error.h"
 #include "tests/test_support.h"
 
 namespace cellbake {
@@ -18,15 +19,7 @@ namespace {
 using test::TempDir;
 using test::write_text;
 
-std::string read_error(const std::filesystem::path& file, std::uint64_t* triangles = nullptr) {
-  try {
-    const ModelInfo info = read_model(file, [](const Triangle&) {});
-    if (triangles) *triangles = info.triangles_emitted;
-    return "";
-  } catch (const InputError& e) {
-    return e.what();
-  }
-}
+using test::read_error;
 
 const char* kPlyHeader =
     "ply\nformat %s 1.0\nelement vertex 99999999999999\nproperty float x\nproperty float y\nproperty float "
