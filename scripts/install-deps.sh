@@ -3,7 +3,7 @@
 #
 #   scripts/install-deps.sh [GROUP...]     (default: build)
 #
-#   build  compilers, CMake and the libraries `cellbake` links; GLFW and
+#   build  compilers, CMake, the lld linker and the libraries `cellbake` links; GLFW and
 #          Dear ImGui for `cellbake-view` (built only when they are present)
 #   test   GoogleTest, assimp's test models, Xvfb (the viewer screenshot test)
 #   bench  Google Benchmark (-DCELLBAKE_BUILD_BENCH=ON); libavcodec, libavutil
@@ -18,7 +18,7 @@
 set -euo pipefail
 
 declare -A group_packages=(
-  [build]="build-essential cmake ninja-build pkg-config git
+  [build]="build-essential cmake ninja-build pkg-config git lld
            libtbb-dev libopenmesh-dev libcgal-dev libopenimageio-dev libosmesa6-dev
            libsqlite3-dev sqlite3 libtomlplusplus-dev libassimp-dev libmeshoptimizer-dev
            libcli11-dev nlohmann-json3-dev libspdlog-dev libxxhash-dev zlib1g-dev

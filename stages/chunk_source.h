@@ -20,6 +20,14 @@ struct ChunkRef {
   std::uint32_t triangle_count = 0;
 };
 
+// A simplified version of a chunk (stages/chunk_lod.h): level 1, 2, ... each
+// with about half the triangles of the one before, its border vertices kept.
+struct ChunkLodRef {
+  int level = 0;
+  double error = 0;  // metres: how far the simplified surface may lie from the chunk's
+  std::uint32_t triangle_count = 0;
+};
+
 class ChunkSource {
  public:
   virtual ~ChunkSource() = default;
@@ -36,7 +44,18 @@ class ChunkSource {
   // The texture `id` (a Material::texture_id > 0); throws std::runtime_error
   // naming it when it is missing or corrupt. Safe to call from several threads.
   virtual std::shared_ptr<const TextureImage> load_texture(std::int64_t id) const;
+  // The simplified levels stored for chunk `id`, by ascending level (empty:
+  // none, e.g. a store ingested before levels were built).
+  virtual std::vector<ChunkLodRef> lods(std::int64_t id) const { return {}; }
+  // Level `level` (>= 1) of chunk `id`, with Chunk::id = `id`; throws
+  // std::runtime_error naming chunk and level when it is missing or corrupt.
+  // Safe to call from several threads.
+  virtual std::shared_ptr<const Chunk> load_lod(std::int64_t id, int level) const;
 };
+
+inline std::shared_ptr<const Chunk> ChunkSource::load_lod(std::int64_t id, int level) const {
+  throw std::runtime_error("chunk source has no level " + std::to_string(level) + " of chunk " + std::to_string(id));
+}
 
 inline std::shared_ptr<const TextureImage> ChunkSource::load_texture(std::int64_t id) const {
   throw std::runtime_error("chunk source has no texture " + std::to_string(id));

@@ -67,6 +67,10 @@ struct FarGeometryRow {
   std::int64_t chunk_id = 0;
   std::uint32_t triangles = 0;
   bool whole = false;
+  // 0: the chunk itself (whole, or the triangles `geometry` lists); >= 1: the
+  // store's simplified level of the whole chunk (whole is true, `triangles`
+  // its triangle count; ChunkSource::load_lod).
+  int level = 0;
   Vec3d origin;
   Box3d bounds;
   std::vector<std::uint8_t> geometry;  // empty when whole

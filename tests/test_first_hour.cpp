@@ -254,7 +254,7 @@ TEST(ConfigPaths, CommandLineValuesAreRelativeToTheCurrentDirectory) {
 }
 
 TEST(ConfigPaths, HeaderExamplesOfTheConfigsWorkFromTheRepositoryRoot) {
-  const std::filesystem::path root = std::filesystem::path(__FILE__).parent_path().parent_path();
+  const std::filesystem::path root = std::filesystem::path(CELLBAKE_SOURCE_DIR);
   for (const char* name : {"configs/house.toml", "configs/openfoam-buildings.toml"}) {
     std::ifstream in(root / name);
     std::string line, bake_line;

@@ -14,7 +14,7 @@
 namespace cellbake {
 namespace {
 
-const std::filesystem::path kSource = std::filesystem::path(__FILE__).parent_path().parent_path();
+const std::filesystem::path kSource = std::filesystem::path(CELLBAKE_SOURCE_DIR);
 
 test::CommandResult shell(const std::string& command) { return test::run_shell(command); }
 

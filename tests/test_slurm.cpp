@@ -30,7 +30,7 @@ std::string missing_slurm_programs() {
 }
 
 const std::filesystem::path kScript =
-    std::filesystem::path(__FILE__).parent_path().parent_path() / "scripts" / "slurm-local.sh";
+    std::filesystem::path(CELLBAKE_SOURCE_DIR) / "scripts" / "slurm-local.sh";
 
 // A private single-node cluster for the test's lifetime: started in `dir`,
 // always stopped (daemons ended by their pid files) when the guard goes.
