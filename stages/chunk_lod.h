@@ -1,0 +1,56 @@
+// Simplified levels of a chunk for the far field's level-of-detail tier
+// (issue #35). Each level simplifies the chunk itself (not the level before)
+// by edge collapse under quadric error metrics (Garland & Heckbert 1997, as
+// meshoptimizer's meshopt_simplify implements it) to about half the triangles
+// of the level before, with the chunk's border vertices locked
+// (meshopt_SimplifyLockBorder): a chunk at any level meets its neighbours at
+// any level, and the exact triangles of the near field, without cracks (the
+// locked-border clusters of Karis et al. 2021, "Nanite", with the store's
+// chunks as clusters). A far chunk is drawn at the coarsest level whose error,
+// seen from the nearest point a view may stand, stays under a pixel budget
+// (the screen-space error test of Luebke et al. 2003, "Level of Detail for 3D
+// Graphics", ch. 4); which tiles draw geometry at all is the far choice's
+// measure of triangles (stages/far_choice.h, after Maciel & Shirley 1995).
+#pragma once
+
+#include <cstddef>
+#include <span>
+#include <vector>
+
+#include "stages/chunk_source.h"
+#include "stages/geometry.h"
+
+namespace cellbake {
+
+struct ChunkLodParams {
+  int max_levels = 6;                // levels 1 .. max_levels at most
+  double ratio = 0.5;                // each level aims at this fraction of the level before's triangles
+  std::size_t min_triangles = 64;    // no level is made from fewer triangles than this
+  double min_reduction = 0.85;       // a level must keep at most this fraction of the level before's, else the
+                                     // levels stop (locked borders and seams leave nothing more to collapse)
+};
+
+struct ChunkLod {
+  ChunkLodRef ref;  // level, error (metres) and triangle count
+  Chunk chunk;      // the level: same id, origin and bounds as the chunk, only the vertices it uses
+};
+
+// The levels of `chunk` (level 1, 2, ...; possibly none), each with the
+// largest distance meshoptimizer bounds between it and the chunk (in the
+// chunk's units, metres). Vertices keep their attributes (colour, texture
+// coordinates, normal); a vertex shared by triangles of different materials
+// is split first, so material borders stay where they are and every
+// triangle keeps its material. Deterministic. A chunk with a non-finite
+// position, or with fewer than 2 * params.min_triangles triangles, has no levels.
+std::vector<ChunkLod> build_chunk_lods(const Chunk& chunk, const ChunkLodParams& params = {});
+
+// The largest error a far chunk may have: `error_px` pixels of a cube face
+// `face_size` pixels wide (90 degrees), seen from `distance` metres (the
+// nearest a view may come to the chunk).
+double allowed_lod_error(double distance, double error_px, int face_size);
+
+// The coarsest of `levels` whose error is at most `allowed_error` (0: none is;
+// draw the chunk itself). `levels` ascend by level, errors growing.
+int choose_lod_level(std::span<const ChunkLodRef> levels, double allowed_error);
+
+}  // namespace cellbake

@@ -1,0 +1,129 @@
+// The far field's chunk levels (stages/chunk_lod.h): halving levels, locked
+// borders (no cracks between chunks at different levels), materials kept,
+// and the level a distance allows.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <set>
+#include <tuple>
+
+#include "stages/chunk_lod.h"
+
+namespace cellbake {
+namespace {
+
+// An n x n grid of quads over [0, 1]^2, z a smooth bump, as one chunk; the
+// left half material 0, the right half material 1 when `two_materials`.
+Chunk bumpy_patch(int n, bool two_materials) {
+  Chunk c;
+  c.id = 7;
+  c.origin = {100, 200, 0};
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const float x = float(i) / float(n), y = float(j) / float(n);
+      c.positions.push_back({x, y, 0.05f * std::sin(3 * x) * std::cos(2 * y)});
+      c.colors.push_back({std::uint8_t(i), std::uint8_t(j), 0, 255});
+      c.bounds.expand(c.origin + Vec3d{x, y, 0.05 * std::sin(3.0 * x) * std::cos(2.0 * y)});
+    }
+  const auto v = [n](int i, int j) { return std::uint32_t(j * (n + 1) + i); };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      c.indices.insert(c.indices.end(), {v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j), v(i + 1, j + 1), v(i, j + 1)});
+      if (two_materials) c.materials.insert(c.materials.end(), 2, i < n / 2 ? 0u : 1u);
+    }
+  return c;
+}
+
+using Edge = std::tuple<float, float, float, float, float, float>;
+
+// The edges used by one triangle only, by the positions of their ends (sorted).
+std::set<Edge> border_edges(const Chunk& c) {
+  std::map<Edge, int> uses;
+  for (std::size_t t = 0; t < c.triangle_count(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      Vec3f a = c.positions[c.indices[3 * t + std::size_t(k)]], b = c.positions[c.indices[3 * t + std::size_t(k + 1) % 3]];
+      if (std::tie(b.x, b.y, b.z) < std::tie(a.x, a.y, a.z)) std::swap(a, b);
+      ++uses[{a.x, a.y, a.z, b.x, b.y, b.z}];
+    }
+  std::set<Edge> out;
+  for (const auto& [e, n] : uses)
+    if (n == 1) out.insert(e);
+  return out;
+}
+
+TEST(ChunkLod, LevelsHalveTheTrianglesAndKeepTheBorderExactly) {
+  const Chunk chunk = bumpy_patch(40, false);  // 3200 triangles, 160 border edges
+  const std::vector<ChunkLod> levels = build_chunk_lods(chunk);
+  ASSERT_GE(levels.size(), 3u);
+  const std::set<Edge> border = border_edges(chunk);
+  std::size_t previous = chunk.triangle_count();
+  double previous_error = 0;
+  for (std::size_t k = 0; k < levels.size(); ++k) {
+    const ChunkLod& l = levels[k];
+    EXPECT_EQ(l.ref.level, int(k) + 1);
+    EXPECT_EQ(l.ref.triangle_count, l.chunk.triangle_count());
+    EXPECT_LE(double(l.ref.triangle_count), 0.85 * double(previous)) << "level " << l.ref.level;
+    EXPECT_GE(l.ref.error, previous_error) << "level " << l.ref.level;
+    EXPECT_LT(l.ref.error, 0.1) << "level " << l.ref.level;  // the bump is 0.05 high
+    EXPECT_EQ(l.chunk.id, chunk.id);
+    EXPECT_EQ(l.chunk.origin, chunk.origin);
+    EXPECT_EQ(l.chunk.colors.size(), l.chunk.positions.size());
+    // The same border edges, vertex for vertex: a neighbour at any level meets it without a crack.
+    EXPECT_EQ(border_edges(l.chunk), border) << "level " << l.ref.level;
+    previous = l.ref.triangle_count, previous_error = l.ref.error;
+  }
+  // The border's 160 edges bound how far levels can go.
+  EXPECT_GE(levels.back().ref.triangle_count, 80u);
+}
+
+TEST(ChunkLod, AFlatPatchCollapsesWithoutError) {
+  Chunk flat = bumpy_patch(20, false);
+  for (Vec3f& p : flat.positions) p.z = 0;
+  const std::vector<ChunkLod> levels = build_chunk_lods(flat);
+  ASSERT_FALSE(levels.empty());
+  for (const ChunkLod& l : levels) EXPECT_LT(l.ref.error, 1e-5) << "level " << l.ref.level;
+}
+
+TEST(ChunkLod, MaterialBordersStayWhereTheyAre) {
+  const Chunk chunk = bumpy_patch(40, true);
+  const std::vector<ChunkLod> levels = build_chunk_lods(chunk);
+  ASSERT_GE(levels.size(), 2u);
+  for (const ChunkLod& l : levels) {
+    ASSERT_EQ(l.chunk.materials.size(), l.chunk.triangle_count());
+    for (std::size_t t = 0; t < l.chunk.triangle_count(); ++t) {
+      // Every corner of a material-0 triangle lies in the left half, of a material-1 one in the right.
+      for (int k = 0; k < 3; ++k) {
+        const float x = l.chunk.positions[l.chunk.indices[3 * t + std::size_t(k)]].x;
+        if (l.chunk.materials[t] == 0)
+          EXPECT_LE(x, 0.5f + 1e-6f) << "level " << l.ref.level << " triangle " << t;
+        else
+          EXPECT_GE(x, 0.5f - 1e-6f) << "level " << l.ref.level << " triangle " << t;
+      }
+    }
+  }
+}
+
+TEST(ChunkLod, SmallOrBrokenChunksHaveNoLevels) {
+  EXPECT_TRUE(build_chunk_lods(bumpy_patch(5, false)).empty());  // 50 triangles
+  Chunk broken = bumpy_patch(40, false);
+  broken.positions[100].y = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_TRUE(build_chunk_lods(broken).empty());
+  Chunk bad_index = bumpy_patch(40, false);
+  bad_index.indices[5] = 1u << 30;
+  EXPECT_TRUE(build_chunk_lods(bad_index).empty());
+}
+
+TEST(ChunkLod, TheLevelIsTheCoarsestWithinThePixelBudget) {
+  const std::vector<ChunkLodRef> levels = {{1, 0.001, 2000}, {2, 0.0035, 1000}, {3, 0.02, 500}};
+  // 1 px of a 512-pixel face at 10 m: 10 * 2 / 512 = 0.039 m.
+  EXPECT_NEAR(allowed_lod_error(10, 1, 512), 0.0390625, 1e-12);
+  EXPECT_EQ(choose_lod_level(levels, allowed_lod_error(10, 1, 512)), 3);
+  EXPECT_EQ(choose_lod_level(levels, allowed_lod_error(1, 1, 512)), 2);
+  EXPECT_EQ(choose_lod_level(levels, allowed_lod_error(0.1, 1, 512)), 0);
+  EXPECT_EQ(choose_lod_level(levels, allowed_lod_error(0, 1, 512)), 0);  // a view may stand at the chunk
+  EXPECT_EQ(choose_lod_level({}, 1.0), 0);
+}
+
+}  // namespace
+}  // namespace cellbake
