@@ -5,6 +5,7 @@
 // their cells; merge refuses to mix versions.
 #include <gtest/gtest.h>
 
+#include "storage/cell_content_hash.h"
 #include "storage/cell_db.h"
 #include "storage/cell_db_merge.h"
 #include "storage/sqlite_db.h"
@@ -189,6 +190,34 @@ TEST(CellDbMigration, MergeRefusesAShardOfVersionFourNamingIt) {
     EXPECT_NE(std::string(e.what()).find("shard.db"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("schema version 4 differs"), std::string::npos) << e.what();
   }
+}
+
+TEST(CellDbMigration, MergingANewShardIntoAVersionFourDatabaseMigratesItFirst) {
+  test::TempDir dir;
+  write_v4_database(dir / "merged.db");
+  CellRow cell;  // a done cell without samples whose far geometry is level 2 of chunk 11
+  cell.id = 9;
+  cell.status = "done";
+  cell.input_hash = cell.cull_hash = "h";
+  FarGeometryRow level;
+  level.chunk_id = 11;
+  level.level = 2;
+  level.whole = true;
+  level.triangles = 3;
+  level.bounds = {{4, 4, 4}, {5, 5, 5}};
+  cell.far_geometry = {level};
+  cell.far_geometry_triangles = 3;
+  cell.content_hash = cell_content_hash(cell);
+  {
+    CellDb shard(dir / "shard.db", CellDb::Mode::read_write);
+    shard.put_cell(cell);
+  }
+  CellDb target(dir / "merged.db", CellDb::Mode::read_write);  // as merge opens it
+  EXPECT_EQ(target.schema_version(), 5);
+  const CellDb shard(dir / "shard.db", CellDb::Mode::read_only);
+  EXPECT_EQ(copy_cells(target, shard).copied, 1u);
+  EXPECT_EQ(target.get_cell(9)->far_geometry.at(0).level, 2);
+  EXPECT_EQ(target.get_cell(7)->far_geometry.at(0).level, 0);
 }
 
 TEST(CellDbMigration, MergeRefusesAShardOfAnotherVersionNamingIt) {
