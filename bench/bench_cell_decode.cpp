@@ -1,9 +1,10 @@
 // Viewer-side decode time of whole cells on one core: for each done cell of a
 // cell database, decode_cell (viewer/decoded_cell.h) with the cell's geometry
 // store: every face image and face mesh of its samples, and the far pieces
-// cut out of their stored chunks. Prints the median and worst milliseconds
-// per cell (best of --repeat, so the store's chunk cache is warm; the first,
-// cold decode is printed too) and the stored bytes by kind.
+// cut out of their stored chunks or loaded as their simplified levels. Prints
+// the median and worst milliseconds per cell (best of --repeat, so the store's
+// chunk cache is warm; the first, cold decode is printed too), the stored
+// bytes by kind and the far geometry rows that draw a level (issue #35).
 //
 //   bench_cell_decode CELLS.db [--store STORE.db] [--repeat 5]
 //
@@ -45,7 +46,7 @@ int run(int argc, char** argv) {
   if (store_path.empty()) throw std::invalid_argument(database + " names no store: pass --store");
   const GeometryStore store(store_path);
   std::vector<double> per_cell, cold;
-  std::uint64_t colour = 0, mesh = 0, far = 0, far_triangles = 0;
+  std::uint64_t colour = 0, mesh = 0, far = 0, far_triangles = 0, level_rows = 0, level_triangles = 0;
   for (std::int64_t id : db.cell_ids()) {
     const std::optional<CellRow> row = db.get_cell(id);
     if (!row || row->status != "done") continue;
@@ -61,16 +62,22 @@ int run(int argc, char** argv) {
     per_cell.push_back(best);
     for (const SampleRow& s : row->samples)
       for (const FaceRow& f : s.faces) colour += f.image.size(), mesh += f.mesh.size();
-    for (const FarGeometryRow& g : row->far_geometry) far += g.geometry.size();
-    far_triangles += row->far_geometry_triangles;
+    for (const FarGeometryRow& g : row->far_geometry) {
+      far += g.geometry.size();
+      // Bytes per far triangle: of the chunks' own triangles (a level row stores no bytes).
+      (g.level == 0 ? far_triangles : level_triangles) += g.triangles;
+      level_rows += g.level != 0;
+    }
   }
   if (per_cell.empty()) throw std::runtime_error("no done cells");
   const double n = double(per_cell.size());
   std::printf("%zu cells: decode ms per cell median %.2f, worst %.2f (first, cold: median %.2f, worst %.2f); "
-              "per cell %.1f KB colour, %.1f KB mesh, %.1f KB far geometry (%.2f B per far triangle)\n",
+              "per cell %.1f KB colour, %.1f KB mesh, %.1f KB far geometry (%.2f B per far triangle); "
+              "%llu far rows drawing a simplified level (%llu triangles)\n",
               per_cell.size(), median_of(per_cell), *std::max_element(per_cell.begin(), per_cell.end()), median_of(cold),
               *std::max_element(cold.begin(), cold.end()), colour / 1024.0 / n, mesh / 1024.0 / n, far / 1024.0 / n,
-              far_triangles ? double(far) / double(far_triangles) : 0.0);
+              far_triangles ? double(far) / double(far_triangles) : 0.0, (unsigned long long)level_rows,
+              (unsigned long long)level_triangles);
   return 0;
 }
 

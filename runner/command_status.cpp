@@ -186,7 +186,8 @@ void add_status_command(CLI::App& app) {
       return;
     }
     std::uint64_t bytes = 0, far = 0, samples = 0, delta_covered = 0, delta_removed = 0;
-    std::uint64_t far_geometry = 0, geometry_tiles = 0, face_tiles = 0, replaced = 0;
+    std::uint64_t far_geometry = 0, geometry_tiles = 0, face_tiles = 0, replaced = 0, far_levels = 0,
+                  level_rows = 0;
     CellDbBytes by_kind;
     std::map<std::string, double> stage_seconds;
     std::map<std::string, ConfigCells> configs;
@@ -214,6 +215,7 @@ void add_status_command(CLI::App& app) {
       far += t.far_triangles;
       far_geometry += t.far_geometry_triangles, geometry_tiles += t.geometry_tiles, face_tiles += t.face_tiles;
       replaced += t.replaced_triangles;
+      far_levels += t.far_level_triangles, level_rows += t.far_level_rows;
       const CellDbBytes b = db.bytes_by_kind();
       by_kind.cells += b.cells, by_kind.colour += b.colour, by_kind.mesh += b.mesh, by_kind.near_list += b.near_list;
       by_kind.far_geometry += b.far_geometry;
@@ -301,6 +303,7 @@ void add_status_command(CLI::App& app) {
                             {"far_geometry", by_kind.far_geometry}};
       j["far_triangles"] = far;
       j["far_geometry_triangles"] = far_geometry;
+      j["far_geometry_levels"] = {{"rows", level_rows}, {"triangles", far_levels}};  // of those, simplified
       j["far_choice"] = {{"geometry_tiles", geometry_tiles}, {"face_tiles", face_tiles}, {"replaced_triangles", replaced}};
       j["samples"] = samples;
       j["delta_covered_pixels"] = delta_covered;
@@ -336,8 +339,12 @@ void add_status_command(CLI::App& app) {
           std::printf("  ... and %zu more (`cellbake status --json` lists them all)\n", failed_cells.size() - kShown);
         std::printf("  rerun the bake to retry them (done cells are skipped)\n");
       }
-      std::printf("stored: %.1f MB, far field: %llu depth-mesh triangles, %llu exact geometry triangles\n",
+      std::printf("stored: %.1f MB, far field: %llu depth-mesh triangles, %llu exact geometry triangles",
                   bytes / 1e6, (unsigned long long)far, (unsigned long long)far_geometry);
+      if (level_rows > 0)
+        std::printf(" (%llu of them in %llu simplified chunk levels)", (unsigned long long)far_levels,
+                    (unsigned long long)level_rows);
+      std::printf("\n");
       if (face_tiles > 0)
         std::printf("far choice: %llu of %llu face tiles drawn as geometry (%.1f %%), replacing %llu depth-mesh "
                     "triangles\n",

@@ -16,7 +16,6 @@
 #include "storage/cell_content_hash.h"
 #include "storage/chunk_codec.h"
 #include "storage/far_geometry_check.h"
-#include "storage/geometry_store.h"
 #include "storage/sqlite_db.h"
 
 namespace cellbake {
@@ -131,23 +130,26 @@ std::string check_far_rows(const CellRow& row) {
 }
 
 // Far geometry against the store: chunks present, triangle numbers within
-// them, bounds and origin those of the triangles named.
-std::string check_far_against_store(const CellRow& row, const GeometryStore& store) {
+// them, bounds and origin those of the triangles named, levels the store
+// lists with the row's triangle count.
+std::string check_far_against_store(const CellRow& row, const ChunkSource& store) {
   for (const FarGeometryRow& g : row.far_geometry) {
     const std::string at = "far geometry of chunk " + std::to_string(g.chunk_id);
     std::shared_ptr<const Chunk> chunk;
+    std::vector<ChunkLodRef> lods;
     try {
       chunk = store.load(g.chunk_id);
+      if (g.level != 0) lods = store.lods(g.chunk_id);
     } catch (const std::exception& e) {
       return at + ": " + e.what();
     }
-    if (std::string problem = far_geometry_problem(g, *chunk); !problem.empty()) return problem;
+    if (std::string problem = far_geometry_problem(g, *chunk, lods); !problem.empty()) return problem;
   }
   return "";
 }
 
 // The near list against the cull box's content in the store.
-std::string check_near_list(const CellRow& row, const Box3d& bounds, const GeometryStore& store) {
+std::string check_near_list(const CellRow& row, const Box3d& bounds, const ChunkSource& store) {
   CullBoxResult expected;
   try {
     expected = near_field_at(bounds.center(), row.cull_half_size, store);
@@ -226,6 +228,7 @@ std::string check_cell(const CellDb& db, std::int64_t id, const CellCheckContext
     }
   }
   for (const auto& g : row->far_geometry) {
+    if (std::string problem = far_geometry_level_problem(g); !problem.empty()) return problem;
     if (g.whole) continue;
     try {
       std::size_t triangles = 0;

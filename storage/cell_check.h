@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "stages/chunk_source.h"
 #include "storage/cell_db.h"
 
 namespace cellbake {
@@ -23,8 +24,6 @@ struct CellProblem {
   std::int64_t id = 0;
   std::string reason;  // e.g. "sample 0 face 3 mesh: face mesh blob: ..." or "content hash mismatch ..."
 };
-
-class GeometryStore;
 
 // Where a cell belongs in its configuration's grid (pipeline/cell_grid.h
 // computes it from the database's meta `config`).
@@ -41,9 +40,10 @@ struct CellCheckContext {
   // Empty function: places unknown, not checked.
   std::function<std::optional<CellPlace>(std::int64_t id)> place;
   // The geometry store the database was baked from (its content hash equal
-  // to meta `store_hash`), or null: the near list is then not recomputed and
-  // far geometry is not compared with the chunks it names.
-  const GeometryStore* store = nullptr;
+  // to meta `store_hash`; any ChunkSource in tests), or null: the near list
+  // is then not recomputed and far geometry is not compared with the chunks
+  // and levels it names.
+  const ChunkSource* store = nullptr;
 };
 
 // Checks cell `id` of `db`: empty when it is sound (or failed: failed cells
@@ -53,13 +53,16 @@ struct CellCheckContext {
 // a grid-coded one (blob version 2) coded for its own face, none wholly within the
 // face's geometry tiles, and per face the samples' triangles summing to the
 // far-choice row's; far geometry rows naming positive chunk ids, ordered
-// bounds, triangles summing to the cell's far_geometry_triangles. With a
+// bounds, triangles summing to the cell's far_geometry_triangles, levels
+// 0..kMaxFarGeometryLevel, a level >= 1 whole with no blob. With a
 // place: region, grid indices and bounds as the grid has them. With a store:
 // the near list against near_field_at(centre, cull_half_size) of the store
 // (non-empty when the cube meets chunks, only chunks it meets, every chunk
 // wholly within it, triangles summing to near_triangles),
 // far geometry naming chunks the store holds, triangle numbers within them and
-// bounds and origin equal to those of the triangles they name. Never throws
+// bounds and origin equal to those of the triangles they name, a level >= 1
+// one the store lists for the chunk (ChunkSource::lods) with the row's
+// triangle count and the chunk's bounds. Never throws
 // for a damaged row; SQLite errors (an unreadable file) still throw.
 std::string check_cell(const CellDb& db, std::int64_t id, const CellCheckContext& context = {});
 

@@ -23,6 +23,8 @@ std::string cell_content_hash(const CellRow& row) {
       h.u64(std::uint64_t(g.chunk_id)).u64(g.triangles).u64(g.whole).f64(g.origin.x).f64(g.origin.y).f64(g.origin.z);
       h.f64(g.bounds.lo.x).f64(g.bounds.lo.y).f64(g.bounds.lo.z).f64(g.bounds.hi.x).f64(g.bounds.hi.y).f64(g.bounds.hi.z);
       h.bytes(g.geometry.data(), g.geometry.size()).u64(g.geometry.size());
+      // A simplified level (issue #35); level 0 rows hash as before it existed.
+      if (g.level != 0) h.text("level").u64(std::uint64_t(std::int64_t(g.level)));
     }
     for (const auto& f : row.far_choice)
       h.u64(std::uint64_t(f.face)).u64(f.geometry_tiles).u64(f.tdm_triangles).u64(f.replaced_triangles).u64(f.geometry_triangles);

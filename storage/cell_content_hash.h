@@ -13,7 +13,8 @@ namespace cellbake {
 // Hex digest of `row`'s content (id, cull_half_size, near_triangles,
 // near_chunks, and per sample in order: index, eye, parent, void_after, pixel
 // counts, and per face: face, image_format, image and mesh bytes; then the
-// far geometry list and per-face far choice when there are any). Ignores
+// far geometry list, each row's level only when it is not 0 so cells baked
+// before levels keep their hash, and per-face far choice when there are any). Ignores
 // status, error, hashes, bounds, stage and sample seconds. Deterministic.
 std::string cell_content_hash(const CellRow& row);
 

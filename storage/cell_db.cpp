@@ -6,6 +6,7 @@
 #include <chrono>
 #include <thread>
 #include <cstring>
+#include <limits>
 #include <stdexcept>
 
 #include "stages/hashing.h"
@@ -14,7 +15,7 @@
 namespace cellbake {
 namespace {
 
-constexpr int kCellDbSchemaVersion = 4;
+constexpr int kCellDbSchemaVersion = 5;
 constexpr int kOldestReadableSchemaVersion = 2;  // read-only opens of v2 databases (one sample per cell) still work
 
 // Migrations: entry i upgrades schema version i to i + 1.
@@ -68,6 +69,11 @@ CREATE TABLE far_choice(
   geometry_tiles INTEGER NOT NULL, tdm_triangles INTEGER NOT NULL, replaced_triangles INTEGER NOT NULL,
   geometry_triangles INTEGER NOT NULL,
   PRIMARY KEY(cell_id, face));
+)sql",
+    // v5: a far geometry row may draw a simplified level of its chunk from the
+    // geometry store (issue #35); 0 = the chunk itself, as every older row.
+    R"sql(
+ALTER TABLE far_geometry ADD COLUMN level INTEGER NOT NULL DEFAULT 0;
 )sql",
 };
 
@@ -232,12 +238,13 @@ void CellDb::put_cell(const CellRow& c) {
     s.bind(23, c.max_depth_error).bind(24, secs.dump()).bind(25, std::int64_t(c.far_geometry_triangles));
     s.run();
   }
-  SqliteStatement ins_geometry(*db_, "INSERT INTO far_geometry VALUES(?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
+  SqliteStatement ins_geometry(*db_, "INSERT INTO far_geometry VALUES(?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)");
   for (const FarGeometryRow& g : c.far_geometry) {
     ins_geometry.bind(1, c.id).bind(2, g.chunk_id).bind(3, std::int64_t(g.triangles)).bind(4, std::int64_t(g.whole));
     ins_geometry.bind(5, g.origin.x).bind(6, g.origin.y).bind(7, g.origin.z).bind(8, g.bounds.lo.x);
     ins_geometry.bind(9, g.bounds.lo.y).bind(10, g.bounds.lo.z).bind(11, g.bounds.hi.x).bind(12, g.bounds.hi.y);
-    ins_geometry.bind(13, g.bounds.hi.z).bind_blob(14, g.geometry.data(), g.geometry.size()).run();
+    ins_geometry.bind(13, g.bounds.hi.z).bind_blob(14, g.geometry.data(), g.geometry.size());
+    ins_geometry.bind(15, std::int64_t(g.level)).run();
   }
   SqliteStatement ins_choice(*db_, "INSERT INTO far_choice VALUES(?,?,?,?,?,?)");
   for (const FarChoiceRow& f : c.far_choice) {
@@ -336,7 +343,9 @@ std::optional<CellRow> CellDb::get_cell(std::int64_t id, bool with_blobs) const 
   if (schema_version_ >= 4) {
     SqliteStatement fg(*db_, std::string("SELECT chunk_id, triangles, whole, origin_x, origin_y, origin_z, min_x, "
                                          "min_y, min_z, max_x, max_y, max_z, ") +
-                                 (with_blobs ? "geometry" : "x''") + " FROM far_geometry WHERE cell_id=? ORDER BY chunk_id");
+                                 (with_blobs ? "geometry" : "x''") +
+                                 (schema_version_ >= 5 ? ", level" : ", 0") +
+                                 " FROM far_geometry WHERE cell_id=? ORDER BY chunk_id");
     fg.bind(1, id);
     while (fg.step()) {
       FarGeometryRow g;
@@ -347,6 +356,12 @@ std::optional<CellRow> CellDb::get_cell(std::int64_t id, bool with_blobs) const 
       g.bounds = {{fg.column_double(6), fg.column_double(7), fg.column_double(8)},
                   {fg.column_double(9), fg.column_double(10), fg.column_double(11)}};
       g.geometry = fg.column_blob(12);
+      const std::int64_t level = fg.column_int(13);
+      // Out of int's range is damage as a negative level is: check_cell and
+      // decode_cell refuse it by the value kept here.
+      g.level = level < std::numeric_limits<int>::min() || level > std::numeric_limits<int>::max()
+                    ? -1
+                    : int(level);
       c.far_geometry.push_back(std::move(g));
     }
     SqliteStatement fc(*db_,
@@ -446,6 +461,15 @@ CellDbTotals CellDb::totals() const {
       t.geometry_tiles += std::uint64_t(std::popcount(std::uint32_t(choice.column_int(0))));
       t.face_tiles += 16;
       t.replaced_triangles += std::uint64_t(choice.column_int(1));
+    }
+  }
+  if (schema_version_ >= 5) {
+    SqliteStatement levels(*db_,
+                           "SELECT count(*), total(triangles) FROM far_geometry WHERE level != 0 AND "
+                           "cell_id IN (SELECT id FROM cells WHERE status = 'done')");
+    if (levels.step()) {
+      t.far_level_rows = std::uint64_t(levels.column_int(0));
+      t.far_level_triangles = std::uint64_t(levels.column_double(1));
     }
   }
   SqliteStatement samples(*db_, schema_version_ >= 3

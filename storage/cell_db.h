@@ -60,6 +60,11 @@ struct FarChoiceRow {
   std::uint64_t geometry_triangles = 0; // triangles of the far chunks this face's geometry tiles need
 };
 
+// The highest simplified level a far geometry row may name (issue #35): the
+// viewer's GPU cache id of a level (viewer/decoded_cell.h lod_cache_id) holds
+// it in 4 bits; check_cell and decode_cell refuse rows beyond it.
+inline constexpr int kMaxFarGeometryLevel = 15;
+
 // Exact far geometry of a cell (issue #13): one source chunk, whole (drawn
 // from the geometry store) or the triangles of it the samples saw, stored
 // as a chunk blob (storage/chunk_codec.h) with its origin and bounds.
@@ -69,7 +74,7 @@ struct FarGeometryRow {
   bool whole = false;
   // 0: the chunk itself (whole, or the triangles `geometry` lists); >= 1: the
   // store's simplified level of the whole chunk (whole is true, `triangles`
-  // its triangle count; ChunkSource::load_lod).
+  // its triangle count; ChunkSource::load_lod), at most kMaxFarGeometryLevel.
   int level = 0;
   Vec3d origin;
   Box3d bounds;
@@ -123,6 +128,9 @@ struct CellDbTotals {
   // recorded choice (faces with anything to draw), and the depth-mesh
   // triangles the geometry replaced.
   std::uint64_t far_geometry_triangles = 0, geometry_tiles = 0, face_tiles = 0, replaced_triangles = 0;
+  // Of far_geometry_triangles, those of rows drawing a simplified level of
+  // their chunk (issue #35; schema version 5), and how many such rows.
+  std::uint64_t far_level_triangles = 0, far_level_rows = 0;
 };
 
 // Stored bytes by kind over the done cells (issue #16): encoded colour images,

@@ -71,7 +71,8 @@ void copy_rows(CellDb& target, const CellDb& source, const std::vector<std::int6
 
   // A second connection to the target (WAL allows it) with the source
   // attached; both are the same schema version, so SELECT * matches column
-  // for column.
+  // for column (far_geometry's `level` of version 5 included: a shard of
+  // another version was refused above).
   SqliteDb db(target.path(), SqliteDb::Mode::read_write_create);
   db.exec("PRAGMA synchronous=NORMAL");  // as CellDb: WAL stays consistent, a crash loses at most the last cells
   {

@@ -24,11 +24,47 @@ std::string text(const Box3d& b) {
   return buf;
 }
 
+std::string level_list(std::span<const ChunkLodRef> lods) {
+  if (lods.empty()) return "none";
+  std::string out;
+  for (const ChunkLodRef& l : lods)
+    out += (out.empty() ? "" : ", ") + std::to_string(l.level) + " (" + std::to_string(l.triangle_count) +
+           " triangles)";
+  return out;
+}
+
 }  // namespace
 
-std::string far_geometry_problem(const FarGeometryRow& g, const Chunk& stored) {
+std::string far_geometry_level_problem(const FarGeometryRow& g) {
+  if (g.level == 0) return "";
+  const std::string at =
+      "far geometry of chunk " + std::to_string(g.chunk_id) + " level " + std::to_string(g.level);
+  if (g.level < 0) return at + ": a level is never negative";
+  if (g.level > kMaxFarGeometryLevel)
+    return at + ": past the highest level a row may name (" + std::to_string(kMaxFarGeometryLevel) + ")";
+  if (!g.whole) return at + ": a level row not marked whole (levels are of whole chunks)";
+  if (!g.geometry.empty()) return at + ": a level row with a geometry blob";
+  return "";
+}
+
+std::string far_geometry_problem(const FarGeometryRow& g, const Chunk& stored,
+                                 std::span<const ChunkLodRef> lods) {
   const std::string at = "far geometry of chunk " + std::to_string(g.chunk_id);
   try {
+    if (std::string problem = far_geometry_level_problem(g); !problem.empty()) return problem;
+    if (g.level != 0) {
+      const std::string level = at + " level " + std::to_string(g.level);
+      const auto it =
+          std::find_if(lods.begin(), lods.end(), [&](const ChunkLodRef& l) { return l.level == g.level; });
+      if (it == lods.end())
+        return level + ": the store holds no such level of the chunk (its levels: " + level_list(lods) + ")";
+      if (it->triangle_count != g.triangles)
+        return level + ": " + std::to_string(g.triangles) + " triangles recorded, the store's level has " +
+               std::to_string(it->triangle_count);
+      if (!close(g.bounds, stored.bounds))
+        return level + ": bounds " + text(g.bounds) + " are not the store's chunk's " + text(stored.bounds);
+      return "";
+    }
     if (g.whole) {
       if (g.triangles != stored.triangle_count())
         return at + ": whole, " + std::to_string(g.triangles) +

@@ -1,5 +1,6 @@
 // An in-memory ChunkSource for tests and benchmarks: chunks are held in a
-// vector, query() is a linear scan over their bounds, load() counts its calls.
+// vector, query() is a linear scan over their bounds, load() counts its calls;
+// simplified levels of chunks (lods(), load_lod()) are held in a map the test fills.
 // Header-only, no GoogleTest dependency (the benchmarks use it too).
 #pragma once
 
@@ -7,9 +8,12 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <map>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "stages/chunk_source.h"
@@ -73,13 +77,48 @@ class MemoryChunkSource : public ChunkSource {
 
   Box3d model_bounds() const override { return bounds_; }
 
+  // Adds level `level` (>= 1) of chunk `id` as lods() lists it: `error` and
+  // the chunk's triangle count (`triangle_count` overrides it, for tests of a
+  // source that misreports). Its Chunk::id is set to `id`; replaces an earlier one.
+  void add_lod(std::int64_t id, int level, Chunk chunk, double error = 0,
+               std::optional<std::uint32_t> triangle_count = std::nullopt) {
+    if (level < 1) throw std::invalid_argument("MemoryChunkSource: level " + std::to_string(level) + " < 1");
+    chunk.id = id;
+    const auto triangles = triangle_count.value_or(static_cast<std::uint32_t>(chunk.triangle_count()));
+    lods_[{id, level}] = {ChunkLodRef{level, error, triangles},
+                          std::make_shared<const Chunk>(std::move(chunk))};
+  }
+
+  std::vector<ChunkLodRef> lods(std::int64_t id) const override {
+    std::vector<ChunkLodRef> refs;  // ascending: the map orders by (id, level)
+    for (auto it = lods_.lower_bound({id, 0}); it != lods_.end() && it->first.first == id; ++it)
+      refs.push_back(it->second.ref);
+    return refs;
+  }
+
+  std::shared_ptr<const Chunk> load_lod(std::int64_t id, int level) const override {
+    lod_loads_.fetch_add(1, std::memory_order_relaxed);
+    auto it = lods_.find({id, level});
+    if (it == lods_.end())
+      throw std::runtime_error("MemoryChunkSource: level " + std::to_string(level) + " of chunk " +
+                               std::to_string(id) + " is missing");
+    return it->second.chunk;
+  }
+
   std::uint64_t load_count() const { return loads_.load(std::memory_order_relaxed); }
   std::size_t chunk_count() const { return chunks_.size(); }
+  std::uint64_t lod_load_count() const { return lod_loads_.load(std::memory_order_relaxed); }
 
  private:
   std::vector<std::shared_ptr<const Chunk>> chunks_;  // sorted by id
   Box3d bounds_;
   mutable std::atomic<std::uint64_t> loads_{0};
+  struct Lod {
+    ChunkLodRef ref;
+    std::shared_ptr<const Chunk> chunk;
+  };
+  std::map<std::pair<std::int64_t, int>, Lod> lods_;  // by (chunk id, level)
+  mutable std::atomic<std::uint64_t> lod_loads_{0};
 };
 
 }  // namespace cellbake::test

@@ -2,11 +2,13 @@
 // and the viewer's cut of a far piece out of its stored chunk.
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <random>
 #include <stdexcept>
 #include <vector>
 
 #include "stages/encode_triangle_list.h"
+#include "tests/fixture_memory_chunk_source.h"
 #include "viewer/decoded_cell.h"
 
 namespace cellbake {
@@ -118,12 +120,19 @@ Chunk two_triangle_chunk() {
   return c;
 }
 
+// A source holding two_triangle_chunk() as chunk 4.
+std::unique_ptr<test::MemoryChunkSource> two_triangle_source() {
+  auto source = std::make_unique<test::MemoryChunkSource>();
+  source->add(two_triangle_chunk());
+  return source;
+}
+
 TEST(FarPieceChunk, CutsTheStoredTrianglesUnderTheCacheId) {
   DecodedFarPiece piece;
   piece.cache_id = -7;
   piece.chunk_id = 4;
   piece.triangles = {1};
-  const auto chunk = far_piece_chunk(piece, two_triangle_chunk());
+  const auto chunk = far_piece_chunk(piece, *two_triangle_source());
   EXPECT_EQ(chunk->id, -7);
   ASSERT_EQ(chunk->triangle_count(), 1u);
   EXPECT_EQ(chunk->positions.size(), 3u);
@@ -137,7 +146,7 @@ TEST(FarPieceChunk, NumbersBeyondTheStoredChunkNameIt) {
   piece.chunk_id = 4;
   piece.triangles = {1, 2};
   try {
-    far_piece_chunk(piece, two_triangle_chunk());
+    far_piece_chunk(piece, *two_triangle_source());
     FAIL() << "no error";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("chunk 4"), std::string::npos) << e.what();

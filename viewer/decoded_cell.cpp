@@ -8,6 +8,7 @@
 #include "stages/chunk_subset.h"
 #include "stages/encode_triangle_list.h"
 #include "storage/chunk_codec.h"
+#include "storage/far_geometry_check.h"
 
 namespace cellbake {
 
@@ -25,15 +26,39 @@ std::size_t DecodedCell::bytes() const {
   return b;
 }
 
-std::shared_ptr<const Chunk> far_piece_chunk(const DecodedFarPiece& piece, const Chunk& stored) {
+std::int64_t lod_cache_id(std::int64_t chunk_id, int level) {
+  constexpr std::int64_t kLevelBase = std::int64_t{1} << 62, kChunkLimit = std::int64_t{1} << 58;
+  static_assert(kMaxFarGeometryLevel < 16, "a level's cache id holds it in 4 bits");
+  if (level < 1 || level > kMaxFarGeometryLevel || chunk_id < 1 || chunk_id >= kChunkLimit)
+    throw std::invalid_argument("far geometry of chunk " + std::to_string(chunk_id) + " level " +
+                                std::to_string(level) + ": no cache id (levels 1.." +
+                                std::to_string(kMaxFarGeometryLevel) + " of chunks 1..2^58-1)");
+  return kLevelBase + chunk_id * 16 + level;
+}
+
+std::shared_ptr<const Chunk> far_piece_chunk(const DecodedFarPiece& piece, const ChunkSource& source) {
   if (piece.chunk) return piece.chunk;
+  const std::string at = "far geometry of chunk " + std::to_string(piece.chunk_id);
+  if (piece.level != 0) {
+    const std::string level = at + " level " + std::to_string(piece.level) + ": ";
+    std::shared_ptr<const Chunk> loaded;
+    try {
+      loaded = source.load_lod(piece.chunk_id, piece.level);
+    } catch (const std::exception& e) {
+      throw std::runtime_error(level + e.what());
+    }
+    if (!loaded) throw std::runtime_error(level + "the store returned no geometry");
+    auto chunk = std::make_shared<Chunk>(*loaded);
+    chunk->id = piece.cache_id;
+    return chunk;
+  }
+  const std::shared_ptr<const Chunk> stored = source.load(piece.chunk_id);
   try {
-    auto chunk = std::make_shared<Chunk>(chunk_subset(stored, piece.triangles));
+    auto chunk = std::make_shared<Chunk>(chunk_subset(*stored, piece.triangles));
     chunk->id = piece.cache_id;
     return chunk;
   } catch (const std::invalid_argument& e) {
-    throw std::runtime_error("far geometry of chunk " + std::to_string(piece.chunk_id) + ": " + e.what() +
-                             " (the cell does not belong to this geometry store?)");
+    throw std::runtime_error(at + ": " + e.what() + " (the cell does not belong to this geometry store?)");
   }
 }
 
@@ -77,6 +102,47 @@ void split_into_tiles(DecodedFace& d) {
       d.tiles.push_back({3 * start[std::size_t(k)], 3 * count[std::size_t(k)], bounds[std::size_t(k)]});
 }
 
+// A level row (far_geometry_level_problem passed) as a piece under its shared
+// cache id; with `source`, checked against its levels and loaded.
+DecodedFarPiece decode_level_piece(const FarGeometryRow& g, const std::string& where,
+                                   const ChunkSource* source) {
+  const std::string at = where + " far geometry of chunk " + std::to_string(g.chunk_id) + " level " +
+                         std::to_string(g.level) + ": ";
+  DecodedFarPiece piece;
+  piece.chunk_id = g.chunk_id;
+  piece.level = g.level;
+  piece.bounds = g.bounds;
+  try {
+    piece.cache_id = lod_cache_id(g.chunk_id, g.level);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(where + " " + e.what());
+  }
+  if (!source) return piece;  // loaded when first drawn
+  std::vector<ChunkLodRef> lods;
+  try {
+    lods = source->lods(g.chunk_id);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(at + e.what());
+  }
+  const auto it =
+      std::find_if(lods.begin(), lods.end(), [&](const ChunkLodRef& l) { return l.level == g.level; });
+  if (it == lods.end())
+    throw std::runtime_error(at +
+                             "the store holds no such level of the chunk (the cell does not belong to this "
+                             "geometry store?)");
+  if (it->triangle_count != g.triangles)
+    throw std::runtime_error(at + std::to_string(g.triangles) + " triangles, the store's level has " +
+                             std::to_string(it->triangle_count) +
+                             " (the cell does not belong to this geometry store?)");
+  try {
+    piece.chunk = far_piece_chunk(piece, *source);  // names chunk and level
+  } catch (const std::exception& e) {
+    throw std::runtime_error(where + " " + e.what());
+  }
+  piece.bounds = piece.chunk->bounds;  // of the level's triangles, whatever the row says
+  return piece;
+}
+
 }  // namespace
 
 DecodedCell decode_cell(const CellRow& row, const ChunkSource* source) {
@@ -95,6 +161,12 @@ DecodedCell decode_cell(const CellRow& row, const ChunkSource* source) {
     if (!is_finite(g.bounds.lo) || !is_finite(g.bounds.hi) || g.bounds.lo.x > g.bounds.hi.x ||
         g.bounds.lo.y > g.bounds.hi.y || g.bounds.lo.z > g.bounds.hi.z)
       throw std::runtime_error(far + "bounds are inverted or not finite (culled, it would never be drawn)");
+    if (const std::string problem = far_geometry_level_problem(g); !problem.empty())
+      throw std::runtime_error(where + " " + problem);
+    if (g.level != 0) {
+      cell.far_pieces.push_back(decode_level_piece(g, where, source));
+      continue;
+    }
     if (g.whole) {
       // The store's chunk, where the row's bounds say, with the row's triangles
       // (the index entry alone: the chunk is loaded when it is drawn).
@@ -131,7 +203,7 @@ DecodedCell decode_cell(const CellRow& row, const ChunkSource* source) {
         piece.chunk = std::move(chunk);
       }
       if (source && !piece.chunk) {
-        piece.chunk = far_piece_chunk(piece, *source->load(piece.chunk_id));
+        piece.chunk = far_piece_chunk(piece, *source);
         piece.triangles = {};
         piece.bounds = piece.chunk->bounds;  // of the triangles cut out, whatever the row says
       }

@@ -35,20 +35,34 @@ struct DecodedFace {
 constexpr int kFaceTiles = kFarTiles;  // the far-choice grid (stages/cube_map.h)
 
 // A piece of a cell's exact far geometry (issue #13): some triangles of a
-// chunk of the geometry store, drawn under a cache id of its own.
+// chunk of the geometry store, drawn under a cache id of its own; or a
+// simplified level of a whole chunk (issue #35), drawn under a cache id
+// shared by every cell that draws that level.
 struct DecodedFarPiece {
-  std::int64_t cache_id = 0;  // negative and unique per cell and piece, so GPU caches keep it apart from the store's chunks
+  // Level 0: negative and unique per cell and piece, so GPU caches keep it
+  // apart from the store's chunks; level >= 1: lod_cache_id(chunk_id, level).
+  std::int64_t cache_id = 0;
   std::int64_t chunk_id = 0;  // the store's chunk
+  int level = 0;              // 0: triangles of the chunk itself; >= 1: the store's level (load_lod)
   Box3d bounds;               // world bounds of the piece's triangles
-  std::vector<std::uint32_t> triangles;  // ascending numbers into the stored chunk (empty when `chunk` is set)
-  std::shared_ptr<const Chunk> chunk;    // the piece itself, for cells that stored it as a chunk blob
+  std::vector<std::uint32_t> triangles;  // ascending numbers into the stored chunk (level 0, `chunk` unset)
+  std::shared_ptr<const Chunk> chunk;    // the piece itself: stored as a chunk blob, or already cut / loaded
 };
 
-// The chunk a far piece draws: `piece.chunk`, or the piece's triangles cut
-// out of `stored` (the store's chunk `piece.chunk_id`), with id = cache_id.
-// Throws std::runtime_error naming the chunk when a triangle number is out of
-// range for `stored`.
-std::shared_ptr<const Chunk> far_piece_chunk(const DecodedFarPiece& piece, const Chunk& stored);
+// The GPU cache id of level `level` of store chunk `chunk_id`:
+// 2^62 + chunk_id * 16 + level. Store chunk ids are small positive numbers
+// and per-cell pieces' ids negative, so it collides with neither, and every
+// cell drawing the same chunk level shares one cache entry. Throws
+// std::invalid_argument naming chunk and level unless 1 <= level <=
+// kMaxFarGeometryLevel (15) and 1 <= chunk_id < 2^58.
+std::int64_t lod_cache_id(std::int64_t chunk_id, int level);
+
+// The chunk a far piece draws, with id = cache_id: `piece.chunk`; else for a
+// level piece `source`'s level (ChunkSource::load_lod) of the chunk; else the
+// piece's triangles cut out of `source`'s chunk `piece.chunk_id`. Throws
+// std::runtime_error naming the chunk (and level) when the source lacks it or
+// a triangle number is out of range for the stored chunk.
+std::shared_ptr<const Chunk> far_piece_chunk(const DecodedFarPiece& piece, const ChunkSource& source);
 
 struct DecodedCell {
   std::int64_t id = 0;
@@ -58,8 +72,8 @@ struct DecodedCell {
   std::uint64_t near_triangles = 0;    // triangles of those chunks inside the cull box
   std::uint64_t far_triangles = 0;     // sum over the decoded faces
   std::vector<DecodedFace> faces;
-  // Exact far geometry (issue #13): the seen triangles of far chunks, and
-  // whole chunks of the store.
+  // Exact far geometry (issue #13): the seen triangles of far chunks and
+  // simplified levels of whole chunks (issue #35), and whole chunks of the store.
   std::vector<DecodedFarPiece> far_pieces;
   std::vector<std::int64_t> far_whole_ids;  // ascending
   std::uint64_t far_geometry_triangles = 0;
@@ -70,12 +84,15 @@ struct DecodedCell {
 // Decodes `row` (loaded with blobs). Throws std::runtime_error naming the cell,
 // sample and face when the cell is not "done", a face index is out of range,
 // a blob is corrupt or truncated (the validated decoders of stages/encode.h),
-// or far geometry bounds are inverted or not finite: the caller then falls
-// back for this cell alone. With `source` (the cell's geometry store), the far
-// pieces are also cut out of their stored chunks here (far_piece_chunk), off
-// the drawing thread, with bounds of the triangles cut; a triangle number out
-// of range, a chunk the store lacks or a whole chunk not where and as the row
-// says is an error naming the cell; without it they are cut when first drawn.
+// or far geometry bounds are inverted or not finite, or a row's level is
+// damaged (far_geometry_level_problem): the caller then falls back for this
+// cell alone. With `source` (the cell's geometry store), the far pieces are
+// also cut out of their stored chunks or loaded as their levels here
+// (far_piece_chunk), off the drawing thread, with bounds of the triangles cut
+// or loaded; a triangle number out of range, a chunk the store lacks, a whole
+// chunk not where and as the row says, or a level the store does not list for
+// the chunk with the row's triangle count is an error naming the cell, chunk
+// and level; without it they are cut or loaded when first drawn.
 DecodedCell decode_cell(const CellRow& row, const ChunkSource* source = nullptr);
 
 }  // namespace cellbake

@@ -127,8 +127,9 @@ SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width
       const ChunkLoader load_piece = [&](std::int64_t cache_id) {
         const auto it = std::find_if(cell.far_pieces.begin(), cell.far_pieces.end(),
                                      [cache_id](const DecodedFarPiece& p) { return p.cache_id == cache_id; });
-        if (it->chunk) return it->chunk;
-        return far_piece_chunk(*it, *source_.load(it->chunk_id));
+        // Cells decoded without a source: cut out of the store's chunk, or the
+        // store's level loaded (shared by every cell drawing it: one cache id).
+        return far_piece_chunk(*it, source_);
       };
       chunks_.draw(camera, Box3d{}, pieces, load_piece);
       if (!cell.far_whole_ids.empty()) chunks_.draw(camera, Box3d{}, visible(cell.far_whole_ids), load);

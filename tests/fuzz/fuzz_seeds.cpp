@@ -118,6 +118,8 @@ int main(int argc, char** argv) {
     write(root / "fuzz_far_geometry", "sound", row(40, 0, 4, {0, 1, 7, 39}));
     write(root / "fuzz_far_geometry", "past_end", row(8, 0, 2, {3, 8}));
     write(root / "fuzz_far_geometry", "whole", row(12, 1, 12, {}));
+    // Level 2 of a 12-triangle chunk (3 triangles), whole, no blob: flags 1 | 2 << 2.
+    write(root / "fuzz_far_geometry", "level", std::vector<std::uint8_t>{12, 1 | 2 << 2, 3});
   }
 
   const fs::path obj = root / "fuzz_obj_reader";
