@@ -52,6 +52,11 @@ struct BakeConfig {
   // depth-mesh triangles it replaces (geometry is exact; a view never draws
   // more than the model).
   double far_geometry_factor = 2.0;
+  // The LOD tier (stages/chunk_lod.h): a far chunk may be drawn at the
+  // store's coarsest simplified level whose error, seen from the nearest
+  // point of the cell (or a sample), is at most this many pixels of a stored
+  // cube face; 0: exact geometry only.
+  double far_lod_error_px = 1.0;
 
   // [sample]
   int face_size = 512;           // stored cube-face resolution, pixels

@@ -8,6 +8,7 @@
 
 #include "pipeline/sample_backend.h"
 #include "stages/background_fill.h"
+#include "stages/chunk_lod.h"
 #include "stages/chunk_subset.h"
 #include "stages/cube_sampler.h"
 #include "stages/depth_mesh.h"
@@ -98,6 +99,7 @@ CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::str
   in.text("far_choice").u64(StageVersions::far_choice).text(c.far_choice).u64(c.far_geometry_below);
   if (c.far_seen_rings != 0) in.text("seen_rings").u64(std::uint64_t(c.far_seen_rings));
   in.text("geometry_factor").f64(c.far_geometry_factor);
+  if (c.far_lod_error_px != 0) in.text("lod_error_px").f64(c.far_lod_error_px);
   h.input = in.hex();
   return h;
 }
@@ -440,12 +442,25 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
     }
     samples.push_back(c);
   }
-  work.far = choose_far_field(eyes, work.far_chunks, samples, parse_far_choice_mode(config.far_choice),
-                              config.far_geometry_factor,
-                              [&](std::size_t sample, int face) -> const FaceMesh& {
-                                return face_mesh(work, config, sample, face);
-                              },
-                              [&](std::size_t sample, int face) { return face_mesh_bound(work, config, sample, face); });
+  // Each far chunk's coarsest stored level within far.lod_error_px, seen
+  // from the nearest eye the viewer may draw the cell from.
+  std::vector<FarLodChoice> lods;
+  if (config.far_lod_error_px > 0) {
+    lods.resize(work.far_chunks.size());
+    for (std::size_t i = 0; i < work.far_chunks.size(); ++i) {
+      const std::vector<ChunkLodRef> levels = source.lods(work.far_chunks[i].id);
+      if (levels.empty()) continue;
+      const double allowed =
+          allowed_lod_error(box_distance(eyes, work.far_chunks[i].bounds), config.far_lod_error_px, config.face_size);
+      lods[i].level = choose_lod_level(levels, allowed);
+      for (const ChunkLodRef& l : levels)
+        if (l.level == lods[i].level) lods[i].triangles = l.triangle_count;
+    }
+  }
+  work.far = choose_far_field(
+      eyes, work.far_chunks, samples, parse_far_choice_mode(config.far_choice), config.far_geometry_factor,
+      [&](std::size_t sample, int face) -> const FaceMesh& { return face_mesh(work, config, sample, face); },
+      [&](std::size_t sample, int face) { return face_mesh_bound(work, config, sample, face); }, lods);
   for (SampleWork& s : work.samples)  // bounded faces the choice never meshed: drawn wholly as geometry
     for (auto& p : s.pending) p.reset();
   drop_replaced_and_measure_kept(work, config);
@@ -462,6 +477,7 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
     g.chunk_id = piece.chunk.id;
     g.triangles = std::uint32_t(piece.triangle_count());
     g.whole = piece.triangles.empty();
+    g.level = piece.level;  // a simplified level is drawn whole, from the store
     g.bounds = piece.chunk.bounds;
     if (!g.whole) {
       const Chunk part = chunk_subset(*source.load(piece.chunk.id), piece.triangles);

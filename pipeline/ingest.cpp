@@ -313,9 +313,11 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   // Build chunks in parallel batches, write them in order (deterministic ids).
   constexpr std::size_t kBatch = 256;
   std::vector<Chunk> batch;
+  std::vector<std::vector<ChunkLod>> batch_lods;
   for (std::size_t first = 0; first < ranges.size(); first += kBatch) {
     const std::size_t n = std::min(kBatch, ranges.size() - first);
     batch.assign(n, Chunk{});
+    batch_lods.assign(n, {});
     parallel_for(n, [&](std::size_t j) {
       const ChunkRange& r = ranges[first + j];
       // Exact duplicates share shape hash and centroid; keep the first copy (lowest index).
@@ -339,13 +341,18 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
       for (std::size_t k = r.begin; k < r.end; ++k)
         if (!drop[k - r.begin]) tris.push_back(&spill[keys[k].index]);
       batch[j] = build_chunk(tris);
+      // The far field's simplified levels (stages/chunk_lod.h).
+      if (params.chunk_lods) batch_lods[j] = build_chunk_lods(batch[j], params.lod);
     });
-    for (Chunk& c : batch) {
+    for (std::size_t j = 0; j < n; ++j) {
+      const Chunk& c = batch[j];
       if (c.indices.empty()) continue;
       report.triangles_stored += c.triangle_count();
       report.vertices += c.positions.size();
       report.bounds.expand(c.bounds);
-      writer.add_chunk(c);
+      const std::int64_t id = writer.add_chunk(c);
+      writer.add_chunk_lods(id, batch_lods[j]);
+      for (const ChunkLod& l : batch_lods[j]) ++report.chunk_lods, report.lod_triangles += l.ref.triangle_count;
       up_evidence.add_chunk(c);
       ++report.chunks;
     }

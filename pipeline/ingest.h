@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "stages/chunk_lod.h"
 #include "stages/geometry.h"
 #include "stages/up_axis_from_geometry.h"
 
@@ -42,6 +43,10 @@ struct IngestParams {
   // (ModelInfo::up), else what the geometry says when it is sure
   // (stages/up_axis_from_geometry.h), else none.
   std::string up;
+  // Simplified levels of every chunk for the far field's LOD tier (issue #35;
+  // stages/chunk_lod.h), stored in the store's chunk_lods table.
+  bool chunk_lods = true;
+  ChunkLodParams lod;
 };
 
 struct IngestReport {
@@ -51,6 +56,8 @@ struct IngestReport {
   std::uint64_t skipped_duplicate = 0;
   std::uint64_t polygons_triangulated = 0;
   std::uint64_t chunks = 0;
+  std::uint64_t chunk_lods = 0;     // simplified chunk levels stored
+  std::uint64_t lod_triangles = 0;  // their triangles, all levels together
   std::uint64_t vertices = 0;
   Box3d bounds;
   double read_seconds = 0, chunk_seconds = 0, write_seconds = 0;

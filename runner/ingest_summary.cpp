@@ -41,6 +41,8 @@ void print_ingest_summary(const IngestReport& r, const std::string& store, bool 
         {"skipped_degenerate", r.skipped_degenerate},
         {"skipped_duplicate", r.skipped_duplicate},
         {"chunks", r.chunks},
+        {"chunk_lods", r.chunk_lods},
+        {"lod_triangles", r.lod_triangles},
         {"vertices", r.vertices},
         {"bounds",
          {{"min", {r.bounds.lo.x, r.bounds.lo.y, r.bounds.lo.z}}, {"max", {r.bounds.hi.x, r.bounds.hi.y, r.bounds.hi.z}}}},
@@ -66,6 +68,9 @@ void print_ingest_summary(const IngestReport& r, const std::string& store, bool 
   std::printf("  %llu chunks, %llu vertices, bounds (%.3f %.3f %.3f)-(%.3f %.3f %.3f)\n", (unsigned long long)r.chunks,
               (unsigned long long)r.vertices, r.bounds.lo.x, r.bounds.lo.y, r.bounds.lo.z, r.bounds.hi.x,
               r.bounds.hi.y, r.bounds.hi.z);
+  if (r.chunk_lods > 0)
+    std::printf("  %llu simplified chunk levels for the far field (%llu triangles, all levels together)\n",
+                (unsigned long long)r.chunk_lods, (unsigned long long)r.lod_triangles);
   std::printf("  time: read %.2f s, chunk %.2f s, write %.2f s, total %.2f s (%.2f M triangles/s)\n", r.read_seconds,
               r.chunk_seconds, r.write_seconds, total, total > 0 ? r.triangles_read / total / 1e6 : 0.0);
   if (!r.up.empty())

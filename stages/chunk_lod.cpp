@@ -115,6 +115,15 @@ std::vector<ChunkLod> build_chunk_lods(const Chunk& chunk, const ChunkLodParams&
   return levels;
 }
 
+double box_distance(const Box3d& a, const Box3d& b) {
+  double sum = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double gap = std::max({0.0, a.lo[k] - b.hi[k], b.lo[k] - a.hi[k]});
+    sum += gap * gap;
+  }
+  return std::sqrt(sum);
+}
+
 double allowed_lod_error(double distance, double error_px, int face_size) {
   if (!(distance > 0) || !(error_px > 0) || face_size <= 0) return 0;
   // A pixel at the centre of a 90-degree face spans 2 / face_size of the

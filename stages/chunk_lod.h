@@ -44,6 +44,10 @@ struct ChunkLod {
 // position, or with fewer than 2 * params.min_triangles triangles, has no levels.
 std::vector<ChunkLod> build_chunk_lods(const Chunk& chunk, const ChunkLodParams& params = {});
 
+// The shortest distance between a point of `a` and a point of `b` (0 when
+// they overlap or touch).
+double box_distance(const Box3d& a, const Box3d& b);
+
 // The largest error a far chunk may have: `error_px` pixels of a cube face
 // `face_size` pixels wide (90 degrees), seen from `distance` metres (the
 // nearest a view may come to the chunk).

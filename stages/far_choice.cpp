@@ -116,8 +116,14 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
 
 FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
                            std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor,
-                           const FarChoiceMeshSource& mesh_source, const FarChoiceBoundSource& bound_source) {
+                           const FarChoiceMeshSource& mesh_source, const FarChoiceBoundSource& bound_source,
+                           std::span<const FarLodChoice> lods) {
   FarChoice out;
+  if (!lods.empty() && lods.size() != far_chunks.size())
+    throw std::invalid_argument("choose_far_field: " + std::to_string(lods.size()) + " level choices for " +
+                                std::to_string(far_chunks.size()) + " far chunks");
+  const auto level_of = [&](std::size_t i) { return lods.empty() ? FarLodChoice{} : lods[i]; };
+  std::vector<char> use_level(far_chunks.size(), 0);
   // What each tile would drop: its depth-mesh triangles, counted from the
   // meshes known so far. Triangles spanning tiles are dropped only when all
   // the tiles they reach take geometry (counted in the gain of the group
@@ -237,7 +243,9 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
   if (samples.empty()) {
     mode = FarChoiceMode::geometry;
     for (std::size_t i = 0; i < far_chunks.size(); ++i) {
-      elements.push_back({std::uint32_t(i), kWhole, far_chunks[i].triangle_count});
+      const FarLodChoice l = level_of(i);
+      use_level[i] = l.level > 0 && l.triangles < far_chunks[i].triangle_count;
+      elements.push_back({std::uint32_t(i), kWhole, use_level[i] ? l.triangles : far_chunks[i].triangle_count});
       for (int f = 0; f < kCubeFaces; ++f)
         add(f, tiles_seeing_box(f, eyes, far_chunks[i].bounds), std::uint32_t(elements.size() - 1));
     }
@@ -262,6 +270,26 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
     for (std::size_t i = 0; i < far_chunks.size(); ++i)
       offset[i + 1] = offset[i] + (seen[i] && !whole[i] ? far_chunks[i].triangle_count : 0);
     std::vector<std::uint32_t> element_of(offset.back(), kWhole);
+    if (!lods.empty()) {
+      // A chunk's level replaces what was seen of it when it costs fewer triangles.
+      std::vector<std::uint64_t> seen_count(far_chunks.size(), 0);
+      for (std::size_t i = 0; i < far_chunks.size(); ++i)
+        if (whole[i]) seen_count[i] = far_chunks[i].triangle_count;
+      for (const FarChoiceSample& sample : samples)
+        for (const auto* list : sample.seen)
+          if (list)
+            for (const SeenChunk& c : *list)
+              if (const std::int64_t i = index_of(c.id); i >= 0 && !whole[std::size_t(i)])
+                for (std::uint32_t t : c.triangles)
+                  if (t < far_chunks[std::size_t(i)].triangle_count && element_of[offset[std::size_t(i)] + t] == kWhole)
+                    element_of[offset[std::size_t(i)] + t] = 0, ++seen_count[std::size_t(i)];
+      std::fill(element_of.begin(), element_of.end(), kWhole);
+      for (std::size_t i = 0; i < far_chunks.size(); ++i) {
+        const FarLodChoice l = level_of(i);
+        use_level[i] = seen[i] && l.level > 0 && l.triangles < seen_count[i];
+        if (use_level[i]) whole[i] = 1;
+      }
+    }
     std::vector<std::uint32_t> whole_element(far_chunks.size(), kWhole);
     for (const FarChoiceSample& sample : samples)
       for (int f = 0; f < kCubeFaces; ++f) {
@@ -273,7 +301,8 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
           if (whole[ci]) {
             if (whole_element[ci] == kWhole) {
               whole_element[ci] = std::uint32_t(elements.size());
-              elements.push_back({std::uint32_t(ci), kWhole, far_chunks[ci].triangle_count});
+              elements.push_back(
+                  {std::uint32_t(ci), kWhole, use_level[ci] ? level_of(ci).triangles : far_chunks[ci].triangle_count});
             }
             add(f, c.tiles, whole_element[ci]);
             continue;
@@ -401,8 +430,13 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
   });
   for (std::uint32_t e : order) {
     const Element& el = elements[e];
-    if (out.pieces.empty() || out.pieces.back().chunk.id != far_chunks[el.chunk].id)
+    if (out.pieces.empty() || out.pieces.back().chunk.id != far_chunks[el.chunk].id) {
       out.pieces.push_back({far_chunks[el.chunk], {}});
+      if (use_level[el.chunk]) {
+        out.pieces.back().level = level_of(el.chunk).level;
+        out.pieces.back().level_triangles = level_of(el.chunk).triangles;
+      }
+    }
     if (el.triangle != kWhole) out.pieces.back().triangles.push_back(el.triangle);
   }
   for (const FarPiece& p : out.pieces) out.geometry_triangles += p.triangle_count();

@@ -54,11 +54,23 @@ struct FaceFarChoice {
   std::uint64_t geometry_triangles = 0;  // triangles of the distinct chunks its geometry tiles need
 };
 
-// The far geometry of one source chunk: the whole chunk, or some of its triangles.
+// The far geometry of one source chunk: the whole chunk, some of its
+// triangles, or a simplified level of the whole chunk.
 struct FarPiece {
   ChunkRef chunk;
-  std::vector<std::uint32_t> triangles;  // ascending; empty: the whole chunk
-  std::uint64_t triangle_count() const { return triangles.empty() ? chunk.triangle_count : triangles.size(); }
+  std::vector<std::uint32_t> triangles;  // ascending; empty: the whole chunk (or its level)
+  int level = 0;                         // >= 1: the store's simplified level (stages/chunk_lod.h)
+  std::uint32_t level_triangles = 0;     // that level's triangles
+  std::uint64_t triangle_count() const {
+    return level > 0 ? level_triangles : triangles.empty() ? chunk.triangle_count : triangles.size();
+  }
+};
+
+// The simplified level a far chunk may be drawn at (stages/chunk_lod.h
+// choose_lod_level): level 0 when none is within the error budget.
+struct FarLodChoice {
+  int level = 0;
+  std::uint32_t triangles = 0;
 };
 
 struct FarChoice {
@@ -134,9 +146,17 @@ using FarChoiceBoundSource = std::function<std::uint64_t(std::size_t sample, int
 // A face whose mesh was never asked for but bounded counts its bound in
 // FaceFarChoice::replaced_triangles. Calls each source at most once per
 // face, deterministically (a bound, when asked, before the mesh).
+//
+// With `lods` (one per far chunk, in the same order; empty: none), a far
+// chunk with a level takes it whole in place of its seen triangles when the
+// level has fewer triangles than they are (or than the chunk, seen whole):
+// one element covering every tile that saw any of it, of the level's
+// weight. A level is within the error the caller allows, so it counts as
+// geometry like the exact triangles.
 FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
                            std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor,
-                           const FarChoiceMeshSource& mesh_source, const FarChoiceBoundSource& bound_source);
+                           const FarChoiceMeshSource& mesh_source, const FarChoiceBoundSource& bound_source,
+                           std::span<const FarLodChoice> lods = {});
 
 // Which triangles use each vertex of a chunk (compressed rows: the triangles
 // of vertex v are triangles[offsets[v] .. offsets[v + 1])).

@@ -41,6 +41,9 @@ CREATE TABLE chunks(id INTEGER PRIMARY KEY,
                     triangle_count INTEGER NOT NULL, vertex_count INTEGER NOT NULL,
                     geometry BLOB NOT NULL);
 CREATE VIRTUAL TABLE chunk_rtree USING rtree(id, min_x, max_x, min_y, max_y, min_z, max_z);
+CREATE TABLE chunk_lods(chunk_id INTEGER NOT NULL, level INTEGER NOT NULL, error REAL NOT NULL,
+                        triangle_count INTEGER NOT NULL, vertex_count INTEGER NOT NULL, geometry BLOB NOT NULL,
+                        PRIMARY KEY(chunk_id, level)) WITHOUT ROWID;
 )sql";
 
 // True when `path` is a finished geometry store of ours (any schema).
@@ -118,9 +121,18 @@ void hash_chunk(Hasher& h, std::int64_t id, const double (&origin_and_bounds)[9]
   for (double v : origin_and_bounds) h.f64(v);
   h.u64(std::uint64_t(triangles)).u64(std::uint64_t(vertices)).bytes(blob, size).u64(size);
 }
-std::string combine_content_hash(const Hasher& textures, const Hasher& materials, const Hasher& chunks) {
+void hash_chunk_lod(Hasher& h, std::int64_t id, std::int64_t level, double error, std::int64_t triangles,
+                    std::int64_t vertices, const void* blob, std::size_t size) {
+  h.u64(std::uint64_t(id)).u64(std::uint64_t(level)).f64(error);
+  h.u64(std::uint64_t(triangles)).u64(std::uint64_t(vertices)).bytes(blob, size).u64(size);
+}
+// The chunk levels count only when there are some, so stores without levels
+// keep the hash they had before levels existed.
+std::string combine_content_hash(const Hasher& textures, const Hasher& materials, const Hasher& chunks,
+                                 const Hasher& lods, std::uint64_t lod_rows) {
   Hasher h;
   h.text("cellbake-store-content-v1").text(textures.hex()).text(materials.hex()).text(chunks.hex());
+  if (lod_rows > 0) h.text("chunk-levels").text(lods.hex());
   return h.hex();
 }
 
@@ -139,7 +151,8 @@ GeometryStoreWriter::GeometryStoreWriter(const std::filesystem::path& final_path
       temp_path_(final_path.string() + ".tmp-" + std::to_string(::getpid())),
       textures_hash_(std::make_unique<Hasher>()),
       materials_hash_(std::make_unique<Hasher>()),
-      chunks_hash_(std::make_unique<Hasher>()) {
+      chunks_hash_(std::make_unique<Hasher>()),
+      lods_hash_(std::make_unique<Hasher>()) {
   check_store_target(final_path);
   remove_stale_temporaries(final_path);
   std::error_code ec;
@@ -150,6 +163,7 @@ GeometryStoreWriter::GeometryStoreWriter(const std::filesystem::path& final_path
   insert_chunk_ = std::make_unique<SqliteStatement>(
       *db_, "INSERT INTO chunks VALUES(?,?,?,?,?,?,?,?,?,?,?,?,?)");
   insert_rtree_ = std::make_unique<SqliteStatement>(*db_, "INSERT INTO chunk_rtree VALUES(?,?,?,?,?,?,?)");
+  insert_lod_ = std::make_unique<SqliteStatement>(*db_, "INSERT INTO chunk_lods VALUES(?,?,?,?,?,?)");
   db_->exec("BEGIN");
 }
 
@@ -157,6 +171,7 @@ GeometryStoreWriter::~GeometryStoreWriter() {
   if (finished_) return;
   insert_chunk_.reset();
   insert_rtree_.reset();
+  insert_lod_.reset();
   db_.reset();
   std::error_code ec;
   std::filesystem::remove(temp_path_, ec);
@@ -231,8 +246,23 @@ std::int64_t GeometryStoreWriter::add_chunk(const Chunk& chunk) {
   return id;
 }
 
+void GeometryStoreWriter::add_chunk_lods(std::int64_t id, const std::vector<ChunkLod>& lods) {
+  if (id <= 0 || id >= next_id_) throw std::invalid_argument("add_chunk_lods: chunk " + std::to_string(id) + " was not added");
+  for (const ChunkLod& l : lods) {
+    const std::vector<std::uint8_t> blob = encode_chunk_blob(l.chunk);
+    auto& s = *insert_lod_;
+    s.bind(1, id).bind(2, std::int64_t(l.ref.level)).bind(3, l.ref.error);
+    s.bind(4, std::int64_t(l.chunk.triangle_count())).bind(5, std::int64_t(l.chunk.positions.size()));
+    s.bind_blob(6, blob.data(), blob.size());
+    s.run();
+    hash_chunk_lod(*lods_hash_, id, l.ref.level, l.ref.error, std::int64_t(l.chunk.triangle_count()),
+                   std::int64_t(l.chunk.positions.size()), blob.data(), blob.size());
+    ++lod_rows_;
+  }
+}
+
 std::string GeometryStoreWriter::content_hash() const {
-  return combine_content_hash(*textures_hash_, *materials_hash_, *chunks_hash_);
+  return combine_content_hash(*textures_hash_, *materials_hash_, *chunks_hash_, *lods_hash_, lod_rows_);
 }
 
 void GeometryStoreWriter::finish(const StoreSummary& sum) {
@@ -252,12 +282,14 @@ void GeometryStoreWriter::finish(const StoreSummary& sum) {
   put("content_hash", sum.content_hash);
   const std::uint64_t chunk_rows = std::uint64_t(next_id_ - 1), texture_rows = std::uint64_t(next_texture_id_ - 1);
   put("rows", "chunks=" + std::to_string(chunk_rows) + " chunk_rtree=" + std::to_string(chunk_rows) +
-                  " materials=" + std::to_string(material_rows_) + " textures=" + std::to_string(texture_rows));
+                  " materials=" + std::to_string(material_rows_) + " textures=" + std::to_string(texture_rows) +
+                  " chunk_lods=" + std::to_string(lod_rows_));
   if (!sum.up.empty()) put("up", sum.up);
   if (!sum.up.empty() && !sum.up_source.empty()) put("up_source", sum.up_source);
   db_->exec("COMMIT");
   insert_chunk_.reset();
   insert_rtree_.reset();
+  insert_lod_.reset();
   db_->exec("PRAGMA journal_mode=DELETE");
   db_.reset();
   std::filesystem::rename(temp_path_, final_path_);
@@ -318,7 +350,56 @@ GeometryStore::GeometryStore(const std::filesystem::path& path, std::size_t cach
   summary_.content_hash = meta["content_hash"];
   if (meta["up"] == "z" || meta["up"] == "y") summary_.up = meta["up"], summary_.up_source = meta["up_source"];
   materials_ = read_materials(c->db);
+  {
+    SqliteStatement t(c->db, "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'chunk_lods'");
+    if (t.step() && t.column_int(0) > 0) {
+      SqliteStatement l(c->db, "SELECT chunk_id, level, error, triangle_count FROM chunk_lods ORDER BY chunk_id, level");
+      while (l.step())
+        lods_[l.column_int(0)].push_back(
+            {int(std::clamp<std::int64_t>(l.column_int(1), -1, 1 << 20)), l.column_double(2),
+             std::uint32_t(std::clamp<std::int64_t>(l.column_int(3), 0, std::int64_t(UINT32_MAX)))});
+    }
+  }
   release(std::move(c));
+}
+
+std::vector<ChunkLodRef> GeometryStore::lods(std::int64_t id) const {
+  const auto it = lods_.find(id);
+  return it == lods_.end() ? std::vector<ChunkLodRef>{} : it->second;
+}
+
+std::shared_ptr<const Chunk> GeometryStore::load_lod(std::int64_t id, int level) const {
+  const std::string where =
+      path_.string() + ": level " + std::to_string(level) + " of chunk " + std::to_string(id);
+  if (level < 1 || level > 15) throw std::runtime_error(where + ": no such level (levels are 1 to 15)");
+  const std::int64_t key = -(id * 16 + level);  // store chunks are cached under their positive ids
+  if (auto hit = cached(key)) return hit;
+  auto chunk = std::make_shared<Chunk>();
+  chunk->id = id;
+  auto c = acquire();
+  try {
+    SqliteStatement q(c->db,
+                      "SELECT c.origin_x, c.origin_y, c.origin_z, c.min_x, c.min_y, c.min_z, c.max_x, c.max_y, c.max_z, "
+                      "l.triangle_count, l.vertex_count, l.geometry FROM chunk_lods l JOIN chunks c ON c.id = l.chunk_id "
+                      "WHERE l.chunk_id = ? AND l.level = ?");
+    q.bind(1, id).bind(2, std::int64_t(level));
+    if (!q.step()) throw std::runtime_error("does not exist");
+    chunk->origin = {q.column_double(0), q.column_double(1), q.column_double(2)};
+    chunk->bounds = {{q.column_double(3), q.column_double(4), q.column_double(5)},
+                     {q.column_double(6), q.column_double(7), q.column_double(8)}};
+    std::size_t size = 0;
+    const std::uint8_t* data = q.column_blob_data(11, size);
+    decode_chunk_blob(data, size, *chunk);
+    if (std::int64_t(chunk->triangle_count()) != q.column_int(9) ||
+        std::int64_t(chunk->positions.size()) != q.column_int(10))
+      throw std::runtime_error("blob holds " + std::to_string(chunk->triangle_count()) + " triangles, the row says " +
+                               std::to_string(q.column_int(9)));
+  } catch (const std::exception& e) {
+    release(std::move(c));
+    throw std::runtime_error(where + ": " + e.what());
+  }
+  release(std::move(c));
+  return remember(key, std::move(chunk));
 }
 
 std::vector<Material> GeometryStore::read_materials(SqliteDb& db) const {
@@ -418,15 +499,16 @@ std::vector<ChunkRef> GeometryStore::query(const Box3d& box) const {
   return out;
 }
 
+std::shared_ptr<const Chunk> GeometryStore::cached(std::int64_t key) const {
+  std::lock_guard<std::mutex> lock(cache_mutex_);
+  auto it = cache_.find(key);
+  if (it == cache_.end()) return nullptr;
+  lru_.splice(lru_.begin(), lru_, it->second.pos);
+  return it->second.chunk;
+}
+
 std::shared_ptr<const Chunk> GeometryStore::load(std::int64_t id) const {
-  {
-    std::lock_guard<std::mutex> lock(cache_mutex_);
-    auto it = cache_.find(id);
-    if (it != cache_.end()) {
-      lru_.splice(lru_.begin(), lru_, it->second.pos);
-      return it->second.chunk;
-    }
-  }
+  if (auto hit = cached(id)) return hit;
   auto chunk = std::make_shared<Chunk>();
   chunk->id = id;
   {
@@ -453,14 +535,18 @@ std::shared_ptr<const Chunk> GeometryStore::load(std::int64_t id) const {
     q.reset();
     release(std::move(c));
   }
+  return remember(id, std::move(chunk));
+}
+
+std::shared_ptr<const Chunk> GeometryStore::remember(std::int64_t key, std::shared_ptr<const Chunk> chunk) const {
   const std::size_t bytes = chunk->positions.size() * (sizeof(Vec3f) + sizeof(Rgba8)) +
                             chunk->uvs.size() * sizeof(Uv) + chunk->normals.size() * sizeof(Vec3f) +
                             chunk->indices.size() * 4 + chunk->materials.size() * 4 + sizeof(Chunk);
   std::lock_guard<std::mutex> lock(cache_mutex_);
-  auto it = cache_.find(id);
+  auto it = cache_.find(key);
   if (it != cache_.end()) return it->second.chunk;
-  lru_.push_front(id);
-  cache_[id] = {chunk, lru_.begin(), bytes};
+  lru_.push_front(key);
+  cache_[key] = {chunk, lru_.begin(), bytes};
   cache_bytes_ += bytes;
   while (cache_bytes_ > cache_cap_ && lru_.size() > 1) {
     auto victim = cache_.find(lru_.back());
@@ -554,7 +640,21 @@ std::string stored_content_hash(const std::filesystem::path& path) {
     const std::uint8_t* blob = c.column_blob_data(12, size);
     hash_chunk(chunks, c.column_int(0), v, c.column_int(10), c.column_int(11), blob, size);
   }
-  return combine_content_hash(textures, materials, chunks);
+  Hasher lods;
+  std::uint64_t lod_rows = 0;
+  SqliteStatement has_lods(db, "SELECT count(*) FROM sqlite_master WHERE type = 'table' AND name = 'chunk_lods'");
+  if (has_lods.step() && has_lods.column_int(0) > 0) {
+    SqliteStatement l(db, "SELECT chunk_id, level, error, triangle_count, vertex_count, geometry FROM chunk_lods "
+                          "ORDER BY chunk_id, level");
+    while (l.step()) {
+      std::size_t size = 0;
+      const std::uint8_t* blob = l.column_blob_data(5, size);
+      hash_chunk_lod(lods, l.column_int(0), l.column_int(1), l.column_double(2), l.column_int(3), l.column_int(4), blob,
+                     size);
+      ++lod_rows;
+    }
+  }
+  return combine_content_hash(textures, materials, chunks, lods, lod_rows);
 }
 
 }  // namespace cellbake

@@ -13,6 +13,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "stages/chunk_lod.h"
 #include "stages/chunk_source.h"
 #include "stages/geometry.h"
 
@@ -65,6 +66,10 @@ class GeometryStoreWriter {
   void add_source(const SourceFileRecord& source);
   // Adds a chunk (its id is assigned here, 1, 2, 3 ... in call order).
   std::int64_t add_chunk(const Chunk& chunk);
+  // Adds the simplified levels of chunk `id` (already added; table
+  // chunk_lods, part of content_hash() when any are added). Throws
+  // std::invalid_argument for a chunk id not added yet.
+  void add_chunk_lods(std::int64_t id, const std::vector<ChunkLod>& lods);
   // The content hash (32 hex digits) of what has been added: every texture
   // (id, size, wrap modes, alpha flag, texels), every material row (index,
   // name, colour, texture name and id, alpha test) and every chunk row (id,
@@ -83,11 +88,12 @@ class GeometryStoreWriter {
  private:
   std::filesystem::path final_path_, temp_path_;
   std::unique_ptr<SqliteDb> db_;
-  std::unique_ptr<SqliteStatement> insert_chunk_, insert_rtree_;
+  std::unique_ptr<SqliteStatement> insert_chunk_, insert_rtree_, insert_lod_;
+  std::uint64_t lod_rows_ = 0;
   std::int64_t next_id_ = 1;
   std::int64_t next_texture_id_ = 1;
   std::uint64_t material_rows_ = 0;
-  std::unique_ptr<Hasher> textures_hash_, materials_hash_, chunks_hash_;
+  std::unique_ptr<Hasher> textures_hash_, materials_hash_, chunks_hash_, lods_hash_;
   std::size_t pending_ = 0;
   bool finished_ = false;
 };
@@ -102,6 +108,10 @@ class GeometryStore : public ChunkSource {
   std::vector<ChunkRef> query(const Box3d& box) const override;
   std::shared_ptr<const Chunk> load(std::int64_t id) const override;
   Box3d model_bounds() const override { return summary_.bounds; }
+  // The levels table (read once at open; empty for stores without levels).
+  std::vector<ChunkLodRef> lods(std::int64_t id) const override;
+  // Decoded and cached like chunks; throws naming store, chunk and level.
+  std::shared_ptr<const Chunk> load_lod(std::int64_t id, int level) const override;
 
   const StoreSummary& summary() const { return summary_; }
   std::vector<SourceFileRecord> sources() const;
@@ -123,11 +133,14 @@ class GeometryStore : public ChunkSource {
   void release(std::unique_ptr<Connection> c) const;
 
   std::vector<Material> read_materials(SqliteDb& db) const;
+  std::shared_ptr<const Chunk> cached(std::int64_t key) const;
+  std::shared_ptr<const Chunk> remember(std::int64_t key, std::shared_ptr<const Chunk> chunk) const;
 
   std::filesystem::path path_;
   StoreSummary summary_;
   int schema_version_ = 2;
   std::vector<Material> materials_;
+  std::unordered_map<std::int64_t, std::vector<ChunkLodRef>> lods_;
   mutable std::mutex pool_mutex_;
   mutable std::vector<std::unique_ptr<Connection>> pool_;
 

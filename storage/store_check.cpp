@@ -73,6 +73,17 @@ void check_rows(SqliteDb& db, const std::filesystem::path& path,
       problems.push_back({0, std::string("table ") + table + " has " + std::to_string(n) +
                                  " rows, ingest wrote " + std::to_string(r->second)});
   }
+  // The chunk levels: counted by stores that have them.
+  const bool lod_table = has_table(db, "chunk_lods");
+  const auto lods = recorded.find("chunk_lods");
+  if (lods != recorded.end() && !lod_table && lods->second > 0)
+    problems.push_back({0, "table chunk_lods is missing"});
+  else if (lod_table) {
+    const std::uint64_t n = count_rows(db, "chunk_lods");
+    if (lods == recorded.end() ? n > 0 : n != lods->second)
+      problems.push_back({0, "table chunk_lods has " + std::to_string(n) + " rows, ingest wrote " +
+                                 (lods == recorded.end() ? std::string("none") : std::to_string(lods->second))});
+  }
 }
 
 // An R-tree coordinate (float32, rounded outwards) holds the exact double
@@ -158,6 +169,34 @@ void check_chunk_blobs(SqliteDb& db, const std::filesystem::path& path,
   };
   compare("chunks", rows);
   compare("triangles", triangles);
+  if (!has_table(db, "chunk_lods")) return;
+  SqliteStatement l(db, "SELECT l.chunk_id, l.level, l.error, l.triangle_count, l.vertex_count, l.geometry, c.id "
+                        "FROM chunk_lods l LEFT JOIN chunks c ON c.id = l.chunk_id ORDER BY l.chunk_id, l.level");
+  while (l.step()) {
+    const std::int64_t id = l.column_int(0), level = l.column_int(1);
+    const std::string where = "level " + std::to_string(level) + ": ";
+    if (l.column_is_null(6)) {
+      problems.push_back({id, where + "the store holds no such chunk"});
+      continue;
+    }
+    if (level < 1 || level > 15 || !std::isfinite(l.column_double(2)) || l.column_double(2) < 0) {
+      problems.push_back({id, where + "level out of 1..15 or error not a finite length"});
+      continue;
+    }
+    std::size_t size = 0;
+    const std::uint8_t* data = l.column_blob_data(5, size);
+    Chunk chunk;
+    try {
+      decode_chunk_blob(data, size, chunk);
+    } catch (const std::exception& e) {
+      problems.push_back({id, where + e.what()});
+      continue;
+    }
+    if (std::int64_t(chunk.triangle_count()) != l.column_int(3) || std::int64_t(chunk.positions.size()) != l.column_int(4))
+      problems.push_back({id, where + "blob holds " + std::to_string(chunk.triangle_count()) + " triangles and " +
+                                  std::to_string(chunk.positions.size()) + " vertices, the row says " +
+                                  std::to_string(l.column_int(3)) + " and " + std::to_string(l.column_int(4))});
+  }
 }
 
 }  // namespace

@@ -532,6 +532,50 @@ TEST(FarChoiceChoose, TenThousandsOfTinyDistantTrianglesKeepTheDepthMeshes) {
   EXPECT_EQ(g.faces[0].tdm_triangles, 0u);
 }
 
+TEST(FarChoiceChoose, ASimplifiedLevelTakesTilesTheExactTrianglesCouldNot) {
+  // A far wall of thin pipes: 4 chunks of 4000 triangles, 3000 of each seen
+  // on the tiles of +X; the depth meshes hold 200 triangles a tile (3200).
+  std::vector<ChunkRef> far;
+  SampleInput s;
+  for (std::int64_t id = 1; id <= 4; ++id) {
+    far.push_back(ref(id, 4000));
+    SeenChunk seen;
+    seen.id = id;
+    for (std::uint32_t t = 0; t < 3000; ++t) {
+      seen.triangles.push_back(t);
+      seen.triangle_tiles.push_back(std::uint16_t(1u << (t % kFarTilesPerFace)));
+      seen.tiles |= seen.triangle_tiles.back();
+    }
+    s.seen[0].push_back(std::move(seen));
+  }
+  for (int tile = 0; tile < kFarTilesPerFace; ++tile) add_tile_triangles(s.meshes[0], tile, 200);
+  std::vector<FarChoiceSample> samples = {s.view()};
+  const Box3d eyes = Box3d::cube({0, 0, 0}, 1);
+  // Exact: 12000 triangles against 3200: depth meshes everywhere.
+  const FarChoice exact = choose_far_field(eyes, far, samples, FarChoiceMode::cheapest, 2.0);
+  EXPECT_EQ(exact.faces[0].geometry_tiles, 0u);
+  // Level 2 of each chunk, 700 triangles (2800 in all, whole chunks): every tile takes it.
+  const std::vector<FarLodChoice> levels(4, FarLodChoice{2, 700});
+  const FarChoice lod = choose_far_field(eyes, far, samples, FarChoiceMode::cheapest, 2.0, {}, {}, levels);
+  EXPECT_EQ(lod.faces[0].geometry_tiles, kAllFaceTiles);
+  EXPECT_EQ(lod.geometry_triangles, 2800u);
+  ASSERT_EQ(lod.pieces.size(), 4u);
+  for (const FarPiece& p : lod.pieces) {
+    EXPECT_EQ(p.level, 2);
+    EXPECT_TRUE(p.triangles.empty());
+    EXPECT_EQ(p.triangle_count(), 700u);
+  }
+  // A level with more triangles than were seen is not taken: the seen triangles stay exact.
+  const std::vector<FarLodChoice> coarse(4, FarLodChoice{1, 3500});
+  const FarChoice forced = choose_far_field(eyes, far, samples, FarChoiceMode::geometry, 2.0, {}, {}, coarse);
+  ASSERT_EQ(forced.pieces.size(), 4u);
+  for (const FarPiece& p : forced.pieces) EXPECT_EQ(p.level, 0);
+  EXPECT_EQ(forced.geometry_triangles, 12000u);
+  // One choice per far chunk, or none.
+  EXPECT_THROW(choose_far_field(eyes, far, samples, FarChoiceMode::cheapest, 2.0, {}, {}, std::span<const FarLodChoice>(coarse).subspan(0, 2)),
+               std::invalid_argument);
+}
+
 TEST(FarChoiceChoose, AMixedFaceTakesGeometryOnlyWhereItIsCheaper) {
   // +Y face: tile 0 sees 2 triangles of chunk 5 against 20 depth-mesh
   // triangles; tile 5 sees 1000 triangles of chunk 6 against 20.

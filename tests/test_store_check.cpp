@@ -111,6 +111,59 @@ TEST_F(StoreCheck, ACorruptChunkBlobIsFoundByTheFullCheckAndBakeCheckStore) {
   EXPECT_NE(b.output.find("chunk 3: chunk blob"), std::string::npos) << b.output;
 }
 
+// The far field's chunk levels (issue #35): stored at ingest, part of the
+// content hash, checked and loaded by level.
+TEST(StoreLevels, IngestStoresLevelsInTheHashAndTheCheckFindsADamagedOne) {
+  test::TempDir dir;
+  std::ostringstream o;
+  int next = 1;
+  test::obj_box(o, next, {0, 0, 0}, {4, 4, 3}, 10);  // one chunk of 1 200 triangles
+  test::write_text(dir / "box.obj", o.str());
+  const auto serial = [](std::size_t n, const std::function<void(std::size_t)>& fn) {
+    for (std::size_t i = 0; i < n; ++i) fn(i);
+  };
+  IngestParams params;
+  const IngestReport with = ingest_models({dir / "box.obj"}, dir / "lod.db", params, serial);
+  params.chunk_lods = false;
+  const IngestReport without = ingest_models({dir / "box.obj"}, dir / "plain.db", params, serial);
+  EXPECT_GT(with.chunk_lods, 1u);
+  EXPECT_EQ(without.chunk_lods, 0u);
+  EXPECT_NE(with.content_hash, without.content_hash);
+  {
+    GeometryStore plain(dir / "plain.db");
+    EXPECT_TRUE(plain.lods(1).empty());
+    EXPECT_THROW(plain.load_lod(1, 1), std::runtime_error);
+    GeometryStore store(dir / "lod.db");
+    const std::vector<ChunkLodRef> levels = store.lods(1);
+    ASSERT_EQ(levels.size(), with.chunk_lods);
+    for (const ChunkLodRef& l : levels) {
+      const auto chunk = store.load_lod(1, l.level);
+      EXPECT_EQ(chunk->triangle_count(), l.triangle_count) << "level " << l.level;
+      EXPECT_LT(chunk->triangle_count(), 1200u);
+      EXPECT_LT(l.error, 0.1) << "level " << l.level;  // a 4 m box of flat walls
+    }
+    EXPECT_EQ(stored_content_hash(dir / "lod.db"), with.content_hash);
+  }
+  EXPECT_TRUE(check_store(dir / "lod.db").empty());
+  {
+    SqliteDb d(dir / "lod.db", SqliteDb::Mode::read_write_create);
+    d.exec("UPDATE chunk_lods SET geometry = substr(geometry, 1, 40) WHERE chunk_id = 1 AND level = 1");
+  }
+  std::string problems;
+  for (const StoreProblem& p : check_store(dir / "lod.db")) problems += describe(p) + "\n";
+  EXPECT_NE(problems.find("chunk 1: level 1: "), std::string::npos) << problems;
+  EXPECT_NE(problems.find("content hash mismatch"), std::string::npos) << problems;
+  GeometryStore damaged(dir / "lod.db");
+  EXPECT_THROW(damaged.load_lod(1, 1), std::runtime_error);
+  {
+    SqliteDb d(dir / "lod.db", SqliteDb::Mode::read_write_create);
+    d.exec("DELETE FROM chunk_lods WHERE level = 2");
+  }
+  problems.clear();
+  for (const StoreProblem& p : check_store_rows(dir / "lod.db")) problems += describe(p) + "\n";
+  EXPECT_NE(problems.find("table chunk_lods has"), std::string::npos) << problems;
+}
+
 TEST_F(StoreCheck, AStoreWithoutRecordedCountsIsAcceptedAsBefore) {
   sql("DELETE FROM meta WHERE key = 'rows'");
   EXPECT_TRUE(check_store_rows(store()).empty());
