@@ -3,9 +3,7 @@
 # CELLBAKE_QUICK=1 skips them; docs/reliability.md says what they cover):
 #   asan  AddressSanitizer + UndefinedBehaviorSanitizer (leaks checked, the
 #         first report fatal) over the parser, codec, storage and runner tests,
-#         in ${CELLBAKE_ASAN_DIR:-build-asan}; then, in the same build, the
-#         fuzz targets' replay with the sanitized replay's own mutants (what
-#         `scripts/fuzz.sh replay` runs, without building the libraries twice);
+#         in ${CELLBAKE_ASAN_DIR:-build-asan};
 #   tsan  ThreadSanitizer over the bake graph (GL and Embree bakes on 2
 #         threads), parallel ingest, merge, the bake lock and concurrent
 #         schema creation, in ${CELLBAKE_TSAN_DIR:-build-tsan}; first it checks
@@ -58,7 +56,7 @@ configure_and_build() {
     -DCMAKE_C_FLAGS="-O1 -g1 ${flags}" -DCMAKE_CXX_FLAGS="-O1 -g1 ${flags}" \
     -DCMAKE_EXE_LINKER_FLAGS="${flags}" -DCMAKE_SHARED_LINKER_FLAGS="${flags}" \
     -DCELLBAKE_BUILD_TESTS=ON -DCELLBAKE_BUILD_BENCH=OFF -DCELLBAKE_BUILD_VIEWER_APP=OFF -DCELLBAKE_UNITY_RUNNER=ON \
-    -DCELLBAKE_TEST_TIMEOUT=1800 -DCELLBAKE_FUZZ_REPLAY_SEED=2 > "${dir}.configure.log" 2>&1 \
+    -DCELLBAKE_TEST_TIMEOUT=1800 > "${dir}.configure.log" 2>&1 \
     || { cat "${dir}.configure.log"; return 1; }
   cmake --build "${dir}" -j "$(nproc)" --target cellbake "$@"
 }
@@ -99,15 +97,10 @@ run_job() {
     asan)
       local dir="${CELLBAKE_ASAN_DIR:-build-asan}"
       configure_and_build asan "${dir}" "-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer" \
-        "${asan_tests[@]}" fuzz_all || return 1
+        "${asan_tests[@]}" || return 1
       built=$(date +%s)
       echo "[sanitize] asan: built in $(( built - start )) s; running ${asan_tests[*]} (except ${asan_exclude})"
-      run_tests "${dir}" "${asan_exclude}" "${asan_tests[@]}" || status=1
-      # The fuzz replay as scripts/fuzz.sh replay runs it: full unwinding for
-      # the leak suppressions, one allocation over 2560 MiB is a finding.
-      echo "[sanitize] asan: the fuzz targets' replay (seed 2)"
-      ASAN_OPTIONS="fast_unwind_on_malloc=0:max_allocation_size_mb=2560:${ASAN_OPTIONS}" \
-        run_tests "${dir}" '^$' fuzz_replay || status=1 ;;
+      run_tests "${dir}" "${asan_exclude}" "${asan_tests[@]}" || status=1 ;;
     tsan)
       local dir="${CELLBAKE_TSAN_DIR:-build-tsan}"
       configure_and_build tsan "${dir}" "-fsanitize=thread" "${tsan_tests[@]}" || return 1

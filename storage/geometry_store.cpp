@@ -43,7 +43,7 @@ CREATE TABLE chunks(id INTEGER PRIMARY KEY,
 CREATE VIRTUAL TABLE chunk_rtree USING rtree(id, min_x, max_x, min_y, max_y, min_z, max_z);
 CREATE TABLE chunk_lods(chunk_id INTEGER NOT NULL, level INTEGER NOT NULL, error REAL NOT NULL,
                         triangle_count INTEGER NOT NULL, vertex_count INTEGER NOT NULL, geometry BLOB NOT NULL,
-                        PRIMARY KEY(chunk_id, level)) WITHOUT ROWID;
+                        PRIMARY KEY(chunk_id, level));
 )sql";
 
 // True when `path` is a finished geometry store of ours (any schema).

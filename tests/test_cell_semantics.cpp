@@ -23,7 +23,8 @@ namespace cellbake {
 namespace {
 
 // The 4 x 4 x 3 m box with a pillar, 2 x 2 cells of 1.5 m baked with the far
-// choice (far.db: far geometry rows) or with depth meshes only (tdm.db: face
+// choice (far.db: exact far geometry rows; lod.db: the default, with the
+// store's simplified chunk levels) or with depth meshes only (tdm.db: face
 // meshes), each once per test program and only when a test asks for it (CTest
 // runs each test in a program of its own).
 class CellSemantics : public ::testing::Test {
@@ -36,7 +37,10 @@ class CellSemantics : public ::testing::Test {
         test::run_cellbake("bake --store " + path("s.db") +
                            " --region=0.5,0.5,1,3.5,3.5,1 --cell-size 1.5 --face-size 32 --near-budget 1000 "
                            "--quiet --threads 2 --out " +
-                           path(name) + (name == "tdm.db" ? " --set far.choice=tdm" : ""))
+                           path(name) +
+                           (name == "tdm.db"   ? " --set far.choice=tdm"
+                            : name == "far.db" ? " --set far.lod_error_px=0"  // exact rows: triangle lists
+                                               : ""))
             .exit_code,
         0);
   }
@@ -107,7 +111,7 @@ class CellSemantics : public ::testing::Test {
 test::TempDir* CellSemantics::dir_ = nullptr;
 
 TEST_F(CellSemantics, BakedCellsAndTheirMergePass) {
-  for (const char* name : {"far.db", "tdm.db"}) {
+  for (const char* name : {"far.db", "tdm.db", "lod.db"}) {
     bake(name);
     const CellDb db(path(name), CellDb::Mode::read_only);
     EXPECT_TRUE(check_database_meta(db).empty()) << name;
@@ -116,6 +120,10 @@ TEST_F(CellSemantics, BakedCellsAndTheirMergePass) {
   }
   EXPECT_NO_THROW(merge_shards(path("merged.db"), {path("far.db")}, [](const std::string&) {}));
   ASSERT_NE(far_cell(), 0) << "the bake kept no far geometry: nothing below would test it";
+  SqliteDb d(path("lod.db"), SqliteDb::Mode::read_only);
+  SqliteStatement levels(d, "SELECT count(*) FROM far_geometry WHERE level > 0");
+  ASSERT_TRUE(levels.step());
+  EXPECT_GT(levels.column_int(0), 0) << "the default bake drew no chunk at a simplified level";
 }
 
 TEST_F(CellSemantics, MovedCellBoundsAreFoundAgainstTheGrid) {
