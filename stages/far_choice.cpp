@@ -114,10 +114,47 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
   return choose_far_field(eyes, far_chunks, samples, mode, geometry_factor, mesh_source, FarChoiceBoundSource{});
 }
 
+namespace {
+
+FarChoice choose_with_levels(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
+                             std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor,
+                             const FarChoiceMeshSource& mesh_source, const FarChoiceBoundSource& bound_source,
+                             std::span<const FarLodChoice> lods);
+
+}  // namespace
+
 FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
                            std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor,
                            const FarChoiceMeshSource& mesh_source, const FarChoiceBoundSource& bound_source,
                            std::span<const FarLodChoice> lods) {
+  if (lods.empty())
+    return choose_with_levels(eyes, far_chunks, samples, mode, geometry_factor, mesh_source, bound_source, {});
+  if (lods.size() != far_chunks.size())
+    throw std::invalid_argument("choose_far_field: " + std::to_string(lods.size()) + " level choices for " +
+                                std::to_string(far_chunks.size()) + " far chunks");
+  // Exact geometry first: a chunk the exact choice already draws stays exact
+  // (no image error where it was affordable); levels only bring in chunks
+  // whose exact triangles no tile could pay for.
+  const FarChoice exact =
+      choose_with_levels(eyes, far_chunks, samples, mode, geometry_factor, mesh_source, bound_source, {});
+  std::vector<FarLodChoice> levels(lods.begin(), lods.end());
+  bool any = false;
+  for (const FarPiece& p : exact.pieces) {
+    const auto it = std::lower_bound(far_chunks.begin(), far_chunks.end(), p.chunk.id,
+                                     [](const ChunkRef& c, std::int64_t v) { return c.id < v; });
+    if (it != far_chunks.end() && it->id == p.chunk.id) levels[std::size_t(it - far_chunks.begin())] = {};
+  }
+  for (const FarLodChoice& l : levels) any |= l.level > 0;
+  if (!any) return exact;
+  return choose_with_levels(eyes, far_chunks, samples, mode, geometry_factor, mesh_source, bound_source, levels);
+}
+
+namespace {
+
+FarChoice choose_with_levels(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
+                             std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor,
+                             const FarChoiceMeshSource& mesh_source, const FarChoiceBoundSource& bound_source,
+                             std::span<const FarLodChoice> lods) {
   FarChoice out;
   if (!lods.empty() && lods.size() != far_chunks.size())
     throw std::invalid_argument("choose_far_field: " + std::to_string(lods.size()) + " level choices for " +
@@ -442,6 +479,8 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
   for (const FarPiece& p : out.pieces) out.geometry_triangles += p.triangle_count();
   return out;
 }
+
+}  // namespace
 
 VertexTriangles vertex_triangles(const Chunk& chunk) {
   VertexTriangles a;

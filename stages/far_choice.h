@@ -147,12 +147,13 @@ using FarChoiceBoundSource = std::function<std::uint64_t(std::size_t sample, int
 // FaceFarChoice::replaced_triangles. Calls each source at most once per
 // face, deterministically (a bound, when asked, before the mesh).
 //
-// With `lods` (one per far chunk, in the same order; empty: none), a far
-// chunk with a level takes it whole in place of its seen triangles when the
-// level has fewer triangles than they are (or than the chunk, seen whole):
-// one element covering every tile that saw any of it, of the level's
-// weight. A level is within the error the caller allows, so it counts as
-// geometry like the exact triangles.
+// With `lods` (one per far chunk, in the same order; empty: none), the
+// choice is made first without them; a chunk that choice draws stays exact.
+// Then it is made again in which every other far chunk with a level takes it
+// whole in place of its seen triangles when the level has fewer triangles
+// than they are (or than the chunk, seen whole): one element covering every
+// tile that saw any of it, of the level's weight. A level is within the
+// error the caller allows, so it counts as geometry like exact triangles.
 FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
                            std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor,
                            const FarChoiceMeshSource& mesh_source, const FarChoiceBoundSource& bound_source,
