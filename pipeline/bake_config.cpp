@@ -118,6 +118,9 @@ const std::map<std::string, Setter>& setters() {
       {"far.lod_error_px", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.far_lod_error_px = number(n, w, "far.lod_error_px", 0, 64);
        }},
+      {"far.lod_replaces_exact", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.far_lod_replaces_exact = text(n, w, "far.lod_replaces_exact", {"on", "off"});
+       }},
       {"far.seen_rings", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.far_seen_rings = int(integer(n, w, "far.seen_rings", 0, 8));
        }},
@@ -361,7 +364,7 @@ std::string describe_bake_config(const BakeConfig& c) {
   o << "up=" << c.up << "\ncells.size=" << c.cell_size << "\nnear.budget=" << c.near_budget
     << "\nnear.budget_fraction=" << c.near_budget_fraction << "\nfar.choice=" << c.far_choice
     << "\nfar.geometry_below=" << c.far_geometry_below << "\nfar.seen_rings=" << c.far_seen_rings
-    << "\nfar.lod_error_px=" << c.far_lod_error_px
+    << "\nfar.lod_error_px=" << c.far_lod_error_px << "\nfar.lod_replaces_exact=" << c.far_lod_replaces_exact
     << "\nfar.geometry_factor=" << c.far_geometry_factor
     << "\nsample.face_size=" << c.face_size << "\nsample.supersample=" << c.supersample
     << "\nsample.near_plane=" << c.near_plane << "\nsample.seam_shell_px=" << c.seam_shell_px

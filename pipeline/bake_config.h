@@ -57,6 +57,11 @@ struct BakeConfig {
   // point of the cell (or a sample), is at most this many pixels of a stored
   // cube face; 0: exact geometry only.
   double far_lod_error_px = 1.0;
+  // "off": a chunk the exact choice already draws stays exact (levels only
+  // bring in chunks no tile could pay for); "on": levels replace exact seen
+  // triangles wherever they cost fewer (whole chunks: no slivers the samples
+  // missed; at 12.7 M +4.8 dB over "off", on the 2 M demo -2.8 dB).
+  std::string far_lod_replaces_exact = "off";
 
   // [sample]
   int face_size = 512;           // stored cube-face resolution, pixels

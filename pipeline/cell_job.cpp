@@ -100,6 +100,7 @@ CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::str
   if (c.far_seen_rings != 0) in.text("seen_rings").u64(std::uint64_t(c.far_seen_rings));
   in.text("geometry_factor").f64(c.far_geometry_factor);
   if (c.far_lod_error_px != 0) in.text("lod_error_px").f64(c.far_lod_error_px);
+  if (c.far_lod_error_px != 0 && c.far_lod_replaces_exact != "off") in.text("lod_replaces_exact");
   h.input = in.hex();
   return h;
 }
@@ -460,7 +461,8 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
   work.far = choose_far_field(
       eyes, work.far_chunks, samples, parse_far_choice_mode(config.far_choice), config.far_geometry_factor,
       [&](std::size_t sample, int face) -> const FaceMesh& { return face_mesh(work, config, sample, face); },
-      [&](std::size_t sample, int face) { return face_mesh_bound(work, config, sample, face); }, lods);
+      [&](std::size_t sample, int face) { return face_mesh_bound(work, config, sample, face); }, lods,
+      config.far_lod_replaces_exact == "off");
   for (SampleWork& s : work.samples)  // bounded faces the choice never meshed: drawn wholly as geometry
     for (auto& p : s.pending) p.reset();
   drop_replaced_and_measure_kept(work, config);

@@ -126,9 +126,9 @@ FarChoice choose_with_levels(const Box3d& eyes, std::span<const ChunkRef> far_ch
 FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
                            std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor,
                            const FarChoiceMeshSource& mesh_source, const FarChoiceBoundSource& bound_source,
-                           std::span<const FarLodChoice> lods) {
-  if (lods.empty())
-    return choose_with_levels(eyes, far_chunks, samples, mode, geometry_factor, mesh_source, bound_source, {});
+                           std::span<const FarLodChoice> lods, bool exact_first) {
+  if (lods.empty() || !exact_first)
+    return choose_with_levels(eyes, far_chunks, samples, mode, geometry_factor, mesh_source, bound_source, lods);
   if (lods.size() != far_chunks.size())
     throw std::invalid_argument("choose_far_field: " + std::to_string(lods.size()) + " level choices for " +
                                 std::to_string(far_chunks.size()) + " far chunks");

@@ -147,9 +147,10 @@ using FarChoiceBoundSource = std::function<std::uint64_t(std::size_t sample, int
 // FaceFarChoice::replaced_triangles. Calls each source at most once per
 // face, deterministically (a bound, when asked, before the mesh).
 //
-// With `lods` (one per far chunk, in the same order; empty: none), the
-// choice is made first without them; a chunk that choice draws stays exact.
-// Then it is made again in which every other far chunk with a level takes it
+// With `lods` (one per far chunk, in the same order; empty: none) and
+// `exact_first`, the choice is made first without them; a chunk that choice
+// draws stays exact. Then (at once without `exact_first`) it is made with
+// them: every other far chunk with a level takes it
 // whole in place of its seen triangles when the level has fewer triangles
 // than they are (or than the chunk, seen whole): one element covering every
 // tile that saw any of it, of the level's weight. A level is within the
@@ -157,7 +158,7 @@ using FarChoiceBoundSource = std::function<std::uint64_t(std::size_t sample, int
 FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
                            std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor,
                            const FarChoiceMeshSource& mesh_source, const FarChoiceBoundSource& bound_source,
-                           std::span<const FarLodChoice> lods = {});
+                           std::span<const FarLodChoice> lods = {}, bool exact_first = true);
 
 // Which triangles use each vertex of a chunk (compressed rows: the triangles
 // of vertex v are triangles[offsets[v] .. offsets[v + 1])).

@@ -23,8 +23,8 @@ namespace cellbake {
 namespace {
 
 // The 4 x 4 x 3 m box with a pillar, 2 x 2 cells of 1.5 m baked with the far
-// choice (far.db: exact far geometry rows; lod.db: the default, with the
-// store's simplified chunk levels) or with depth meshes only (tdm.db: face
+// choice (far.db: exact far geometry rows; lod.db: the store's simplified
+// chunk levels wherever they cost less) or with depth meshes only (tdm.db: face
 // meshes), each once per test program and only when a test asks for it (CTest
 // runs each test in a program of its own).
 class CellSemantics : public ::testing::Test {
@@ -40,7 +40,7 @@ class CellSemantics : public ::testing::Test {
                            path(name) +
                            (name == "tdm.db"   ? " --set far.choice=tdm"
                             : name == "far.db" ? " --set far.lod_error_px=0"  // exact rows: triangle lists
-                                               : ""))
+                                               : " --set far.lod_replaces_exact=on"))  // level rows
             .exit_code,
         0);
   }
@@ -123,7 +123,7 @@ TEST_F(CellSemantics, BakedCellsAndTheirMergePass) {
   SqliteDb d(path("lod.db"), SqliteDb::Mode::read_only);
   SqliteStatement levels(d, "SELECT count(*) FROM far_geometry WHERE level > 0");
   ASSERT_TRUE(levels.step());
-  EXPECT_GT(levels.column_int(0), 0) << "the default bake drew no chunk at a simplified level";
+  EXPECT_GT(levels.column_int(0), 0) << "the bake drew no chunk at a simplified level";
 }
 
 TEST_F(CellSemantics, MovedCellBoundsAreFoundAgainstTheGrid) {
