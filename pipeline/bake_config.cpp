@@ -119,7 +119,7 @@ const std::map<std::string, Setter>& setters() {
          c.far_lod_error_px = number(n, w, "far.lod_error_px", 0, 64);
        }},
       {"far.lod_replaces_exact", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.far_lod_replaces_exact = text(n, w, "far.lod_replaces_exact", {"on", "off"});
+         c.far_lod_replaces_exact = text(n, w, "far.lod_replaces_exact", {"on", "off", "auto"});
        }},
       {"far.seen_rings", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.far_seen_rings = int(integer(n, w, "far.seen_rings", 0, 8));

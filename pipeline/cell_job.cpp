@@ -26,6 +26,25 @@
 namespace cellbake {
 namespace {
 
+// far.lod_replaces_exact = "auto": a far chunk's level replaces its exact
+// seen triangles when their median width is under this many cube-face pixels
+// from the nearest eye (measured at 12.7 M, cells 28-36: 1 px 36.91 dB
+// median over random views, levels everywhere 36.77, never 32.00).
+constexpr double kThinTrianglePixels = 1.0;
+
+// Which of work.far_chunks (sorted by id) some sample saw, by index.
+std::vector<char> seen_far_chunks(const CellWork& work) {
+  std::vector<char> seen(work.far_chunks.size(), 0);
+  for (const SampleWork& s : work.samples)
+    for (const CubeFace& face : s.cube.faces)
+      for (const SeenChunk& c : face.seen) {
+        const auto it = std::lower_bound(work.far_chunks.begin(), work.far_chunks.end(), c.id,
+                                         [](const ChunkRef& r, std::int64_t v) { return r.id < v; });
+        if (it != work.far_chunks.end() && it->id == c.id) seen[std::size_t(it - work.far_chunks.begin())] = 1;
+      }
+  return seen;
+}
+
 using Clock = std::chrono::steady_clock;
 
 class StageTimer {
@@ -100,7 +119,9 @@ CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::str
   if (c.far_seen_rings != 0) in.text("seen_rings").u64(std::uint64_t(c.far_seen_rings));
   in.text("geometry_factor").f64(c.far_geometry_factor);
   if (c.far_lod_error_px != 0) in.text("lod_error_px").f64(c.far_lod_error_px);
-  if (c.far_lod_error_px != 0 && c.far_lod_replaces_exact != "off") in.text("lod_replaces_exact");
+  if (c.far_lod_error_px != 0 && c.far_lod_replaces_exact == "on") in.text("lod_replaces_exact");
+  if (c.far_lod_error_px != 0 && c.far_lod_replaces_exact == "auto")
+    in.text("lod_replaces_exact").text(c.far_lod_replaces_exact).f64(kThinTrianglePixels);
   h.input = in.hex();
   return h;
 }
@@ -444,25 +465,36 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
     samples.push_back(c);
   }
   // Each far chunk's coarsest stored level within far.lod_error_px, seen
-  // from the nearest eye the viewer may draw the cell from.
+  // from the nearest eye the viewer may draw the cell from, and whether it
+  // may replace the chunk's exact seen triangles (far.lod_replaces_exact;
+  // "auto": where the chunk's triangles are thinner than the pixel rays that
+  // found them, so what the samples hit may miss what other eyes see).
   std::vector<FarLodChoice> lods;
   if (config.far_lod_error_px > 0) {
     lods.resize(work.far_chunks.size());
+    std::vector<char> seen;
+    if (config.far_lod_replaces_exact == "auto") seen = seen_far_chunks(work);
     for (std::size_t i = 0; i < work.far_chunks.size(); ++i) {
       const std::vector<ChunkLodRef> levels = source.lods(work.far_chunks[i].id);
       if (levels.empty()) continue;
-      const double allowed =
-          allowed_lod_error(box_distance(eyes, work.far_chunks[i].bounds), config.far_lod_error_px, config.face_size);
+      const double distance = box_distance(eyes, work.far_chunks[i].bounds);
+      const double allowed = allowed_lod_error(distance, config.far_lod_error_px, config.face_size);
       lods[i].level = choose_lod_level(levels, allowed);
+      if (lods[i].level == 0) continue;
       for (const ChunkLodRef& l : levels)
         if (l.level == lods[i].level) lods[i].triangles = l.triangle_count;
+      if (config.far_lod_replaces_exact == "off")
+        lods[i].replaces_exact = false;
+      else if (config.far_lod_replaces_exact == "auto")
+        lods[i].replaces_exact =
+            seen[i] && seen_subset_may_miss(median_triangle_width(*source.load(work.far_chunks[i].id)), distance,
+                                            kThinTrianglePixels, config.face_size);
     }
   }
   work.far = choose_far_field(
       eyes, work.far_chunks, samples, parse_far_choice_mode(config.far_choice), config.far_geometry_factor,
       [&](std::size_t sample, int face) -> const FaceMesh& { return face_mesh(work, config, sample, face); },
-      [&](std::size_t sample, int face) { return face_mesh_bound(work, config, sample, face); }, lods,
-      config.far_lod_replaces_exact == "off");
+      [&](std::size_t sample, int face) { return face_mesh_bound(work, config, sample, face); }, lods);
   for (SampleWork& s : work.samples)  // bounded faces the choice never meshed: drawn wholly as geometry
     for (auto& p : s.pending) p.reset();
   drop_replaced_and_measure_kept(work, config);

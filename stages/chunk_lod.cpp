@@ -142,4 +142,31 @@ int choose_lod_level(std::span<const ChunkLodRef> levels, double allowed_error) 
   return best;
 }
 
+double median_triangle_width(const Chunk& chunk) {
+  std::vector<double> widths;
+  widths.reserve(chunk.triangle_count());
+  for (std::size_t t = 0; t < chunk.triangle_count(); ++t) {
+    const Vec3f& a = chunk.positions[chunk.indices[3 * t]];
+    const Vec3f& b = chunk.positions[chunk.indices[3 * t + 1]];
+    const Vec3f& c = chunk.positions[chunk.indices[3 * t + 2]];
+    const Vec3d ab{double(b.x) - a.x, double(b.y) - a.y, double(b.z) - a.z};
+    const Vec3d ac{double(c.x) - a.x, double(c.y) - a.y, double(c.z) - a.z};
+    const Vec3d bc{double(c.x) - b.x, double(c.y) - b.y, double(c.z) - b.z};
+    const auto length = [](const Vec3d& v) { return std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z); };
+    const Vec3d n{ab.y * ac.z - ab.z * ac.y, ab.z * ac.x - ab.x * ac.z, ab.x * ac.y - ab.y * ac.x};
+    const double twice_area = length(n);
+    const double longest = std::max({length(ab), length(ac), length(bc)});
+    if (!std::isfinite(twice_area) || !std::isfinite(longest) || !(longest > 0) || !(twice_area > 0)) continue;
+    widths.push_back(twice_area / longest);
+  }
+  if (widths.empty()) return 0;
+  const auto middle = widths.begin() + std::ptrdiff_t(widths.size() / 2);
+  std::nth_element(widths.begin(), middle, widths.end());
+  return *middle;
+}
+
+bool seen_subset_may_miss(double width, double distance, double width_px, int face_size) {
+  return width < allowed_lod_error(distance, width_px, face_size);
+}
+
 }  // namespace cellbake

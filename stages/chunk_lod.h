@@ -57,4 +57,18 @@ double allowed_lod_error(double distance, double error_px, int face_size);
 // draw the chunk itself). `levels` ascend by level, errors growing.
 int choose_lod_level(std::span<const ChunkLodRef> levels, double allowed_error);
 
+// The median over `chunk`'s triangles of their width: twice the area over
+// the longest edge, the height across it (how thin a triangle is, in the
+// chunk's units). Triangles with a non-finite or coincident corner, or no
+// area, are skipped; 0 when none is left.
+double median_triangle_width(const Chunk& chunk);
+
+// Whether the triangles a sample saw of a chunk may miss what other eyes of
+// the cell see of it: its triangles (of median width `width`) are narrower
+// than `width_px` pixels of a cube face `face_size` pixels wide seen from
+// `distance` metres, so rays through pixel centres skip some of them (thin
+// pipes, rails). Such a chunk is better drawn whole at a simplified level
+// than as the subset the samples hit.
+bool seen_subset_may_miss(double width, double distance, double width_px, int face_size);
+
 }  // namespace cellbake

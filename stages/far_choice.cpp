@@ -126,26 +126,32 @@ FarChoice choose_with_levels(const Box3d& eyes, std::span<const ChunkRef> far_ch
 FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
                            std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor,
                            const FarChoiceMeshSource& mesh_source, const FarChoiceBoundSource& bound_source,
-                           std::span<const FarLodChoice> lods, bool exact_first) {
-  if (lods.empty() || !exact_first)
+                           std::span<const FarLodChoice> lods) {
+  if (lods.empty())
     return choose_with_levels(eyes, far_chunks, samples, mode, geometry_factor, mesh_source, bound_source, lods);
   if (lods.size() != far_chunks.size())
     throw std::invalid_argument("choose_far_field: " + std::to_string(lods.size()) + " level choices for " +
                                 std::to_string(far_chunks.size()) + " far chunks");
-  // Exact geometry first: a chunk the exact choice already draws stays exact
-  // (no image error where it was affordable); levels only bring in chunks
-  // whose exact triangles no tile could pay for.
-  const FarChoice exact =
-      choose_with_levels(eyes, far_chunks, samples, mode, geometry_factor, mesh_source, bound_source, {});
+  // First the levels that may replace exact triangles; a chunk this choice
+  // draws keeps what it drew (exact triangles where they were affordable),
+  // and the other levels only bring in chunks it could not pay for.
   std::vector<FarLodChoice> levels(lods.begin(), lods.end());
-  bool any = false;
-  for (const FarPiece& p : exact.pieces) {
+  bool deferred = false;
+  for (FarLodChoice& l : levels)
+    if (l.level > 0 && !l.replaces_exact) l = {}, deferred = true;
+  const FarChoice first =
+      choose_with_levels(eyes, far_chunks, samples, mode, geometry_factor, mesh_source, bound_source, levels);
+  if (!deferred) return first;
+  std::vector<char> drawn(far_chunks.size(), 0);
+  for (const FarPiece& p : first.pieces) {
     const auto it = std::lower_bound(far_chunks.begin(), far_chunks.end(), p.chunk.id,
                                      [](const ChunkRef& c, std::int64_t v) { return c.id < v; });
-    if (it != far_chunks.end() && it->id == p.chunk.id) levels[std::size_t(it - far_chunks.begin())] = {};
+    if (it != far_chunks.end() && it->id == p.chunk.id) drawn[std::size_t(it - far_chunks.begin())] = 1;
   }
-  for (const FarLodChoice& l : levels) any |= l.level > 0;
-  if (!any) return exact;
+  bool joined = false;
+  for (std::size_t i = 0; i < lods.size(); ++i)
+    if (lods[i].level > 0 && !lods[i].replaces_exact && !drawn[i]) levels[i] = lods[i], joined = true;
+  if (!joined) return first;
   return choose_with_levels(eyes, far_chunks, samples, mode, geometry_factor, mesh_source, bound_source, levels);
 }
 

@@ -71,6 +71,10 @@ struct FarPiece {
 struct FarLodChoice {
   int level = 0;
   std::uint32_t triangles = 0;
+  // Whether the level may replace the chunk's exact seen triangles where it
+  // costs fewer; when not, it only brings in a chunk the choice would
+  // otherwise not draw at all.
+  bool replaces_exact = true;
 };
 
 struct FarChoice {
@@ -147,18 +151,19 @@ using FarChoiceBoundSource = std::function<std::uint64_t(std::size_t sample, int
 // FaceFarChoice::replaced_triangles. Calls each source at most once per
 // face, deterministically (a bound, when asked, before the mesh).
 //
-// With `lods` (one per far chunk, in the same order; empty: none) and
-// `exact_first`, the choice is made first without them; a chunk that choice
-// draws stays exact. Then (at once without `exact_first`) it is made with
-// them: every other far chunk with a level takes it
-// whole in place of its seen triangles when the level has fewer triangles
-// than they are (or than the chunk, seen whole): one element covering every
-// tile that saw any of it, of the level's weight. A level is within the
-// error the caller allows, so it counts as geometry like exact triangles.
+// With `lods` (one per far chunk, in the same order; empty: none), the
+// choice is made first with the levels that replace exact triangles
+// (FarLodChoice::replaces_exact): such a chunk takes its level whole in
+// place of its seen triangles when the level has fewer triangles than they
+// are (or than the chunk, seen whole): one element covering every tile that
+// saw any of it, of the level's weight. A chunk that choice draws keeps what
+// it drew; the other levels then join for the chunks it does not draw, and
+// the choice is made again. A level is within the error the caller allows,
+// so it counts as geometry like exact triangles.
 FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chunks,
                            std::span<const FarChoiceSample> samples, FarChoiceMode mode, double geometry_factor,
                            const FarChoiceMeshSource& mesh_source, const FarChoiceBoundSource& bound_source,
-                           std::span<const FarLodChoice> lods = {}, bool exact_first = true);
+                           std::span<const FarLodChoice> lods = {});
 
 // Which triangles use each vertex of a chunk (compressed rows: the triangles
 // of vertex v are triangles[offsets[v] .. offsets[v + 1])).

@@ -127,3 +127,30 @@ TEST(ChunkLod, TheLevelIsTheCoarsestWithinThePixelBudget) {
 
 }  // namespace
 }  // namespace cellbake
+
+TEST(ChunkLod, TheMedianWidthIsTheHeightAcrossTheLongestEdge) {
+  // Three right triangles with legs (1, h): the height across the
+  // hypotenuse is h / sqrt(1 + h^2). A degenerate and a NaN triangle are skipped.
+  Chunk chunk;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const double heights[] = {0.1, 0.2, 0.4};
+  for (double h : heights) {
+    const std::uint32_t base = std::uint32_t(chunk.positions.size());
+    chunk.positions.push_back({0, 0, 0});
+    chunk.positions.push_back({1, 0, 0});
+    chunk.positions.push_back({0, float(h), 0});
+    chunk.indices.insert(chunk.indices.end(), {base, base + 1, base + 2});
+  }
+  const std::uint32_t base = std::uint32_t(chunk.positions.size());
+  chunk.positions.push_back({0, 0, 0});
+  chunk.positions.push_back({2, 0, 0});
+  chunk.positions.push_back({nan, 1, 0});
+  chunk.indices.insert(chunk.indices.end(), {base, base + 1, base + 1, base, base + 1, base + 2});
+  const double h = float(0.2);
+  EXPECT_NEAR(median_triangle_width(chunk), h / std::sqrt(1 + h * h), 1e-6);
+  EXPECT_EQ(median_triangle_width(Chunk{}), 0.0);
+  // 1 px of a 512 px face at 10 m spans 2 * 10 / 512 = 0.039 m.
+  EXPECT_TRUE(seen_subset_may_miss(0.03, 10.0, 1.0, 512));
+  EXPECT_FALSE(seen_subset_may_miss(0.05, 10.0, 1.0, 512));
+  EXPECT_FALSE(seen_subset_may_miss(0.03, 0.0, 1.0, 512));
+}

@@ -576,6 +576,47 @@ TEST(FarChoiceChoose, ASimplifiedLevelTakesTilesTheExactTrianglesCouldNot) {
                std::invalid_argument);
 }
 
+TEST(FarChoiceChoose, ALevelThatMayNotReplaceExactTrianglesOnlyTakesWhatTheyCouldNot) {
+  // +X: chunk 1, 3000 of its 4000 triangles seen against 3200 depth-mesh
+  // triangles (exact too dear); -X: chunk 2, 100 of its 1000 seen against
+  // 3200 (exact affordable). Each has a level: 700 and 50 triangles.
+  std::vector<ChunkRef> far = {ref(1, 4000), ref(2, 1000)};
+  SampleInput s;
+  for (int face = 0; face < 2; ++face) {
+    SeenChunk seen;
+    seen.id = face + 1;
+    for (std::uint32_t t = 0; t < (face == 0 ? 3000u : 100u); ++t) {
+      seen.triangles.push_back(t);
+      seen.triangle_tiles.push_back(std::uint16_t(1u << (t % kFarTilesPerFace)));
+      seen.tiles |= seen.triangle_tiles.back();
+    }
+    s.seen[std::size_t(face)].push_back(std::move(seen));
+    for (int tile = 0; tile < kFarTilesPerFace; ++tile) add_tile_triangles(s.meshes[std::size_t(face)], tile, 200);
+  }
+  std::vector<FarChoiceSample> samples = {s.view()};
+  const Box3d eyes = Box3d::cube({0, 0, 0}, 1);
+  const auto level_of = [](const FarChoice& c, std::int64_t id) {
+    for (const FarPiece& p : c.pieces)
+      if (p.chunk.id == id) return p.level;
+    return -1;
+  };
+  // Neither level may replace exact triangles: chunk 2 stays exact (its 100
+  // seen triangles), chunk 1, which the exact choice could not pay for, takes its level.
+  std::vector<FarLodChoice> levels = {{2, 700, false}, {1, 50, false}};
+  const FarChoice kept = choose_far_field(eyes, far, samples, FarChoiceMode::cheapest, 2.0, {}, {}, levels);
+  EXPECT_EQ(level_of(kept, 1), 2);
+  EXPECT_EQ(level_of(kept, 2), 0);
+  EXPECT_EQ(kept.geometry_triangles, 700u + 100u);
+  EXPECT_EQ(kept.faces[0].geometry_tiles, kAllFaceTiles);
+  EXPECT_EQ(kept.faces[1].geometry_tiles, kAllFaceTiles);
+  // Chunk 2's level may replace: its 50 triangles take the place of the 100 seen.
+  levels[1].replaces_exact = true;
+  const FarChoice replaced = choose_far_field(eyes, far, samples, FarChoiceMode::cheapest, 2.0, {}, {}, levels);
+  EXPECT_EQ(level_of(replaced, 1), 2);
+  EXPECT_EQ(level_of(replaced, 2), 1);
+  EXPECT_EQ(replaced.geometry_triangles, 700u + 50u);
+}
+
 TEST(FarChoiceChoose, AMixedFaceTakesGeometryOnlyWhereItIsCheaper) {
   // +Y face: tile 0 sees 2 triangles of chunk 5 against 20 depth-mesh
   // triangles; tile 5 sees 1000 triangles of chunk 6 against 20.
