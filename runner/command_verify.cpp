@@ -51,6 +51,9 @@ void add_verify_command(CLI::App& app) {
                 "Look only from the random views and the sample points, not from the centre and the corners");
   cmd->add_flag("--no-sample-views{false}", opt->verify.sample_views,
                 "Do not look from the cell's sample points");
+  cmd->add_flag("--lod-cut", opt->verify.lod_cut,
+                "Also draw each view as a cut through the store's chunk levels with the cell's triangles, and "
+                "at 1 px of error (the far field's yardstick: psnr_db_cut, psnr_gain_over_cut)");
   cmd->add_option("--threads", opt->verify.threads, "Worker threads (0 = all cores)")
       ->check(CLI::Range(0, 1024));
   cmd->add_option("--worst", opt->verify.worst_views, "Worst views shown as triptychs")

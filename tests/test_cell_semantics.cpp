@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -247,6 +249,30 @@ TEST_F(CellSemantics, FaceMeshesAreCheckedAgainstTheirFaceAndTheFarChoice) {
   expect_found(damaged("tdm.db", "tiles.db", 1,
                        {"UPDATE far_choice SET geometry_tiles = 65535 WHERE cell_id = 1 AND face = 0"}),
                1, "lie within the face's geometry tiles");
+}
+
+TEST_F(CellSemantics, VerifyLodCutMeasuresEveryViewAgainstTheStoresLevels) {
+  bake("lod.db");
+  const std::string report = path("cut-report");
+  const auto v = test::run_cellbake("verify " + path("lod.db") + " --report " + report +
+                                    " --views-per-cell 2 --size 32x24 --threads 1 --quiet --lod-cut");
+  ASSERT_EQ(v.exit_code, 0) << v.output;
+  std::ifstream in(report + "/report.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  std::size_t views = 0;
+  for (const auto& cell : j.at("cells"))
+    for (const auto& view : cell.at("views")) {
+      ++views;
+      ASSERT_TRUE(view.contains("psnr_db_cut")) << view.dump();
+      if (view.at("truth_blank").get<bool>()) continue;
+      // The 1 px cut never draws more than the truth; the cut with the cell's triangles fits them.
+      EXPECT_LE(view.at("triangles_cut_1px").get<double>(), view.at("triangles_truth").get<double>());
+      EXPECT_GE(view.at("cut_error_px").get<double>(), 0.0);
+      if (view.at("triangles_impostor").get<double>() >= view.at("triangles_truth").get<double>())
+        EXPECT_TRUE(view.at("psnr_db_cut").is_null()) << "exact cut, identical to the truth: " << view.dump();
+    }
+  EXPECT_GE(views, 8u);
+  EXPECT_GT(j.at("summary").at("psnr_gain_over_cut").at("count").get<int>(), 0);
 }
 
 TEST_F(CellSemantics, VerifyFallsBackPerCellOnDamagedFarGeometry) {

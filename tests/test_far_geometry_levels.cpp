@@ -3,6 +3,7 @@
 // check_cell against a source's levels, and the viewer's decoded pieces.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -18,6 +19,7 @@
 #include "tests/fixture_memory_chunk_source.h"
 #include "tests/test_support.h"
 #include "viewer/decoded_cell.h"
+#include "viewer/image_metrics.h"
 #include "viewer/scene_drawer.h"
 
 namespace cellbake {
@@ -335,6 +337,35 @@ TEST(FarGeometryLevels, TwoCellsDrawTheLevelFromOneCacheEntry) {
   EXPECT_EQ(drawer.chunk_stats().uploads, uploads);  // the first cell's upload drawn again
   EXPECT_EQ(source.lod_load_count(), loads);
   EXPECT_EQ(source.load_count(), chunk_loads);  // the chunk itself never loaded for drawing
+}
+
+// `verify --lod-cut`'s yardstick: chunk 5 seen from 10 m above with 1/16 of
+// 1 m a pixel (0.0625 m): level 1 (0.01 m, 0.16 px) and level 2 (0.5 m, 8 px).
+TEST(FarGeometryLevels, TheLodCutDrawsEachChunkAtTheLevelItsPixelErrorAllows) {
+  const SourceWithLevels source;
+  SceneDrawer drawer(std::shared_ptr<GlContext>(create_headless_gl_context(1, 1)), source);
+  const RenderCamera camera = test::camera_down({101, 1, 10}, 0.05);
+  SceneDrawOptions options;
+  ViewFrame truth, frame;
+  drawer.draw_truth(camera, 16, 16, options, truth);
+  LodCut cut;
+  const auto centre_colour = [&] { return frame.color[8 * 16 + 8]; };
+  drawer.draw_lod_cut(camera, 16, 16, options, 0, 0.1, frame, &cut);  // exact: the truth itself
+  EXPECT_EQ(cut.levels, std::vector<int>{0});
+  EXPECT_EQ(cut.triangles, 4u);
+  EXPECT_TRUE(std::isinf(compare_frames(frame, truth).psnr_db));
+  const SceneFrameStats green = drawer.draw_lod_cut(camera, 16, 16, options, 0, 1.0, frame, &cut);
+  EXPECT_EQ(cut.levels, std::vector<int>{1});
+  EXPECT_EQ(green.chunk_triangles, 2u);
+  EXPECT_GT(centre_colour().g, 4 * centre_colour().r);
+  drawer.draw_lod_cut(camera, 16, 16, options, 0, 10.0, frame, &cut);
+  EXPECT_EQ(cut.levels, std::vector<int>{2});
+  EXPECT_EQ(cut.triangles, 1u);
+  // By triangles: the finest cut that fits.
+  for (const auto& [budget, level] : std::vector<std::pair<std::uint64_t, int>>{{4, 0}, {3, 1}, {2, 1}, {1, 2}}) {
+    drawer.draw_lod_cut(camera, 16, 16, options, budget, 0, frame, &cut);
+    EXPECT_EQ(cut.levels, std::vector<int>{level}) << budget << " triangles";
+  }
 }
 
 TEST(FarGeometryLevels, MergeCarriesTheLevel) {

@@ -4,7 +4,9 @@
 #include <chrono>
 #include <cmath>
 
+#include "stages/chunk_lod.h"
 #include "stages/render/gl_functions.h"
+#include "viewer/decoded_cell.h"
 #include "viewer/shared_gl_context.h"
 #include "viewer/view_camera.h"
 
@@ -188,6 +190,46 @@ SceneFrameStats SceneDrawer::draw_truth(const RenderCamera& camera, int width, i
     throw;
   }
   set_wireframe(false);
+  return finish({}, before, start, width, height, out);
+}
+
+SceneFrameStats SceneDrawer::draw_lod_cut(const RenderCamera& camera, int width, int height,
+                                          const SceneDrawOptions& options, std::uint64_t max_triangles,
+                                          double error_px, ViewFrame& out, LodCut* cut_out) {
+  const double start = now_ms();
+  const ChunkRendererStats before = chunks_.stats();
+  const std::vector<ChunkRef> refs = chunk_refs_in_view(camera, source_);
+  // Metres per pixel at a chunk's nearest point: the view's height spans
+  // distance * (tan_top - tan_bottom) there.
+  const double per_distance = (camera.tan_top - camera.tan_bottom) / double(height);
+  std::vector<LodCutChunk> chunks;
+  chunks.reserve(refs.size());
+  for (const ChunkRef& r : refs) {
+    const double distance = box_distance(Box3d{camera.eye, camera.eye}, r.bounds);
+    chunks.push_back({distance * per_distance, std::uint32_t(r.triangle_count), source_.lods(r.id)});
+  }
+  LodCut cut = max_triangles > 0 ? lod_cut_for_triangles(chunks, max_triangles) : lod_cut_at_error(chunks, error_px);
+  std::vector<std::int64_t> ids;
+  std::unordered_map<std::int64_t, std::pair<std::int64_t, int>> level_of_id;
+  for (std::size_t i = 0; i < refs.size(); ++i) {
+    const int level = cut.levels[i];
+    const std::int64_t id = level > 0 ? lod_cache_id(refs[i].id, level) : refs[i].id;
+    ids.push_back(id);
+    if (level > 0) level_of_id.emplace(id, std::make_pair(refs[i].id, level));
+  }
+  chunks_.begin_frame(width, height);
+  set_wireframe(options.wireframe);
+  try {
+    chunks_.draw(camera, Box3d{}, ids, [&](std::int64_t id) {
+      const auto it = level_of_id.find(id);
+      return it == level_of_id.end() ? source_.load(id) : source_.load_lod(it->second.first, it->second.second);
+    });
+  } catch (...) {
+    set_wireframe(false);
+    throw;
+  }
+  set_wireframe(false);
+  if (cut_out) *cut_out = std::move(cut);
   return finish({}, before, start, width, height, out);
 }
 

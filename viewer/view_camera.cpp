@@ -58,7 +58,7 @@ bool box_in_view(const RenderCamera& c, const Box3d& box) {
   return true;
 }
 
-std::vector<std::int64_t> chunks_in_view(const RenderCamera& c, const ChunkSource& source) {
+std::vector<ChunkRef> chunk_refs_in_view(const RenderCamera& c, const ChunkSource& source) {
   const Box3d model = source.model_bounds();
   if (model.empty()) return {};
   double reach = -std::numeric_limits<double>::infinity();
@@ -72,10 +72,16 @@ std::vector<std::int64_t> chunks_in_view(const RenderCamera& c, const ChunkSourc
   for (double d : {c.near_plane, reach})
     for (double s : {c.tan_left, c.tan_right})
       for (double t : {c.tan_bottom, c.tan_top}) frustum_box.expand(c.eye + (c.forward + c.right * s + c.up * t) * d);
-  std::vector<std::int64_t> ids;
+  std::vector<ChunkRef> refs;
   for (const ChunkRef& ref : source.query(frustum_box))
-    if (box_in_view(c, ref.bounds)) ids.push_back(ref.id);
-  std::sort(ids.begin(), ids.end());
+    if (box_in_view(c, ref.bounds)) refs.push_back(ref);
+  std::sort(refs.begin(), refs.end(), [](const ChunkRef& a, const ChunkRef& b) { return a.id < b.id; });
+  return refs;
+}
+
+std::vector<std::int64_t> chunks_in_view(const RenderCamera& c, const ChunkSource& source) {
+  std::vector<std::int64_t> ids;
+  for (const ChunkRef& ref : chunk_refs_in_view(c, source)) ids.push_back(ref.id);
   return ids;
 }
 

@@ -34,4 +34,7 @@ bool box_in_view(const RenderCamera& camera, const Box3d& box);
 // kept. Loads nothing.
 std::vector<std::int64_t> chunks_in_view(const RenderCamera& camera, const ChunkSource& source);
 
+// The same chunks with their references (bounds, triangle counts), sorted by id.
+std::vector<ChunkRef> chunk_refs_in_view(const RenderCamera& camera, const ChunkSource& source);
+
 }  // namespace cellbake

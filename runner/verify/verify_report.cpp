@@ -157,6 +157,12 @@ double median_of(const std::vector<double>& values) {
   return a == b ? a : 0.5 * (a + b);  // inf + inf stays inf; inf - inf is avoided
 }
 
+double psnr_difference(double a, double b) {
+  if (std::isnan(a) || std::isnan(b)) return std::numeric_limits<double>::quiet_NaN();
+  if (std::isinf(a) && std::isinf(b) && (a > 0) == (b > 0)) return 0;
+  return a - b;
+}
+
 const std::vector<MetricInfo>& verify_metrics() {
   static const std::vector<MetricInfo> metrics{
       {"psnr_db", true, &VerifyViewResult::psnr_db},
@@ -170,6 +176,11 @@ const std::vector<MetricInfo>& verify_metrics() {
       {"triangle_ratio", false, &VerifyViewResult::triangle_ratio},
       {"ms_impostor", false, &VerifyViewResult::ms_impostor},
       {"ms_truth", false, &VerifyViewResult::ms_truth},
+      {"psnr_db_cut", true, &VerifyViewResult::psnr_db_cut},
+      {"psnr_gain_over_cut", true, &VerifyViewResult::psnr_gain_over_cut},
+      {"cut_error_px", false, &VerifyViewResult::cut_error_px},
+      {"psnr_db_cut_1px", true, &VerifyViewResult::psnr_db_cut_1px},
+      {"triangles_cut_1px", false, &VerifyViewResult::triangles_cut_1px},
   };
   return metrics;
 }
@@ -246,6 +257,10 @@ nlohmann::json to_json(const VerifyViewResult& v) {
           {"triangle_ratio", number_or_null(v.triangle_ratio)},
           {"ms_impostor", number_or_null(v.ms_impostor)},
           {"ms_truth", number_or_null(v.ms_truth)},
+          {"psnr_db_cut", number_or_null(v.psnr_db_cut)},
+          {"cut_error_px", number_or_null(v.cut_error_px)},
+          {"psnr_db_cut_1px", number_or_null(v.psnr_db_cut_1px)},
+          {"triangles_cut_1px", number_or_null(v.triangles_cut_1px)},
           {"far_budget_sweep", [&] {
              nlohmann::json points = nlohmann::json::array();
              for (const FarBudgetPoint& p : v.far_budget_sweep)
@@ -326,6 +341,14 @@ VerifyCellResult cell_from_json(const nlohmann::json& j) {
     r.triangle_ratio = number_from(v, "triangle_ratio", kNaN);
     r.ms_impostor = number_from(v, "ms_impostor", kNaN);
     r.ms_truth = number_from(v, "ms_truth", kNaN);
+    // Only with --lod-cut; a null PSNR is +infinity (identical images).
+    if (v.contains("psnr_db_cut")) {
+      r.psnr_db_cut = number_from(v, "psnr_db_cut", std::numeric_limits<double>::infinity());
+      r.cut_error_px = number_from(v, "cut_error_px", kNaN);
+      r.psnr_db_cut_1px = number_from(v, "psnr_db_cut_1px", std::numeric_limits<double>::infinity());
+      r.triangles_cut_1px = number_from(v, "triangles_cut_1px", kNaN);
+      r.psnr_gain_over_cut = psnr_difference(r.psnr_db, r.psnr_db_cut);
+    }
     c.views.push_back(r);
   }
   return c;
@@ -515,6 +538,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
        "<th>median, all reference views</th></tr>\n";
   for (const auto& m : verify_metrics()) {
     const MetricStats st = metric_stats(cells, m);
+    if (st.count == 0 && std::isnan(st.median_reference)) continue;  // not measured (e.g. psnr_db_cut without --lod-cut)
     h << "<tr><td class=\"l\">" << m.name << "</td><td>" << fmt(st.median) << "</td><td>" << fmt(st.worst)
       << "</td><td>" << (st.count ? std::to_string(st.worst_cell) : "&ndash;") << "</td><td>"
       << fmt(st.median_centre) << "</td><td>" << fmt(st.median_corner) << "</td><td>" << fmt(st.median_sample)

@@ -40,6 +40,15 @@ struct VerifyViewResult {
   // at most 1). NaN when the truth draws nothing.
   double triangle_ratio = std::numeric_limits<double>::quiet_NaN();
   double ms_impostor = 0, ms_truth = 0;  // warm frame, wall clock
+  // `verify --lod-cut` (NaN otherwise): the model drawn as a view-dependent
+  // cut through the store's chunk levels (stages/lod_cut.h), the yardstick
+  // of issue #35: with the impostor's triangles (at the threshold that fits
+  // them), and at 1 pixel of error.
+  double psnr_db_cut = std::numeric_limits<double>::quiet_NaN();
+  double cut_error_px = std::numeric_limits<double>::quiet_NaN();
+  double psnr_gain_over_cut = std::numeric_limits<double>::quiet_NaN();  // psnr_db - psnr_db_cut
+  double psnr_db_cut_1px = std::numeric_limits<double>::quiet_NaN();
+  double triangles_cut_1px = std::numeric_limits<double>::quiet_NaN();
   // The view drawn once more per budget of `verify --far-budget-sweep` (random views only).
   std::vector<FarBudgetPoint> far_budget_sweep;
 };
@@ -66,6 +75,10 @@ struct VerifyCellResult {
 // Median of the finite-or-infinite (not NaN) values: for an even count the mean
 // of the two middle ones; NaN when there are none. Does not modify `values`.
 double median_of(const std::vector<double>& values);
+
+// a - b for PSNRs that may be +infinity (identical images): 0 when both are,
+// +/-infinity when one is; NaN when either is NaN.
+double psnr_difference(double a, double b);
 
 // One metric's statistics. The headline — count, median, worst — is over the
 // random views (runner/verify/verify_views.h: uniform over each cell's

@@ -154,6 +154,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
                         {"reference_views", options.reference_views},
                         {"far_budget_sweep", options.far_budget_sweep},
                         {"lighting", describe_lighting(shading)}};
+  if (options.lod_cut) params["lod_cut"] = true;  // absent otherwise: earlier resume files stay valid
   const std::string params_key = params.dump();
 
   // Selected done cells, in id order.
@@ -272,6 +273,17 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
               v.far_budget_sweep.push_back(
                   {budget, st.chunk_triangles + st.far_triangles, compare_frames(frame, truth).psnr_db});
             }
+          if (options.lod_cut) {  // the yardstick: the model's chunk levels with the impostor's triangles, and at 1 px
+            ViewFrame frame;
+            LodCut cut;
+            drawer->draw_lod_cut(camera, options.width, options.height, draw_options,
+                                 std::max<std::uint64_t>(1, is.chunk_triangles + is.far_triangles), 0, frame, &cut);
+            v.psnr_db_cut = compare_frames(frame, truth).psnr_db;
+            v.cut_error_px = cut.error_px;
+            drawer->draw_lod_cut(camera, options.width, options.height, draw_options, 0, 1.0, frame, &cut);
+            v.psnr_db_cut_1px = compare_frames(frame, truth).psnr_db;
+            v.triangles_cut_1px = double(cut.triangles);
+          }
           drawer->release_context();
           v.triangles_impostor =
               is.chunk_triangles + is.far_triangles;  // near + far geometry + depth meshes drawn
@@ -295,6 +307,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
         for (const auto& s : row->samples)
           v.distance_from_sample = std::min(v.distance_from_sample, length(plan.eye - s.eye));
         v.psnr_db = m.psnr_db;
+        v.psnr_gain_over_cut = psnr_difference(v.psnr_db, v.psnr_db_cut);
         v.ssim = m.ssim;
         v.hole_fraction = m.hole_fraction;
         v.skin_fraction = m.skin_fraction;
