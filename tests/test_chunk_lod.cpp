@@ -125,9 +125,6 @@ TEST(ChunkLod, TheLevelIsTheCoarsestWithinThePixelBudget) {
   EXPECT_EQ(choose_lod_level({}, 1.0), 0);
 }
 
-}  // namespace
-}  // namespace cellbake
-
 TEST(ChunkLod, TheMedianWidthIsTheHeightAcrossTheLongestEdge) {
   // Three right triangles with legs (1, h): the height across the
   // hypotenuse is h / sqrt(1 + h^2). A degenerate and a NaN triangle are skipped.
@@ -154,3 +151,6 @@ TEST(ChunkLod, TheMedianWidthIsTheHeightAcrossTheLongestEdge) {
   EXPECT_FALSE(seen_subset_may_miss(0.05, 10.0, 1.0, 512));
   EXPECT_FALSE(seen_subset_may_miss(0.03, 0.0, 1.0, 512));
 }
+
+}  // namespace
+}  // namespace cellbake

@@ -222,7 +222,10 @@ SceneFrameStats SceneDrawer::draw_lod_cut(const RenderCamera& camera, int width,
   try {
     chunks_.draw(camera, Box3d{}, ids, [&](std::int64_t id) {
       const auto it = level_of_id.find(id);
-      return it == level_of_id.end() ? source_.load(id) : source_.load_lod(it->second.first, it->second.second);
+      if (it == level_of_id.end()) return source_.load(id);
+      auto level = std::make_shared<Chunk>(*source_.load_lod(it->second.first, it->second.second));
+      level->id = id;  // drawn and cached under its level's id
+      return std::shared_ptr<const Chunk>(std::move(level));
     });
   } catch (...) {
     set_wireframe(false);
