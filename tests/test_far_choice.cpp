@@ -577,9 +577,10 @@ TEST(FarChoiceChoose, ASimplifiedLevelTakesTilesTheExactTrianglesCouldNot) {
 }
 
 TEST(FarChoiceChoose, ALevelThatMayNotReplaceExactTrianglesOnlyTakesWhatTheyCouldNot) {
-  // +X: chunk 1, 3000 of its 4000 triangles seen against 3200 depth-mesh
-  // triangles (exact too dear); -X: chunk 2, 100 of its 1000 seen against
-  // 3200 (exact affordable). Each has a level: 700 and 50 triangles.
+  // +X: chunk 1, 3000 of its 4000 triangles seen against 640 depth-mesh
+  // triangles (exact too dear at a factor of 2, also for the whole cell);
+  // -X: chunk 2, 100 of its 1000 seen against 640 (exact affordable). Each
+  // has a level: 700 and 50 triangles.
   std::vector<ChunkRef> far = {ref(1, 4000), ref(2, 1000)};
   SampleInput s;
   for (int face = 0; face < 2; ++face) {
@@ -591,7 +592,7 @@ TEST(FarChoiceChoose, ALevelThatMayNotReplaceExactTrianglesOnlyTakesWhatTheyCoul
       seen.tiles |= seen.triangle_tiles.back();
     }
     s.seen[std::size_t(face)].push_back(std::move(seen));
-    for (int tile = 0; tile < kFarTilesPerFace; ++tile) add_tile_triangles(s.meshes[std::size_t(face)], tile, 200);
+    for (int tile = 0; tile < kFarTilesPerFace; ++tile) add_tile_triangles(s.meshes[std::size_t(face)], tile, 40);
   }
   std::vector<FarChoiceSample> samples = {s.view()};
   const Box3d eyes = Box3d::cube({0, 0, 0}, 1);

@@ -19,7 +19,7 @@ LodCutChunk halving_chunk(double pixel_size) {
 TEST(LodCut, EachChunkTakesItsCoarsestLevelWithinThePixelError) {
   // Pixel sizes 0.01 m (near) and 0.02 m (farther); the eye inside the third.
   const std::vector<LodCutChunk> chunks = {halving_chunk(0.01), halving_chunk(0.02), halving_chunk(0)};
-  const LodCut exact = lod_cut_at_error(chunks, 0.5);
+  const LodCut exact = lod_cut_at_error(chunks, 0.4);
   EXPECT_EQ(exact.levels, (std::vector<int>{0, 0, 0}));
   EXPECT_EQ(exact.triangles, 3000u);
   const LodCut one = lod_cut_at_error(chunks, 1.0);  // 0.01 m near, 0.02 m farther
