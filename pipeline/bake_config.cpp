@@ -117,7 +117,7 @@ const std::map<std::string, Setter>& setters() {
          c.floors = parse_floor_selection(*v, w + ": 'cells.floors'");
        }},
       {"cells.eye_height", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.eye_height = number(n, w, "cells.eye_height", 0, 1e9);
+         c.eye_height = number(n, w, "cells.eye_height", 0, 1e9);  // 0: 1.7 m in the model's units
        }},
       {"near.budget", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.near_budget = static_cast<std::uint64_t>(integer(n, w, "near.budget", 0, std::int64_t(1) << 40));

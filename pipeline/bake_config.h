@@ -49,10 +49,11 @@ struct BakeConfig {
   double cell_size = 2.0;        // edge of a cubic view cell, model units
   // Floors whose eye layers become the regions (plan_bake, before cell ids are
   // given): `floors` of those `cellbake info` finds, eyes `eye_height` above
-  // each, over the regions' horizontal extent (no regions: the model's). Not
-  // hashed or described: the regions they become are.
+  // each (0: 1.7 m in the units info takes the model in: 1.7, or 170 for
+  // centimetres), over the regions' horizontal extent (no regions: the
+  // model's). Not hashed or described: the regions they become are.
   FloorSelection floors;
-  double eye_height = 1.7;
+  double eye_height = 0;
 
   // [near]
   std::uint64_t near_budget = 100000;  // near-field triangle budget per cell (thesis: 100,000)

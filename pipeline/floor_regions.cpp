@@ -5,7 +5,6 @@
 #include <cstdlib>
 #include <stdexcept>
 
-#include "stages/floor_finder.h"
 
 namespace cellbake {
 namespace {
@@ -84,17 +83,38 @@ FloorRegions floor_regions(const std::vector<double>& heights, const FloorSelect
   return out;
 }
 
-FloorRegions find_floor_regions(const ChunkSource& source, const BakeConfig& config, const std::string& store_name) {
+ModelFloors find_model_floors(const ChunkSource& source, int up_axis) {
+  ModelFloors m;
   FloorFinderParams params;
-  params.up_axis = config.up == "y" ? 1 : 2;
-  const FloorFinderResult found = find_floors(source, params);
+  params.up_axis = up_axis;
+  m.found = find_floors(source, params);
   std::vector<double> heights;
-  for (const Floor& f : found.floors) heights.push_back(f.height);
+  std::vector<std::uint64_t> rays;
+  for (const Floor& f : m.found.floors) heights.push_back(f.height), rays.push_back(f.rays);
+  m.units = units_from_storeys(heights, rays);
+  if (!m.units.metres_plausible && !m.units.fitting.empty()) {
+    m.unit = m.units.fitting.front();
+    params.bin_size /= m.unit.metres;
+    params.min_headroom /= m.unit.metres;
+    params.min_separation /= m.unit.metres;
+    m.found = find_floors(source, params);
+  }
+  return m;
+}
+
+FloorRegions find_floor_regions(const ChunkSource& source, const BakeConfig& config, const std::string& store_name) {
+  const int up_axis = config.up == "y" ? 1 : 2;
+  const ModelFloors floors = find_model_floors(source, up_axis);
+  std::vector<double> heights;
+  for (const Floor& f : floors.found.floors) heights.push_back(f.height);
+  const double eye_height = config.eye_height > 0 ? config.eye_height : kEyeHeightMetres / floors.unit.metres;
   const Box3d bounds = source.model_bounds();
   const std::vector<Box3d> footprints = config.regions.empty() ? std::vector<Box3d>{bounds} : config.regions;
   try {
-    return floor_regions(heights, config.floors, footprints, params.up_axis, config.eye_height, bounds,
-                         config.cell_size);
+    FloorRegions r = floor_regions(heights, config.floors, footprints, up_axis, eye_height, bounds, config.cell_size);
+    r.eye_height = eye_height;
+    r.unit = floors.unit;
+    return r;
   } catch (const std::runtime_error& e) {
     throw std::runtime_error(store_name + ": " + e.what());
   }

@@ -13,7 +13,9 @@
 
 #include "pipeline/bake_config.h"
 #include "stages/chunk_source.h"
+#include "stages/floor_finder.h"
 #include "stages/geometry.h"
+#include "stages/storey_units.h"
 
 namespace cellbake {
 
@@ -24,8 +26,24 @@ struct FloorRegion {
   Box3d region;       // the footprint's horizontal extent at `eye`
 };
 
+// The floors `cellbake info` reports: found with the finder's lengths in
+// metres; when their storeys are no storeys in metres but are in other units
+// (stages/storey_units.h), found again with the lengths (headroom, separation,
+// bins) in the most typical of those, whose metres per unit `unit` then holds.
+struct ModelFloors {
+  FloorFinderResult found;
+  StoreyUnits units;                 // what the first search's storeys say
+  ModelUnit unit{"metres", 1};       // the units taken
+};
+ModelFloors find_model_floors(const ChunkSource& source, int up_axis);
+
+// The default eye height above a floor: 1.7 m, in model units.
+inline constexpr double kEyeHeightMetres = 1.7;
+
 struct FloorRegions {
   std::vector<double> heights;       // every floor found, ascending
+  double eye_height = 0;             // above each floor, model units (config.eye_height, or 1.7 m in `unit`)
+  ModelUnit unit{"metres", 1};       // the units the floors were found in
   std::vector<FloorRegion> regions;  // floor by floor, then footprint by footprint: the bake's regions in order
   // Floors that "all" leaves out, one line each: an eye layer more than a cell
   // above the model's top (a roof), which the bake would refuse as a region.
@@ -47,10 +65,11 @@ FloorRegions floor_regions(const std::vector<double>& heights, const FloorSelect
                            const std::vector<Box3d>& footprints, int up_axis, double eye_height,
                            const Box3d& model_bounds, double cell_size);
 
-// Finds the floors of `source` as `cellbake info` does (config.up, default
-// finder parameters; reads every chunk once) and returns floor_regions for
-// config.floors over config.regions (none: the model's bounds). `store_name`
-// names the store in messages.
+// Finds the floors of `source` as `cellbake info` does (find_model_floors
+// along config.up; reads every chunk once, twice for a model not in metres)
+// and returns floor_regions for config.floors over config.regions (none: the
+// model's bounds), eyes config.eye_height above the floors (0: 1.7 m in the
+// units found). `store_name` names the store in messages.
 FloorRegions find_floor_regions(const ChunkSource& source, const BakeConfig& config, const std::string& store_name);
 
 }  // namespace cellbake

@@ -80,16 +80,23 @@ nlohmann::json floors_json(const BakePlan& plan) {
                         {"first_id", l.first_id},
                         {"last_id", l.last_id}});
   }
-  return {{"found", plan.floors.heights}, {"selected", selected}, {"notes", plan.floors.notes}};
+  return {{"found", plan.floors.heights},
+          {"eye_height", plan.floors.eye_height},
+          {"units", plan.floors.unit.name},
+          {"selected", selected},
+          {"notes", plan.floors.notes}};
 }
 
-void print_floors(const BakePlan& plan, double eye_height) {
+void print_floors(const BakePlan& plan) {
   const char* axis = plan.config.up == "y" ? "y" : "z";
   std::printf("floors: %zu found (as `cellbake info` finds them:", plan.floors.heights.size());
   for (std::size_t f = 0; f < plan.floors.heights.size(); ++f)
     std::printf("%s %zu at %s = %.3g", f ? "," : "", f, axis,
                 std::abs(plan.floors.heights[f]) < 5e-4 ? 0.0 : plan.floors.heights[f]);
-  std::printf("); eyes %g above each\n", eye_height);
+  std::printf("); eyes %g above each", plan.floors.eye_height);
+  if (plan.floors.unit.metres != 1)
+    std::printf(" (model units taken as %s, as `cellbake info` does)", plan.floors.unit.name.c_str());
+  std::printf("\n");
   for (const FloorLine& l : floor_lines(plan))
     std::printf("  floor %d: --region %s: %llu cells, ids %lld..%lld\n", l.floor.floor,
                 region_text(l.floor.region).c_str(), (unsigned long long)l.cells, (long long)l.first_id,
@@ -243,7 +250,7 @@ void run_bake_dry_run(const BakeConfig& given, const BakeCommandOptions& options
               std::filesystem::exists(c.database) ? "exists; a bake resumes it" : "would be created");
   std::printf("store: %s, %llu triangles, up %s\n", c.store.c_str(), (unsigned long long)plan.model_triangles,
               c.up.c_str());
-  if (!plan.floors.regions.empty()) print_floors(plan, given.eye_height);
+  if (!plan.floors.regions.empty()) print_floors(plan);
   std::printf("cells: %zu selected of %llu (cell size %g)", plan.cells.size(), (unsigned long long)plan.cells_total,
               c.cell_size);
   if (!plan.cells.empty())

@@ -10,6 +10,7 @@
 #include "pipeline/bake_config.h"
 #include "pipeline/bake_estimate.h"
 #include "pipeline/cell_grid.h"
+#include "pipeline/floor_regions.h"
 #include "runner/number_text.h"
 #include "runner/store_status.h"
 #include "stages/floor_finder.h"
@@ -19,7 +20,7 @@
 namespace cellbake {
 namespace {
 
-constexpr double kEyeHeight = 1.7;  // above the floor, model units taken as metres
+constexpr double kEyeHeight = kEyeHeightMetres;  // above the floor, metres (pipeline/floor_regions.h)
 constexpr int kTargetCellsPerFloor = 64;
 constexpr std::uint64_t kMinChunks = 16;  // fewer: re-ingest with smaller chunks for a far field
 constexpr std::uint64_t kManyCells = 4096;  // more in a suggested bake: say that units may not be metres
@@ -171,14 +172,6 @@ std::vector<std::string> ingest_warnings(const IngestReport& r) {
   return w;
 }
 
-// The units the found floors' storeys suggest (stages/storey_units.h).
-StoreyUnits storey_units_of(const FloorFinderResult& found) {
-  std::vector<double> heights;
-  std::vector<std::uint64_t> rays;
-  for (const Floor& f : found.floors) heights.push_back(f.height), rays.push_back(f.rays);
-  return units_from_storeys(heights, rays);
-}
-
 void print_json(const GeometryStore& store, const InfoModelFile* model, const std::string& ingest,
                 const UpUsed& up, const FloorFinderResult& found, const Suggestion& s, const StoreyUnits& units) {
   nlohmann::json j = store_status_json(store);
@@ -242,21 +235,12 @@ std::size_t suggested_chunk_triangles(const StoreSummary& summary) {
 
 void print_info(const GeometryStore& store, const InfoModelFile* model, const std::string& given, bool json) {
   const UpUsed up = up_to_use(store, model, given);
-  FloorFinderParams params;
-  params.up_axis = up.axis == "y" ? 1 : 2;
-  FloorFinderResult found = find_floors(store, params);
   // Storeys implausible in metres but plausible in other units: the floors
-  // again with the finder's lengths (headroom, separation, bins) in those units.
-  const StoreyUnits units = storey_units_of(found);
-  ModelUnit unit{"metres", 1};
-  if (!units.metres_plausible && !units.fitting.empty()) {
-    unit = units.fitting.front();
-    FloorFinderParams scaled = params;
-    scaled.bin_size /= unit.metres;
-    scaled.min_headroom /= unit.metres;
-    scaled.min_separation /= unit.metres;
-    found = find_floors(store, scaled);
-  }
+  // found again with the finder's lengths (headroom, separation, bins) in those.
+  const ModelFloors floors = find_model_floors(store, up.axis == "y" ? 1 : 2);
+  const FloorFinderResult& found = floors.found;
+  const StoreyUnits& units = floors.units;
+  const ModelUnit& unit = floors.unit;
   const std::string store_name = model ? model->store_name : store.path().string();
   const Suggestion s = suggest_bake(store_name, store, up.axis, found, unit);
   const std::string ingest = model ? ingest_command(*model, store, up, given) : "";

@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -30,6 +31,7 @@
 #include "runner/measured_estimate.h"
 #include "runner/parallel.h"
 #include "storage/cell_db.h"
+#include "tests/fixture_house_model.h"
 #include "tests/fixture_room_obj.h"
 #include "tests/test_support.h"
 
@@ -335,6 +337,35 @@ TEST_F(FloorsBake, AllFloorsAndTheErrors) {
   const auto submit = run_cellbake("submit " + q(dir / "floors.toml") + " --shards 2 --floors 0 --dry-run");
   ASSERT_EQ(submit.exit_code, 0) << submit.output;
   EXPECT_NE(submit.output.find("'--floors' '0'"), std::string::npos) << submit.output;
+}
+
+// A model in centimetres (the first-hour house x 100): the floors are those
+// info finds in its units, eyes 1.7 m = 170 units above them unless given.
+TEST(FloorsBakeUnits, AModelInCentimetresGetsItsEyes170UnitsAboveEachFloor) {
+  TempDir dir;
+  std::vector<test::HouseTriangle> house = test::house_triangles();
+  for (auto& t : house)
+    for (Vec3d& p : t) p = p * 100.0;
+  std::ofstream(dir / "house_cm.obj", std::ios::binary) << test::triangles_obj(house);
+  const auto ingest = run_cellbake("ingest " + q(dir / "house_cm.obj") + " --store " + q(dir / "cm.db") + " --quiet");
+  ASSERT_EQ(ingest.exit_code, 0) << ingest.output;
+  const auto info = json_of(run_cellbake("info --json " + q(dir / "cm.db")));
+  const auto plan = json_of(run_cellbake("bake --store " + q(dir / "cm.db") +
+                                         " --floors 0,1 --cell-size 200 --dry-run --json"));
+  const auto& floors = plan["floors"];
+  EXPECT_EQ(floors["units"], "centimetres");
+  EXPECT_EQ(floors["eye_height"], 170.0);
+  ASSERT_EQ(floors["found"].size(), info["floors"].size());
+  ASSERT_EQ(plan["regions"].size(), 2u);
+  for (int f = 0; f < 2; ++f) {
+    EXPECT_DOUBLE_EQ(floors["found"][f].get<double>(), info["floors"][f]["height"].get<double>());
+    EXPECT_NEAR(plan["regions"][f][2].get<double>(), floors["found"][f].get<double>() + 170, 0.006);
+  }
+  EXPECT_NEAR(plan["regions"][1][2].get<double>(), 470, 1);
+  // Given, it wins.
+  const auto given = json_of(run_cellbake("bake --store " + q(dir / "cm.db") +
+                                          " --floors 0 --cell-size 200 --set cells.eye_height=150 --dry-run --json"));
+  EXPECT_EQ(given["floors"]["eye_height"], 150.0);
 }
 
 // No cellbake-measure-* folder left in `tmp`.
