@@ -1,8 +1,9 @@
 // stages/up_axis_from_geometry: plane scores with analytic answers, a house
 // found Z-up as built and Y-up turned, the unsure answers (a cube, curved
-// geometry, an X-up house), a ChunkSource read equal to the accumulator, and
-// ingest using it: recorded when the file says nothing, a warning when --up
-// contradicts it.
+// geometry, an X-up house), terrain found by the area facing up (issue #38
+// item 5), a ChunkSource read equal to the accumulator, and ingest using it:
+// recorded when the file says nothing, a warning when --up contradicts flat
+// planes.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -218,6 +219,22 @@ TEST(UpAxisFromGeometry, IngestRecordsItWhenTheFileSaysNothingAndWarnsWhenUpDisa
   const IngestReport agreed = ingest_models({obj}, dir / "c.store.db", given, tbb_parallel_for());
   EXPECT_EQ(agreed.up_source, "--up; the geometry agrees");
   EXPECT_EQ(agreed.up_warning, "");
+}
+
+// Terrain in an OBJ (which records no axis): ingest records y from the area
+// facing it; --up z is kept without a warning (only flat planes contradict).
+TEST(UpAxisFromGeometry, IngestRecordsTerrainsAxisAndNeverWarnsFromIt) {
+  test::TempDir dir;
+  const auto obj = dir / "terrain.obj";
+  std::ofstream(obj, std::ios::binary) << test::triangles_obj(terrain_with_trees());
+  const IngestReport detected = ingest_models({obj}, dir / "a.store.db", {}, tbb_parallel_for());
+  EXPECT_EQ(detected.up, "y");
+  EXPECT_NE(detected.up_source.find("as terrain does"), std::string::npos) << detected.up_source;
+  IngestParams given;
+  given.up = "z";
+  const IngestReport kept = ingest_models({obj}, dir / "b.store.db", given, tbb_parallel_for());
+  EXPECT_EQ(kept.up, "z");
+  EXPECT_EQ(kept.up_warning, "");
 }
 
 }  // namespace
