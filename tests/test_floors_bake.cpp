@@ -245,27 +245,34 @@ std::string region_option(const nlohmann::json& r) {
   return o.str();
 }
 
-TEST_F(FloorsBake, AFloorBakesAsTheEquivalentRegionAndShardsAndResumeAgree) {
+TEST_F(FloorsBake, FloorsBakeAsTheEquivalentRegionsAndShardsAndResumeAgree) {
   TempDir dir;
   // The floors info finds are the floors a floors bake uses.
   const auto info = json_of(run_cellbake("info --json " + store()));
   ASSERT_GE(info["floors"].size(), 2u) << info.dump();
-  const auto plan = json_of(run_cellbake(bake("--floors 0 --dry-run --json")));
+  const auto plan = json_of(run_cellbake(bake("--floors 0,1 --dry-run --json")));
   ASSERT_EQ(plan["floors"]["found"].size(), info["floors"].size());
-  ASSERT_EQ(plan["floors"]["selected"].size(), 1u);
-  const auto& floor0 = plan["floors"]["selected"][0];
-  EXPECT_DOUBLE_EQ(floor0["height"].get<double>(), info["floors"][0]["height"].get<double>());
-  EXPECT_NEAR(floor0["eye"].get<double>(), info["floors"][0]["height"].get<double>() + 1.7, 0.006);
-  ASSERT_EQ(plan["regions"].size(), 1u);
-  const std::string region = region_option(plan["regions"][0]);
+  const auto& selected = plan["floors"]["selected"];
+  ASSERT_EQ(selected.size(), 2u);
+  for (int f = 0; f < 2; ++f) {
+    EXPECT_EQ(selected[f]["floor"], f);
+    EXPECT_DOUBLE_EQ(selected[f]["height"].get<double>(), info["floors"][f]["height"].get<double>());
+    EXPECT_NEAR(selected[f]["eye"].get<double>(), info["floors"][f]["height"].get<double>() + 1.7, 0.006);
+  }
+  ASSERT_EQ(plan["regions"].size(), 2u);
+  const std::string regions =
+      "--region " + region_option(plan["regions"][0]) + " --region " + region_option(plan["regions"][1]);
+  // Two cells of floor 0 and the first of floor 1.
+  const std::int64_t upstairs = selected[1]["first_id"];
+  const std::string cells = " --cells 1-2," + std::to_string(upstairs);
 
-  // Three cells through --floors, through the --region the dry run printed, and as two shards merged.
-  const auto a = run_cellbake(bake("--floors 0 --cells 1-3 --out " + q(dir / "floors.db")));
+  // Through --floors, through the --regions the dry run printed, and as two shards merged.
+  const auto a = run_cellbake(bake("--floors 0,1" + cells + " --out " + q(dir / "floors.db")));
   ASSERT_EQ(a.exit_code, 0) << a.output;
-  const auto b = run_cellbake(bake("--region " + region + " --cells 1-3 --out " + q(dir / "region.db")));
+  const auto b = run_cellbake(bake(regions + cells + " --out " + q(dir / "region.db")));
   ASSERT_EQ(b.exit_code, 0) << b.output;
   for (const char* shard : {"0/2", "1/2"}) {
-    const auto s = run_cellbake(bake("--floors 0 --cells 1-3 --shard " + std::string(shard) + " --out " +
+    const auto s = run_cellbake(bake("--floors 0,1" + cells + " --shard " + std::string(shard) + " --out " +
                                      q(dir / ("shard" + std::string(1, shard[0]) + ".db"))));
     ASSERT_EQ(s.exit_code, 0) << s.output;
   }
@@ -284,16 +291,17 @@ TEST_F(FloorsBake, AFloorBakesAsTheEquivalentRegionAndShardsAndResumeAgree) {
     EXPECT_EQ(stamp.input_hash, sb.at(id).input_hash) << id;
     EXPECT_EQ(stamp.content_hash, sb.at(id).content_hash) << id;
     const auto ca = fa.get_cell(id, false), cb = fb.get_cell(id, false);
-    EXPECT_EQ(ca->bounds.lo, cb->bounds.lo) << id;
-    EXPECT_EQ(ca->gx, cb->gx);
-    EXPECT_EQ(ca->gy, cb->gy);
+    EXPECT_EQ(ca->bounds, cb->bounds) << id;
+    EXPECT_EQ(ca->region, cb->region) << id;
+    EXPECT_EQ(ca->region, id == upstairs ? 1 : 0) << id;
+    EXPECT_NEAR(ca->bounds.center().z, selected[ca->region]["eye"].get<double>(), 1e-9) << id;
   }
   const std::string hash = fa.totals().content_hash;
   EXPECT_EQ(hash, fb.totals().content_hash);
   EXPECT_EQ(hash, CellDb(dir / "merged.db", CellDb::Mode::read_only).totals().content_hash);
 
   // A rerun resumes: every cell up to date.
-  const auto again = json_of(run_cellbake(bake("--floors 0 --cells 1-3 --json --out " + q(dir / "floors.db"))));
+  const auto again = json_of(run_cellbake(bake("--floors 0,1" + cells + " --json --out " + q(dir / "floors.db"))));
   EXPECT_EQ(again["cells_up_to_date"], 3);
   EXPECT_EQ(again["cells_baked"], 0);
 }
