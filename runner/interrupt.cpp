@@ -22,7 +22,7 @@ extern "C" void on_interrupt(int) {
 
 extern "C" void on_relayed_interrupt(int) {
   g_relay_interrupted = 1;
-  if (g_relay_child > 0) ::kill(g_relay_child, SIGINT);
+  if (g_relay_child > 0) ::kill(g_relay_child, SIGTERM);
 }
 
 }  // namespace
@@ -43,7 +43,7 @@ InterruptRelay::~InterruptRelay() {
 
 void InterruptRelay::relay_to(pid_t child) {
   g_relay_child = child;
-  if (g_relay_interrupted) ::kill(child, SIGINT);
+  if (g_relay_interrupted) ::kill(child, SIGTERM);
 }
 
 bool InterruptRelay::interrupted() const { return g_relay_interrupted != 0; }

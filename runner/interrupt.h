@@ -16,16 +16,18 @@ void exit_on_interrupt(const char* message);
 
 // While a child process works for the command (`bake --dry-run --measure`
 // bakes its cells in one): SIGINT no longer ends this process at once but is
-// remembered and passed on to the child, so the command can clean up (its
-// temporary folder) once the child has stopped. The disposition SIGINT had
-// before is restored on destruction. One at a time.
+// remembered and the child is ended (SIGTERM: quietly, without the bake's own
+// "rerun to resume"; the child runs in a process group of its own, so a
+// terminal's Ctrl-C reaches this process alone), so the command can clean up
+// (its temporary folder) once the child has stopped. The disposition SIGINT
+// had before is restored on destruction. One at a time.
 class InterruptRelay {
  public:
   InterruptRelay();
   ~InterruptRelay();
   InterruptRelay(const InterruptRelay&) = delete;
   InterruptRelay& operator=(const InterruptRelay&) = delete;
-  // Passes SIGINT on to `child` from now on (at once when one came already).
+  // Ends `child` on SIGINT from now on (at once when one came already).
   void relay_to(pid_t child);
   // Whether SIGINT came since construction.
   bool interrupted() const;

@@ -83,10 +83,15 @@ CellMeasurement measure_cells(const std::vector<std::string>& bake_args, const s
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);  // its summary line
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);  // a group of its own: Ctrl-C reaches us, we end it
+  posix_spawnattr_setpgroup(&attributes, 0);
   pid_t child = 0;
   const auto start = std::chrono::steady_clock::now();
-  const int spawned = posix_spawn(&child, binary.c_str(), &actions, nullptr, argv.data(), environ);
+  const int spawned = posix_spawn(&child, binary.c_str(), &actions, &attributes, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
+  posix_spawnattr_destroy(&attributes);
   if (spawned != 0)
     throw std::runtime_error("cannot start the measurement bake (" + binary + "): " + std::strerror(spawned));
   relay.relay_to(child);
@@ -97,8 +102,7 @@ CellMeasurement measure_cells(const std::vector<std::string>& bake_args, const s
   m.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   m.cpu_seconds = seconds_of(usage.ru_utime) + seconds_of(usage.ru_stime);
   m.peak_rss_bytes = std::uint64_t(usage.ru_maxrss) * 1024;  // KiB on Linux
-  const bool stopped_by_sigint = WIFSIGNALED(status) && WTERMSIG(status) == SIGINT;
-  if (relay.interrupted() || stopped_by_sigint || (WIFEXITED(status) && WEXITSTATUS(status) == 130)) {
+  if (relay.interrupted()) {
     m.interrupted = true;
     return m;
   }

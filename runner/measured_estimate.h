@@ -22,14 +22,14 @@ struct CellMeasurement {
   double in_thread_seconds = 0;      // the cells' stage seconds (rows' stage_seconds), summed
   double bytes = 0;                  // stored for those cells (CellDb totals)
   std::uint64_t peak_rss_bytes = 0;  // the child's maximum resident set
-  bool interrupted = false;          // SIGINT stopped it: nothing measured, the temporary folder removed
+  bool interrupted = false;          // SIGINT came: the child ended, nothing measured, the temporary folder removed
 };
 
 // Bakes `ids` (not empty) with `bake_args` (the `cellbake bake` options that
 // give the configuration: config file, --set, --store, --region, ...; no
 // --out, --cells, --threads or --dry-run) on `threads` threads (>= 1). `quiet`
 // hides the child's progress. Returns with `interrupted` set when SIGINT
-// came (it is passed on to the child); throws std::runtime_error naming the
+// came (the child is ended: runner/interrupt.h InterruptRelay); throws std::runtime_error naming the
 // cells when the bake fails or did not write them all. The temporary folder
 // is gone whenever this returns or throws.
 CellMeasurement measure_cells(const std::vector<std::string>& bake_args, const std::vector<std::int64_t>& ids,

@@ -18,6 +18,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
@@ -449,6 +450,10 @@ TEST_F(FloorsBake, CtrlCDuringTheMeasurementRemovesItsFolder) {
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 130);
   EXPECT_FALSE(measure_folder_left(dir / "tmp"));
+  std::ifstream err_file(dir / "err.txt");
+  const std::string err((std::istreambuf_iterator<char>(err_file)), std::istreambuf_iterator<char>());
+  EXPECT_NE(err.find("temporary database was removed; nothing written"), std::string::npos) << err;
+  EXPECT_EQ(err.find("rerun the same command"), std::string::npos) << err;  // the child ended quietly
   EXPECT_FALSE(std::filesystem::exists(dir / "never.db"));
 }
 
