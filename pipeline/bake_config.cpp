@@ -1,5 +1,6 @@
 #include "pipeline/bake_config.h"
 
+#include <algorithm>
 #include <cmath>
 #include <toml++/toml.h>
 
@@ -99,6 +100,24 @@ const std::map<std::string, Setter>& setters() {
        }},
       {"cells.size", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.cell_size = number(n, w, "cells.size", 1e-6, 1e9);
+       }},
+      {"cells.floors", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         if (const toml::array* a = n.as_array()) {
+           std::string list;
+           for (const auto& item : *a) {
+             const std::int64_t f = integer(item, w, "cells.floors", 0, 1 << 20);
+             list += (list.empty() ? "" : ",") + std::to_string(f);
+           }
+           if (list.empty()) fail(w, "'cells.floors' = [] names no floor (\"all\", or indices like [0, 2])");
+           c.floors = parse_floor_selection(list, w + ": 'cells.floors'");
+           return;
+         }
+         std::optional<std::string> v = n.value<std::string>();
+         if (!v) fail(w, "'cells.floors' must be \"all\" or an array of floor indices like [0, 2]");
+         c.floors = parse_floor_selection(*v, w + ": 'cells.floors'");
+       }},
+      {"cells.eye_height", [](BakeConfig& c, const toml::node& n, const std::string& w) {
+         c.eye_height = number(n, w, "cells.eye_height", 0, 1e9);  // 0: 1.7 m in the model's units
        }},
       {"near.budget", [](BakeConfig& c, const toml::node& n, const std::string& w) {
          c.near_budget = static_cast<std::uint64_t>(integer(n, w, "near.budget", 0, std::int64_t(1) << 40));
@@ -335,10 +354,42 @@ std::uint64_t effective_near_budget(const BakeConfig& c, std::uint64_t model_tri
   return std::min(c.near_budget, static_cast<std::uint64_t>(scaled));
 }
 
+FloorSelection parse_floor_selection(const std::string& text, const std::string& what) {
+  FloorSelection s;
+  if (text == "all") {
+    s.all = true;
+    return s;
+  }
+  if (text == "none") return s;  // overrides a configuration's floors: its regions as given
+  std::stringstream in(text);
+  for (std::string word; std::getline(in, word, ',');) {
+    const std::size_t a = word.find_first_not_of(" \t"), b = word.find_last_not_of(" \t");
+    word = a == std::string::npos ? "" : word.substr(a, b - a + 1);
+    const bool digits = !word.empty() && word.size() <= 7 && word.find_first_not_of("0123456789") == std::string::npos;
+    if (!digits)
+      throw std::runtime_error(what + " '" + text + "': '" + word +
+                               "' is not a floor index (expected \"all\" or indices like 0,2; 0 = the lowest floor)");
+    s.indices.push_back(std::stoi(word));
+  }
+  if (s.indices.empty())
+    throw std::runtime_error(what + " '" + text + "': no floor named (expected \"all\" or indices like 0,2)");
+  std::sort(s.indices.begin(), s.indices.end());
+  s.indices.erase(std::unique(s.indices.begin(), s.indices.end()), s.indices.end());
+  return s;
+}
+
+std::string floor_selection_text(const FloorSelection& s) {
+  if (s.all) return "all";
+  std::string text;
+  for (int f : s.indices) text += (text.empty() ? "" : ",") + std::to_string(f);
+  return text;
+}
+
 void validate_bake_config(const BakeConfig& c) {
   const std::string where = c.source.empty() ? "<command line>" : c.source.string();
   if (c.store.empty()) throw std::runtime_error(where + ": no geometry store given ([model] store or --store)");
-  if (c.regions.empty()) throw std::runtime_error(where + ": no regions given ([[regions]] or --region)");
+  if (c.regions.empty() && c.floors.empty())
+    throw std::runtime_error(where + ": no regions given ([[regions]], --region, or floors: [cells] floors, --floors)");
   if (c.database.empty()) throw std::runtime_error(where + ": no output database given");
 }
 

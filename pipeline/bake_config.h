@@ -15,6 +15,23 @@
 
 namespace cellbake {
 
+// `[cells] floors` / `bake --floors`: which of the floors `cellbake info`
+// finds become bake regions (pipeline/floor_regions.h): all of them, or these
+// indices (0 = the lowest). Empty: the regions are used as given.
+struct FloorSelection {
+  bool all = false;
+  std::vector<int> indices;  // ascending, without repeats (ignored when `all`)
+  bool empty() const { return !all && indices.empty(); }
+};
+
+// Parses "all", "none" (no floors: the regions as given) or a comma-separated
+// list of floor indices ("0,2"). Throws
+// std::runtime_error naming `what` (e.g. "--floors") and the bad word.
+FloorSelection parse_floor_selection(const std::string& text, const std::string& what);
+
+// "all" or "0,2" ("" when empty): the form parse_floor_selection reads.
+std::string floor_selection_text(const FloorSelection& selection);
+
 struct BakeConfig {
   std::filesystem::path source;  // the config file ("" for command-line only)
 
@@ -30,6 +47,13 @@ struct BakeConfig {
 
   // [cells]
   double cell_size = 2.0;        // edge of a cubic view cell, model units
+  // Floors whose eye layers become the regions (plan_bake, before cell ids are
+  // given): `floors` of those `cellbake info` finds, eyes `eye_height` above
+  // each (0: 1.7 m in the units info takes the model in: 1.7, or 170 for
+  // centimetres), over the regions' horizontal extent (no regions: the
+  // model's). Not hashed or described: the regions they become are.
+  FloorSelection floors;
+  double eye_height = 0;
 
   // [near]
   std::uint64_t near_budget = 100000;  // near-field triangle budget per cell (thesis: 100,000)
@@ -146,7 +170,7 @@ BakeConfig parse_bake_config(std::string_view text, const std::filesystem::path&
 // are taken as strings), validating as in a file. Throws naming the override.
 void apply_override(BakeConfig& config, const std::string& assignment);
 
-// Checks cross-field rules (at least one region, non-empty regions, store set).
+// Checks cross-field rules (at least one region or a floor selection, store set).
 // Throws std::runtime_error naming the config source.
 void validate_bake_config(const BakeConfig& config);
 

@@ -200,7 +200,9 @@ void choose_up_axis(const std::string& given, const std::string& from_files, boo
                        " and the geometry is not conclusive: " + geometry.evidence;
     return;
   }
-  if (geometry.axis.empty()) return;
+  // Only flat planes contradict a given or conventional axis: most area facing
+  // an axis (terrain's evidence) is also what a standing sign or facade shows.
+  if (geometry.axis.empty() || geometry.from_facing) return;
   if (geometry.axis == report.up) {
     report.up_source += "; the geometry agrees";
     return;

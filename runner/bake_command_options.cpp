@@ -18,6 +18,10 @@ void add_bake_options(CLI::App& cmd, BakeCommandOptions& opt) {
                  "Up axis: z or y (default: [model] up, else the one the geometry store recorded at ingest, else z)")
       ->check(CLI::IsMember({"z", "y"}));
   cmd.add_option("--region", opt.regions, "Box of eye positions X0,Y0,Z0,X1,Y1,Z1 (repeatable)");
+  cmd.add_option("--floors", opt.floors,
+                 "Bake whole floors: all, or indices like 0,2 of the floors `cellbake info` finds (0 = the lowest); "
+                 "eyes [cells] eye_height above each (default 1.7 m in the units `info` takes the model in), over the "
+                 "--region's x/y extent (none: the model's)");
   cmd.add_option("--cell-size", opt.cell_size, "Edge of a cubic view cell, model units")->check(CLI::PositiveNumber);
   cmd.add_option("--near-budget", opt.near_budget,
                  "Near-field triangle budget per cell (default: [near] budget, 100000, or near.budget_fraction of a "
@@ -63,6 +67,7 @@ BakeConfig bake_config_from_options(BakeCommandOptions& opt) {
       config.regions.push_back(b);
     }
   }
+  if (!opt.floors.empty()) config.floors = parse_floor_selection(opt.floors, "--floors");
   if (std::isnan(opt.cell_size) || std::isinf(opt.cell_size))
     throw std::runtime_error("--cell-size must be a finite number > 0");
   if (opt.cell_size > 0) config.cell_size = opt.cell_size;

@@ -19,6 +19,7 @@ struct BakeCommandOptions {
   std::vector<std::string> sets;
   std::string store, up, out, shard;
   std::vector<std::string> regions;  // "X0,Y0,Z0,X1,Y1,Z1" each
+  std::string floors;                // "all" or "0,2": floors as regions (pipeline/floor_regions.h)
   double cell_size = 0;
   long long near_budget = -1;
   int face_size = 0;

@@ -83,6 +83,12 @@ BakePlan plan_bake(const BakeConfig& given, const BakeOptions& options, const Ge
   BakeConfig& config = plan.config;
   validate_bake_config(config);
   plan.up_note = resolve_up_axis(config, store.summary().up, store.summary().up_source);
+  if (!config.floors.empty()) {  // before any cell id is given: ids follow the regions' order
+    plan.floors = find_floor_regions(store, config, store.path().string());
+    config.regions.clear();
+    for (const FloorRegion& r : plan.floors.regions) config.regions.push_back(r.region);
+    config.floors = {};
+  }
   check_regions_meet_model(config.regions, store.model_bounds(), config.cell_size);
   plan.model_triangles = store.summary().triangles;
   config.near_budget = effective_near_budget(config, plan.model_triangles);
@@ -107,6 +113,20 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
   const BakeConfig& config = plan.config;
   const std::string& up_note = plan.up_note;
   if (!up_note.empty()) std::fprintf(stderr, "%s\n", up_note.c_str());  // even with --quiet: it changes the bake
+  if (!options.quiet && !plan.floors.regions.empty()) {
+    std::string eyes;
+    int last = -1;
+    for (const FloorRegion& r : plan.floors.regions) {
+      if (r.floor == last) continue;  // the same floor over another footprint
+      last = r.floor;
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "%sfloor %d: eyes at %s = %g", eyes.empty() ? "" : ", ", r.floor,
+                    config.up.c_str(), r.eye);
+      eyes += buf;
+    }
+    std::fprintf(stderr, "floors as regions (%g above each): %s\n", plan.floors.eye_height, eyes.c_str());
+    for (const std::string& note : plan.floors.notes) std::fprintf(stderr, "note: %s\n", note.c_str());
+  }
   const std::uint64_t model_triangles = plan.model_triangles;
   if (model_triangles <= config.near_budget && !options.quiet)
     std::fprintf(stderr,

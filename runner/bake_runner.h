@@ -11,6 +11,7 @@
 
 #include "pipeline/bake_config.h"
 #include "pipeline/cell_grid.h"
+#include "pipeline/floor_regions.h"
 
 namespace cellbake {
 
@@ -45,11 +46,14 @@ struct BakeSummary {
 // `bake --dry-run`): the config validated, its up axis resolved against the
 // store's (`up_note`: the note or warning to print, else ""), regions checked
 // against the model's bounds, the effective near budget (near.budget_fraction
-// of a small model), and the selected cells (--cells, shard). Throws on the
-// errors run_bake would throw for.
+// of a small model), and the selected cells (--cells, shard). A floor
+// selection (config.floors) becomes the regions first (pipeline/floor_regions.h),
+// so cell ids and hashes are those of the equivalent --region bake. Throws on
+// the errors run_bake would throw for.
 struct BakePlan {
-  BakeConfig config;                // with `up` and `near_budget` as the bake will use them
+  BakeConfig config;                // with `up`, `near_budget` and the regions as the bake will use them (floors: none)
   std::string up_note;
+  FloorRegions floors;              // what config.floors became (empty without floors)
   std::uint64_t model_triangles = 0;
   std::uint64_t cells_total = 0;    // the configuration's cells
   std::vector<CellSpec> cells;      // this run's selection

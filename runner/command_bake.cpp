@@ -9,6 +9,7 @@
 #include "pipeline/bake_config.h"
 #include "pipeline/bake_estimate.h"
 #include "runner/bake_command_options.h"
+#include "runner/bake_dry_run.h"
 #include "runner/bake_runner.h"
 #include "runner/commands.h"
 #include "runner/console.h"
@@ -42,73 +43,32 @@ void print_bake_summary(const BakeSummary& s, const BakeConfig& config, bool jso
   std::printf("\n");
 }
 
-namespace {
-
-// `bake --dry-run`: what the bake would do (plan_bake), and nothing written.
-void print_dry_run(const BakeConfig& given, const BakeOptions& options, bool json) {
-  validate_bake_config(given);
-  require_sound_store(given.store, options.check_store);
-  const GeometryStore store(given.store);
-  const BakePlan plan = plan_bake(given, options, store);
-  const BakeConfig& c = plan.config;
-  const int threads = options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
-  const BakeEstimate e = estimate_bake(plan.cells.size(), c.face_size, threads, plan.model_triangles);
-  const bool no_far_field = plan.model_triangles <= c.near_budget;
-  if (json) {
-    nlohmann::json j{{"dry_run", true},
-                     {"database", c.database.string()},
-                     {"database_exists", std::filesystem::exists(c.database)},
-                     {"store", c.store.string()},
-                     {"model_triangles", plan.model_triangles},
-                     {"up", c.up},
-                     {"cell_size", c.cell_size},
-                     {"cells_total", plan.cells_total},
-                     {"cells_selected", plan.cells.size()},
-                     {"near_budget", c.near_budget},
-                     {"face_size", c.face_size},
-                     {"threads", threads},
-                     {"estimated_seconds", e.seconds},
-                     {"estimated_core_seconds_per_cell", e.core_seconds_per_cell},
-                     {"estimated_bytes_per_cell", e.bytes_per_cell},
-                     {"estimated_bytes", e.bytes},
-                     {"no_far_field", no_far_field}};
-    nlohmann::json ids = nlohmann::json::array();
-    for (const CellSpec& cell : plan.cells) ids.push_back(cell.id);
-    j["cell_ids"] = ids;
-    if (!plan.up_note.empty()) j["up_note"] = plan.up_note;
-    std::printf("%s\n", j.dump(2).c_str());
-    return;
-  }
-  if (!plan.up_note.empty()) std::fprintf(stderr, "%s\n", plan.up_note.c_str());
-  std::printf("dry run: nothing written (%s %s)\n", c.database.c_str(),
-              std::filesystem::exists(c.database) ? "exists; a bake resumes it" : "would be created");
-  std::printf("store: %s, %llu triangles, up %s\n", c.store.c_str(), (unsigned long long)plan.model_triangles,
-              c.up.c_str());
-  std::printf("cells: %zu selected of %llu (cell size %g)", plan.cells.size(), (unsigned long long)plan.cells_total,
-              c.cell_size);
-  if (!plan.cells.empty())
-    std::printf(", ids %lld..%lld", (long long)plan.cells.front().id, (long long)plan.cells.back().id);
-  std::printf("\nnear budget: %llu triangles per cell%s\n", (unsigned long long)c.near_budget,
-              no_far_field ? " (the whole model fits: no far field; lower it with --near-budget)" : "");
-  std::printf(
-      "estimate: ~%s on %d threads (%.1f core-seconds per cell at %d² faces), ~%.0f KB per cell, ~%.1f MB "
-      "in all (the demo plant's figures scaled to this model's size; a guide, not a promise)\n",
-      duration_text(e.seconds).c_str(), threads, e.core_seconds_per_cell, c.face_size, e.bytes_per_cell / 1e3,
-      e.bytes / 1e6);
-}
-
-}  // namespace
 
 void add_bake_command(CLI::App& app) {
   auto opt = std::make_shared<BakeCommandOptions>();
   CLI::App* cmd = app.add_subcommand("bake", "Bake view cells (near field + textured depth meshes) into a cell database");
   add_bake_options(*cmd, *opt);
   auto dry_run = std::make_shared<bool>(false);
+  auto request = std::make_shared<DryRunRequest>();
   cmd->add_flag("--dry-run", *dry_run,
                 "Check the config and selection, print the cells, near budget, estimated time and bytes; write nothing");
-  cmd->callback([opt, dry_run] {
+  CLI::Option* measure =
+      cmd->add_option("--measure", request->measure,
+                      "With --dry-run: bake K cells chosen stratified over the selection (floors, grid) into a "
+                      "temporary database (removed), measure CPU-seconds and bytes per cell, and project the whole "
+                      "bake on --threads threads and on Slurm shards")
+          ->check(CLI::Range(1, 100000));
+  cmd->add_option("--shards", request->shards,
+                  "With --dry-run --measure: the Slurm shard counts to project onto, each of --threads threads")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 1000000))
+      ->needs(measure)
+      ->capture_default_str();
+  cmd->callback([opt, dry_run, request] {
     const BakeConfig config = bake_config_from_options(*opt);
-    if (*dry_run) return print_dry_run(config, opt->run, opt->json);
+    if (request->measure > 0 && !*dry_run) throw std::runtime_error("--measure goes with --dry-run");
+    request->json = opt->json;
+    if (*dry_run) return run_bake_dry_run(config, *opt, *request);
     exit_on_interrupt("interrupted — rerun the same command to resume");
     opt->run.quiet = quiet_output();
     opt->run.verbose = verbose_output();

@@ -1,6 +1,6 @@
 // `cellbake submit CONFIG --shards N [--partition P] [--account A] [--qos Q]
 // [--time T] [--mem M] [--cpus-per-task C] [--sbatch-arg OPT]... [--merge-time T]
-// [--merge-mem M] [--merge-sbatch-arg OPT]... [--set k=v]... [--out MERGED.db]
+// [--merge-mem M] [--merge-sbatch-arg OPT]... [--set k=v]... [--floors all|0,2] [--out MERGED.db]
 // [--out-dir DIR] [--dry-run]`: a distributed bake on Slurm — a job array of
 // shard bakes plus a merge job that runs after every task succeeded (see
 // runner/slurm_scripts.h).
@@ -19,7 +19,7 @@ namespace cellbake {
 namespace {
 
 struct SubmitOptions {
-  std::string config_file, out, out_dir, partition, account, qos, time, mem;
+  std::string config_file, out, out_dir, partition, account, qos, time, mem, floors;
   SlurmBakeJob defaults;  // the merge job's limits
   std::vector<std::string> sets, sbatch_args, merge_sbatch_args;
   int shards = 0, cpus_per_task = 0;
@@ -65,6 +65,9 @@ void add_submit_command(CLI::App& app) {
   cmd->add_option("config", opt->config_file, "Bake configuration (TOML)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--shards", opt->shards, "Number of shards = array tasks")->required()->check(CLI::Range(1, 100000));
   cmd->add_option("--set", opt->sets, "Override a config key: section.key=value (repeatable; passed to every task)");
+  cmd->add_option("--floors", opt->floors,
+                  "Bake whole floors: all, or indices like 0,2 of those `cellbake info` finds (passed to every task; "
+                  "see bake --help)");
   cmd->add_option("--out", opt->out, "Merged cell database (default: the config's [output] database)");
   cmd->add_option("--out-dir", opt->out_dir, "Folder for shard databases, scripts and logs (default: MERGED_shards)");
   cmd->add_option("--partition", opt->partition, "Slurm partition of both jobs (sbatch --partition)");
@@ -94,6 +97,7 @@ void add_submit_command(CLI::App& app) {
     bake.config_file = opt->config_file;
     bake.sets = opt->sets;
     bake.out = opt->out;
+    bake.floors = opt->floors;
     const BakeConfig config = bake_config_from_options(bake);
 
     SlurmBakeJob job;
@@ -101,6 +105,7 @@ void add_submit_command(CLI::App& app) {
     job.bake_args.push_back(absolute_text(opt->config_file));
     for (const auto& s : opt->sets)
       if (!sets_output_database(s)) job.bake_args.insert(job.bake_args.end(), {"--set", s});
+    if (!opt->floors.empty()) job.bake_args.insert(job.bake_args.end(), {"--floors", opt->floors});
     job.shards = opt->shards;
     job.merged_db = absolute_text(config.database);
     const std::filesystem::path merged(job.merged_db);

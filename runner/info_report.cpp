@@ -10,15 +10,17 @@
 #include "pipeline/bake_config.h"
 #include "pipeline/bake_estimate.h"
 #include "pipeline/cell_grid.h"
+#include "pipeline/floor_regions.h"
 #include "runner/number_text.h"
 #include "runner/store_status.h"
 #include "stages/floor_finder.h"
+#include "stages/storey_units.h"
 #include "stages/up_axis_from_geometry.h"
 
 namespace cellbake {
 namespace {
 
-constexpr double kEyeHeight = 1.7;  // above the floor, model units taken as metres
+constexpr double kEyeHeight = kEyeHeightMetres;  // above the floor, metres (pipeline/floor_regions.h)
 constexpr int kTargetCellsPerFloor = 64;
 constexpr std::uint64_t kMinChunks = 16;  // fewer: re-ingest with smaller chunks for a far field
 constexpr std::uint64_t kManyCells = 4096;  // more in a suggested bake: say that units may not be metres
@@ -45,6 +47,8 @@ UpUsed up_to_use(const GeometryStore& store, const InfoModelFile* model, const s
 
 struct Suggestion {
   bool found = false;
+  double unit = 1;       // metres per model unit the suggestion takes (storey_units.h; 1: metres)
+  std::string unit_name = "metres";
   std::size_t floor = 0;  // index into the floors
   double eye = 0;
   bool object = false;  // lower than eye height above its floor: cells around it at its mid-height
@@ -84,10 +88,14 @@ std::string shell_word(const std::string& path) {
   return path.find_first_of(" '\"$\\") == std::string::npos ? path : "'" + path + "'";
 }
 
-// `store_name`: the store the bake line reads (the store itself or the one the ingest line writes).
+// `store_name`: the store the bake line reads (the store itself or the one the
+// ingest line writes). Lengths in metres (eye height, cell sizes) are divided by
+// `unit`, the metres one model unit is taken to be.
 Suggestion suggest_bake(const std::string& store_name, const GeometryStore& store, const std::string& up,
-                        const FloorFinderResult& found) {
+                        const FloorFinderResult& found, const ModelUnit& unit) {
   Suggestion s;
+  s.unit = unit.metres;
+  s.unit_name = unit.name;
   if (found.floors.empty()) return s;
   // The main floor: the one most rays reach with something above it (indoors), else the widest.
   std::size_t best = 0;
@@ -100,8 +108,13 @@ Suggestion suggest_bake(const std::string& store_name, const GeometryStore& stor
   s.found = true;
   s.floor = best;
   s.region = floor.covered_extent.empty() ? floor.extent : floor.covered_extent;  // indoors, else all of it
-  s.cell_size = suggest_cell_size(s.region.hi[ha] - s.region.lo[ha], s.region.hi[hb] - s.region.lo[hb]);
-  s.eye = floor.height + kEyeHeight;
+  s.cell_size = suggest_cell_size(unit.metres * (s.region.hi[ha] - s.region.lo[ha]),
+                                  unit.metres * (s.region.hi[hb] - s.region.lo[hb]));
+  if (unit.metres != 1) {  // back to model units, two significant digits (350 cm, 140 inches)
+    const double c = s.cell_size / unit.metres, scale = std::pow(10.0, std::floor(std::log10(c)) - 1);
+    s.cell_size = std::round(c / scale) * scale;
+  }
+  s.eye = floor.height + kEyeHeight / unit.metres;
   // A model lower than eye height above its main floor (an object, whose
   // "floor" is its top; the bake refuses eyes that far above it): cells
   // around it at its mid-height, over its footprint grown by one cell, so
@@ -160,7 +173,7 @@ std::vector<std::string> ingest_warnings(const IngestReport& r) {
 }
 
 void print_json(const GeometryStore& store, const InfoModelFile* model, const std::string& ingest,
-                const UpUsed& up, const FloorFinderResult& found, const Suggestion& s) {
+                const UpUsed& up, const FloorFinderResult& found, const Suggestion& s, const StoreyUnits& units) {
   nlohmann::json j = store_status_json(store);
   if (model) {
     j["kind"] = "model_file";
@@ -185,6 +198,14 @@ void print_json(const GeometryStore& store, const InfoModelFile* model, const st
                        {{"min", {f.extent.lo.x, f.extent.lo.y, f.extent.lo.z}},
                         {"max", {f.extent.hi.x, f.extent.hi.y, f.extent.hi.z}}}}});
   j["floors"] = floors;
+  nlohmann::json fitting = nlohmann::json::array();
+  for (const ModelUnit& u : units.fitting) fitting.push_back(u.name);
+  j["units"] = {{"storey", units.storey},
+                {"metres_plausible", units.metres_plausible},
+                {"fitting", fitting},
+                {"taken_as", s.unit_name},
+                {"metres_per_unit", s.unit},
+                {"evidence", units.evidence}};
   if (s.found) {
     const Box3d& r = s.region;
     j["suggested"] = {{"floor", found.floors[s.floor].height},
@@ -214,13 +235,16 @@ std::size_t suggested_chunk_triangles(const StoreSummary& summary) {
 
 void print_info(const GeometryStore& store, const InfoModelFile* model, const std::string& given, bool json) {
   const UpUsed up = up_to_use(store, model, given);
-  FloorFinderParams params;
-  params.up_axis = up.axis == "y" ? 1 : 2;
-  const FloorFinderResult found = find_floors(store, params);
+  // Storeys implausible in metres but plausible in other units: the floors
+  // found again with the finder's lengths (headroom, separation, bins) in those.
+  const ModelFloors floors = find_model_floors(store, up.axis == "y" ? 1 : 2);
+  const FloorFinderResult& found = floors.found;
+  const StoreyUnits& units = floors.units;
+  const ModelUnit& unit = floors.unit;
   const std::string store_name = model ? model->store_name : store.path().string();
-  const Suggestion s = suggest_bake(store_name, store, up.axis, found);
+  const Suggestion s = suggest_bake(store_name, store, up.axis, found, unit);
   const std::string ingest = model ? ingest_command(*model, store, up, given) : "";
-  if (json) return print_json(store, model, ingest, up, found, s);
+  if (json) return print_json(store, model, ingest, up, found, s, units);
 
   const StoreSummary& summary = store.summary();
   if (model)
@@ -254,16 +278,21 @@ void print_info(const GeometryStore& store, const InfoModelFile* model, const st
   }
   const Box3d& r = s.region;
   const double step = region_step(s.cell_size);
-  std::printf("suggested bake (model units taken as metres):\n");
+  if (!units.fitting.empty()) std::printf("units: %s\n", units.evidence.c_str());
+  if (s.unit != 1)
+    std::printf("suggested bake (model units taken as %s: 1 unit = %g m; floors found again with lengths in them):\n",
+                s.unit_name.c_str(), s.unit);
+  else
+    std::printf("suggested bake (model units taken as metres):\n");
   if (s.object)
     std::printf(
-        "  eye height: %s = %s (the model's mid-height: it is lower than %.1f above its floor %s, an "
+        "  eye height: %s = %s (the model's mid-height: it is lower than %g above its floor %s, an "
         "object rather than a place to walk through)\n",
-        up.axis.c_str(), number(s.eye, step).c_str(), kEyeHeight,
+        up.axis.c_str(), number(s.eye, step).c_str(), kEyeHeight / s.unit,
         number(found.floors[s.floor].height, step).c_str());
   else
-    std::printf("  eye height: %s = %s (floor %s + %.1f)\n", up.axis.c_str(), number(s.eye, step).c_str(),
-                number(found.floors[s.floor].height, step).c_str(), kEyeHeight);
+    std::printf("  eye height: %s = %s (floor %s + %g)\n", up.axis.c_str(), number(s.eye, step).c_str(),
+                number(found.floors[s.floor].height, step).c_str(), kEyeHeight / s.unit);
   std::printf("  region: (%s, %s, %s) .. (%s, %s, %s), %s\n", number(r.lo.x, step).c_str(),
               number(r.lo.y, step).c_str(), number(r.lo.z, step).c_str(), number(r.hi.x, step).c_str(),
               number(r.hi.y, step).c_str(), number(r.hi.z, step).c_str(),

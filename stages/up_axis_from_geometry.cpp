@@ -13,6 +13,15 @@ std::string score_text(const std::array<double, 3>& s) {
   return buf;
 }
 
+std::string facing_text(const std::array<double, 3>& f, int best) {
+  const int other = best == 2 ? 1 : 2;
+  const char* names = "xyz";
+  char buf[128];
+  std::snprintf(buf, sizeof buf, "%.0f %% of the area within 45 degrees of %c, %c %.0f %%, x %.0f %%", 100 * f[best],
+                names[best], names[other], 100 * f[other], 100 * f[0]);
+  return buf;
+}
+
 }  // namespace
 
 UpAxisEvidence::UpAxisEvidence(const Box3d& bounds, const UpAxisParams& params)
@@ -32,6 +41,8 @@ void UpAxisEvidence::add_triangle(const Vec3d& p0, const Vec3d& p1, const Vec3d&
   if (!(len > 0) || !std::isfinite(len)) return;
   const double area = 0.5 * len;
   total_area_ += area;
+  for (int a = 0; a < 3; ++a)
+    if (std::abs(n[a]) >= params_.facing_cos * len) facing_area_[a] += area;
   if (bin_size_ == 0) return;
   for (int a = 0; a < 3; ++a) {
     if (std::abs(n[a]) < params_.plane_cos * len) continue;
@@ -62,6 +73,7 @@ UpAxisGuess UpAxisEvidence::guess() const {
       sum += h[i] * around;
     }
     g.score[a] = sum / (total_area_ * total_area_);
+    g.facing[a] = facing_area_[a] / total_area_;
   }
   const int best = g.score[2] >= g.score[1] ? 2 : 1;  // ties go to z, the default
   const double other = std::max(g.score[0], g.score[best == 2 ? 1 : 2]);
@@ -70,13 +82,26 @@ UpAxisGuess UpAxisEvidence::guess() const {
   if (g.score[0] > g.score[1] && g.score[0] > g.score[2] && g.score[0] >= params_.min_score &&
       g.score[0] >= params_.min_ratio * std::max(g.score[1], g.score[2])) {
     g.evidence = "large flat surfaces face x, which cannot be baked as up (" + scores + ")";
-  } else if (g.score[best] < params_.min_score) {
-    g.evidence = "too few large flat surfaces to tell (" + scores + ")";
-  } else if (g.ratio < params_.min_ratio) {
-    g.evidence = "no axis stands out (" + scores + ")";
-  } else {
+    return g;
+  }
+  if (g.score[best] >= params_.min_score && g.ratio >= params_.min_ratio) {
     g.axis = best == 2 ? "z" : "y";
     g.evidence = "large flat surfaces face " + g.axis + " (" + scores + ")";
+    return g;
+  }
+  // The planes do not say: terrain, whose area mostly faces up without being flat?
+  const int up = g.facing[2] >= g.facing[1] ? 2 : 1;
+  const double rival = std::max(g.facing[0], g.facing[up == 2 ? 1 : 2]);
+  if (g.facing[up] >= params_.min_facing_fraction && g.facing[up] >= params_.min_ratio * rival) {
+    g.axis = up == 2 ? "z" : "y";
+    g.from_facing = true;
+    g.ratio = rival > 0 ? g.facing[up] / rival : INFINITY;
+    g.evidence = "most of the surface faces " + g.axis + " though little of it is flat, as terrain does (" +
+                 facing_text(g.facing, up) + "; " + scores + ")";
+  } else if (g.score[best] < params_.min_score) {
+    g.evidence = "too few large flat surfaces to tell (" + scores + ")";
+  } else {
+    g.evidence = "no axis stands out (" + scores + ")";
   }
   return g;
 }

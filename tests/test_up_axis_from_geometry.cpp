@@ -1,8 +1,9 @@
 // stages/up_axis_from_geometry: plane scores with analytic answers, a house
 // found Z-up as built and Y-up turned, the unsure answers (a cube, curved
-// geometry, an X-up house), a ChunkSource read equal to the accumulator, and
-// ingest using it: recorded when the file says nothing, a warning when --up
-// contradicts it.
+// geometry, an X-up house), terrain found by the area facing up (issue #38
+// item 5), a ChunkSource read equal to the accumulator, and ingest using it:
+// recorded when the file says nothing, a warning when --up contradicts flat
+// planes.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -120,6 +121,67 @@ TEST(UpAxisFromGeometry, IsUnsureWhenNoAxisStandsOutOrFlatSurfacesAreFew) {
   EXPECT_EQ(guess_of({}).axis, "");
 }
 
+// Rolling terrain (issue #38 item 5): a Y-up height field y = f(x) + g(z) of
+// triangle waves with slopes of 0.4, so every facet lies 29.5 degrees off up
+// (none within the planes' 10 degrees), with 20 "trees" (open square prisms
+// whose walls face x and z exactly): 200 area units of ground, 80 of walls.
+Tris terrain_with_trees() {
+  Tris t;
+  const auto wave = [](double u) { return 0.4 * std::abs(std::fmod(u, 4.0) - 2.0); };  // slope +-0.4
+  const auto at = [&](double x, double z) { return Vec3d{x, wave(x) + wave(z + 1), z}; };
+  const double step = 1.0;  // the waves' kinks fall on grid lines: each facet is planar
+  for (double x = 0; x < 20; x += step)
+    for (double z = 0; z < 10; z += step) {
+      t.push_back({at(x, z), at(x, z + step), at(x + step, z + step)});
+      t.push_back({at(x, z), at(x + step, z + step), at(x + step, z)});
+    }
+  for (int k = 0; k < 20; ++k) {  // a 1 x 1 prism 1 high at (x0, z0): four walls of area 1
+    // Every wall at a coordinate of its own: no two make one plane.
+    const double x0 = 0.5 + (k % 10) * 1.9 + 0.07 * (k / 10), z0 = 1.5 + (k / 10) * 5.3 + 0.13 * (k % 10);
+    const double y0 = 1.0 + 0.37 * k, y1 = y0 + 1;
+    const Vec3d c[4] = {{x0, 0, z0}, {x0 + 1, 0, z0}, {x0 + 1, 0, z0 + 1}, {x0, 0, z0 + 1}};
+    for (int e = 0; e < 4; ++e) {
+      const Vec3d a = c[e], b = c[(e + 1) % 4];
+      t.push_back({Vec3d{a.x, y0, a.z}, Vec3d{b.x, y0, b.z}, Vec3d{b.x, y1, b.z}});
+      t.push_back({Vec3d{a.x, y0, a.z}, Vec3d{b.x, y1, b.z}, Vec3d{a.x, y1, a.z}});
+    }
+  }
+  return t;
+}
+
+TEST(UpAxisFromGeometry, TerrainIsFoundByTheAreaFacingUpWhenNothingIsFlat) {
+  const Tris terrain = terrain_with_trees();
+  const UpAxisGuess y = guess_of(terrain);
+  EXPECT_EQ(y.score[1], 0.0);  // no facet within 10 degrees of up
+  EXPECT_LT(std::max(y.score[0], y.score[2]), UpAxisParams{}.min_score);  // the walls are no large planes
+  const double ground = 200 * std::sqrt(1 + 2 * 0.4 * 0.4), walls = 80;  // slanted facets' area, walls'
+  EXPECT_NEAR(y.facing[1], ground / (ground + walls), 1e-9);
+  EXPECT_NEAR(y.facing[0], 40 / (ground + walls), 1e-9);
+  EXPECT_NEAR(y.facing[2], 40 / (ground + walls), 1e-9);
+  EXPECT_EQ(y.axis, "y");
+  EXPECT_TRUE(y.from_facing);
+  EXPECT_NE(y.evidence.find("as terrain does"), std::string::npos) << y.evidence;
+  // Turned Z-up: z.
+  const UpAxisGuess z = guess_of(turned(terrain, [](Vec3d p) { return Vec3d{p.x, -p.z, p.y}; }));
+  EXPECT_EQ(z.axis, "z");
+  EXPECT_NEAR(z.facing[2], y.facing[1], 1e-9);
+  // Four times the walls: the ground is 42 % of the area, under the majority needed: unsure.
+  Tris forest = terrain;
+  for (int copy = 0; copy < 3; ++copy) {
+    const Tris more = terrain_with_trees();
+    forest.insert(forest.end(), more.end() - 160, more.end());  // the 20 trees' 160 wall triangles
+  }
+  const UpAxisGuess dense = guess_of(forest);  // ground 230, walls 320
+  EXPECT_EQ(dense.axis, "");
+  EXPECT_FALSE(dense.from_facing);
+  // A cube (1/3 of the area each) stays unsure.
+  Tris cube;
+  test::add_box(cube, {0, 0, 0}, {4, 4, 4}, 3);
+  const UpAxisGuess c = guess_of(cube);
+  EXPECT_NEAR(c.facing[0], 1.0 / 3, 1e-9);
+  EXPECT_EQ(c.axis, "");
+}
+
 TEST(UpAxisFromGeometry, AChunkSourceGivesWhatTheAccumulatorGives) {
   const Tris house = test::house_triangles();
   test::MemoryChunkSource source;
@@ -157,6 +219,22 @@ TEST(UpAxisFromGeometry, IngestRecordsItWhenTheFileSaysNothingAndWarnsWhenUpDisa
   const IngestReport agreed = ingest_models({obj}, dir / "c.store.db", given, tbb_parallel_for());
   EXPECT_EQ(agreed.up_source, "--up; the geometry agrees");
   EXPECT_EQ(agreed.up_warning, "");
+}
+
+// Terrain in an OBJ (which records no axis): ingest records y from the area
+// facing it; --up z is kept without a warning (only flat planes contradict).
+TEST(UpAxisFromGeometry, IngestRecordsTerrainsAxisAndNeverWarnsFromIt) {
+  test::TempDir dir;
+  const auto obj = dir / "terrain.obj";
+  std::ofstream(obj, std::ios::binary) << test::triangles_obj(terrain_with_trees());
+  const IngestReport detected = ingest_models({obj}, dir / "a.store.db", {}, tbb_parallel_for());
+  EXPECT_EQ(detected.up, "y");
+  EXPECT_NE(detected.up_source.find("as terrain does"), std::string::npos) << detected.up_source;
+  IngestParams given;
+  given.up = "z";
+  const IngestReport kept = ingest_models({obj}, dir / "b.store.db", given, tbb_parallel_for());
+  EXPECT_EQ(kept.up, "z");
+  EXPECT_EQ(kept.up_warning, "");
 }
 
 }  // namespace
