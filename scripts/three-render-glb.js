@@ -102,6 +102,7 @@ async function main() {
   const three_root = path.resolve(package_root('three'));
   const { chromium } = require(package_root('playwright-core'));
 
+  const missing = [];  // URLs the page asked for that are not there
   const server = http.createServer((req, res) => {
     const url = decodeURIComponent(req.url.split('?')[0]);
     let body = null, type = 'application/octet-stream';
@@ -114,7 +115,8 @@ async function main() {
         if (file.endsWith('.js')) type = 'text/javascript';
       }
     }
-    if (body === null) { res.writeHead(404); res.end(); return; }
+    if (url === '/favicon.ico') { res.writeHead(204); res.end(); return; }
+    if (body === null) { missing.push(url); res.writeHead(404); res.end(); return; }
     res.writeHead(200, { 'Content-Type': type });
     res.end(body);
   });
@@ -132,7 +134,7 @@ async function main() {
     await page.goto(`http://127.0.0.1:${port}/index.html`);
     await page.waitForFunction(() => window.pageReady === true, null, { timeout: 60000 });
     const result = await page.evaluate((p) => window.renderGlb(p), args);
-    if (errors.length) throw new Error('page errors: ' + errors.join('; '));
+    if (errors.length) throw new Error('page errors: ' + errors.join('; ') + (missing.length ? ' (not found: ' + missing.join(', ') + ')' : ''));
     fs.writeFileSync(args.out, Buffer.from(result.png.split(',')[1], 'base64'));
     console.log(JSON.stringify({ out: args.out, triangles: result.triangles, draw_calls: result.calls }));
   } finally {

@@ -4,7 +4,7 @@
 // the same streams, errors naming the missing cell and store; and, where Node
 // and Chromium are installed (scripts/install-node-tools.sh), the Khronos
 // validator's verdict and a three.js render against `cellbake render`.
-// Two 64-pixel bakes of a small room (one cell each), ~2 s in all.
+// Three 64-pixel bakes of a small room (one cell each), a few seconds in all.
 #include <gtest/gtest.h>
 
 #include <meshoptimizer.h>
@@ -247,26 +247,28 @@ TEST(AffineFaceMesh, RefinementMeetsTheToleranceWithoutCracks) {
 
 // ------------------------------------------------------------- baked cells
 
-// Two bakes of the pillar room, one 2 m cell each at (2, 6, 1.6), 64-pixel
-// faces: `tdm` draws depth meshes only with PNG faces, `mixed` chooses far
-// geometry where it pays with AVIF faces (the bake's default format).
+// Three bakes of the pillar room from one store, one 2 m cell each at
+// (2, 6, 1.6), 64-pixel faces: `tdm` draws depth meshes only with PNG faces,
+// `tdm_avif` the same with AVIF faces (the bake's default format), `geometry`
+// its far field as exact geometry (the cheapest choice in this small room).
 struct BakedCells {
   test::TempDir dir;
-  std::filesystem::path tdm, mixed, store, mixed_store;
-  const std::filesystem::path& store_of(const std::filesystem::path& db) const { return db == mixed ? mixed_store : store; }
+  std::filesystem::path tdm, tdm_avif, geometry, store;
   BakedCells() {
     const Box3d region{{1, 5, 1.6}, {3, 7, 1.6}};
     BakeConfig a = test::obj_room_bake_config(dir.path(), test::pillar_room_obj(), region, 300, 64);
     a.far_choice = "tdm";
     a.database = dir / "tdm.db";
     EXPECT_EQ(test::bake_quietly(a).cells_baked, 1u);
-    // Walls of 24 x 24 quads: flat walls cost more as geometry than as depth
-    // meshes, the pillar less (a separate folder: its own store).
-    std::filesystem::create_directories(dir / "mixed");
-    BakeConfig b = test::obj_room_bake_config(dir / "mixed", test::pillar_room_obj(24), region, 300, 64);
+    BakeConfig b = a;
     b.image_format = "avif";
+    b.database = dir / "tdm_avif.db";
     EXPECT_EQ(test::bake_quietly(b).cells_baked, 1u);
-    tdm = a.database, mixed = b.database, store = a.store, mixed_store = b.store;
+    BakeConfig c = a;
+    c.far_choice = "cheapest";
+    c.database = dir / "geometry.db";
+    EXPECT_EQ(test::bake_quietly(c).cells_baked, 1u);
+    tdm = a.database, tdm_avif = b.database, geometry = c.database, store = a.store;
   }
 };
 
@@ -284,7 +286,7 @@ struct Exported {
 
 Exported export_cell(const std::filesystem::path& db_path, bool compress) {
   const CellDb db(db_path, CellDb::Mode::read_only);
-  const GeometryStore store(baked().store_of(db_path));
+  const GeometryStore store(baked().store);
   Exported e;
   e.row = *db.get_cell(1, true);
   e.cell = decode_cell(e.row, &store);
@@ -312,7 +314,8 @@ int child_named(const json& doc, int parent, const std::string& name) {
 }
 
 TEST(Export, CellGlbHoldsTheCellsTrianglesWithinTheirBounds) {
-  const Exported e = export_cell(baked().mixed, false);
+  const Exported e = export_cell(baked().geometry, false);
+  ASSERT_FALSE(e.cell.far_pieces.empty() && e.cell.far_whole_ids.empty());
   const ParsedGlb glb = parse_glb(e.bytes);
   const json& doc = glb.json;
   EXPECT_EQ(doc["extensionsRequired"], json({"KHR_mesh_quantization"}));
@@ -332,7 +335,7 @@ TEST(Export, CellGlbHoldsTheCellsTrianglesWithinTheirBounds) {
 
   // Every near chunk of the cell is a node whose mesh holds the chunk's
   // triangles, its dequantised positions within the chunk's bounds.
-  const GeometryStore store(baked().mixed_store);
+  const GeometryStore store(baked().store);
   const int near = child_named(doc, cell_node, "near field");
   ASSERT_GE(near, 0);
   std::vector<int> chunk_nodes;
@@ -379,12 +382,19 @@ TEST(Export, CellGlbHoldsTheCellsTrianglesWithinTheirBounds) {
     triangles += chunk_triangles;
   }
   EXPECT_EQ(triangles, e.stats.near_triangles);
-  // The far field: exact geometry and depth meshes, as decoded.
-  EXPECT_EQ(e.stats.depth_mesh_triangles, e.cell.far_triangles);
-  EXPECT_GE(e.stats.depth_mesh_triangles_out, e.stats.depth_mesh_triangles);
-  std::vector<int> faces;
-  collect(doc, cell_node, "face ", faces);
-  EXPECT_EQ(faces.size(), e.cell.faces.size());
+  // The far geometry: as many triangles as the cell's row holds (pieces cut
+  // out of store chunks; here no chunk is also in the near field).
+  const int far = child_named(doc, cell_node, "far geometry");
+  ASSERT_GE(far, 0);
+  std::vector<int> far_nodes;
+  collect(doc, far, "chunk ", far_nodes);
+  EXPECT_EQ(far_nodes.size(), e.cell.far_pieces.size() + e.cell.far_whole_ids.size());
+  std::uint64_t far_triangles = 0;
+  for (int n : far_nodes)
+    for (const json& p : doc["meshes"][doc["nodes"][n]["mesh"].get<int>()]["primitives"])
+      far_triangles += doc["accessors"][p["indices"].get<int>()]["count"].get<std::uint64_t>() / 3;
+  EXPECT_EQ(far_triangles, e.cell.far_geometry_triangles);
+  EXPECT_EQ(e.stats.far_geometry_triangles, e.cell.far_geometry_triangles);
   EXPECT_EQ(e.stats.bytes, e.bytes.size());
 }
 
@@ -422,7 +432,7 @@ TEST(Export, TexturedDepthMeshCarriesItsStoredImage) {
 }
 
 TEST(Export, CompressedStreamsDecodeToTheUncompressedOnes) {
-  const Exported plain = export_cell(baked().mixed, false), packed = export_cell(baked().mixed, true);
+  const Exported plain = export_cell(baked().tdm_avif, false), packed = export_cell(baked().tdm_avif, true);
   const ParsedGlb a = parse_glb(plain.bytes), b = parse_glb(packed.bytes);
   EXPECT_LT(packed.bytes.size(), plain.bytes.size());
   // AVIF faces: re-encoded as JPEG plainly, kept as stored when compressed.
@@ -519,9 +529,10 @@ TEST(ExportTools, KhronosValidatorReportsNoErrors) {
   if (!have_node_package("gltf-validator"))
     GTEST_SKIP() << "no gltf-validator in " << node_tools() << " (scripts/install-node-tools.sh)";
   test::TempDir dir;
-  for (const auto& [db, name] : {std::pair{baked().tdm, "tdm"}, std::pair{baked().mixed, "mixed"}}) {
+  for (const auto& [db, name] :
+       {std::pair{baked().tdm, "tdm"}, std::pair{baked().tdm_avif, "tdm_avif"}, std::pair{baked().geometry, "geometry"}}) {
     const auto out = dir / (std::string(name) + ".glb");
-    const test::CommandResult ex = test::run_cellbake("export " + q(db) + " --cell 1 --store " + q(baked().store_of(db)) + " --out " + q(out));
+    const test::CommandResult ex = test::run_cellbake("export " + q(db) + " --cell 1 --store " + q(baked().store) + " --out " + q(out));
     ASSERT_EQ(ex.exit_code, 0) << ex.output;
     const test::CommandResult v = test::run_shell(node_command("validate-gltf.js") + " " + q(out));
     EXPECT_EQ(v.exit_code, 0) << v.output;
@@ -551,14 +562,15 @@ TEST(ExportTools, ThreeJsRenderMatchesCellbakeRender) {
     GTEST_SKIP() << "no Chromium (apt-get install chromium, or CHROMIUM=path)";
   test::TempDir dir;
   const std::string view = " --eye 2,6,1.6 --look 12,6.5,1.4 --size 160x120";  // the cell's root sample point
-  for (const auto& [db, compress] : {std::pair{baked().mixed, false}, std::pair{baked().mixed, true}, std::pair{baked().tdm, false}}) {
+  for (const auto& [db, compress] :
+       {std::pair{baked().geometry, false}, std::pair{baked().tdm_avif, false}, std::pair{baked().tdm_avif, true}}) {
     const auto glb = dir / "cell.glb", three = dir / "three.png", ours = dir / "ours.png";
-    const test::CommandResult ex = test::run_cellbake("export " + q(db) + " --cell 1 --store " + q(baked().store_of(db)) +
+    const test::CommandResult ex = test::run_cellbake("export " + q(db) + " --cell 1 --store " + q(baked().store) +
                                                       " --out " + q(glb) + (compress ? " --compress" : ""));
     ASSERT_EQ(ex.exit_code, 0) << ex.output;
     const test::CommandResult r = test::run_shell(node_command("three-render-glb.js") + " --glb " + q(glb) + view + " --out " + q(three));
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    const test::CommandResult c = test::run_cellbake("render " + q(db) + " --store " + q(baked().store_of(db)) + view + " --out " + q(ours));
+    const test::CommandResult c = test::run_cellbake("render " + q(db) + " --store " + q(baked().store) + view + " --out " + q(ours));
     ASSERT_EQ(c.exit_code, 0) << c.output;
     const DecodedImage a = decode_image(read_bytes(three)), b = decode_image(read_bytes(ours));
     ASSERT_EQ(a.width, b.width);

@@ -7,6 +7,7 @@
 
 #include "pipeline/export/affine_face_mesh.h"
 #include "pipeline/export/glb_builder.h"
+#include "pipeline/export/gltf_image.h"
 #include "pipeline/export/gltf_vertex_streams.h"
 #include "stages/encode.h"
 
@@ -238,11 +239,9 @@ class SceneWriter {
     for (int y = 0; y < t->height; ++y)
       std::copy_n(t->texels.begin() + std::ptrdiff_t(y) * t->width, t->width,
                   rows.begin() + std::ptrdiff_t(t->height - 1 - y) * t->width);
-    const bool png = t->has_alpha;
-    const std::vector<std::uint8_t> bytes =
-        encode_image(rows, t->width, t->height, {png ? "png" : "jpeg", options_.jpeg_quality});
+    const GltfImage encoded = encode_gltf_image(rows, t->width, t->height, t->has_alpha, options_.jpeg_quality);
     ++stats_.images_reencoded;
-    const int image = add_image(bytes, png ? "image/png" : "image/jpeg");
+    const int image = add_image(encoded.bytes, encoded.mime_type);
     const int sampler = add_sampler(kLinear, kLinearMipmapLinear, gl_wrap(t->wrap_u), gl_wrap(t->wrap_v));
     return store_textures_[id] = add_texture(image, sampler);
   }
@@ -259,14 +258,14 @@ class SceneWriter {
       texture = add_texture(add_image(stored->image, "image/" + format), sampler, "EXT_texture_" + format);
     } else {
       const DecodedImage& im = face.image;
-      std::vector<std::uint8_t> bytes;
+      GltfImage encoded;
       try {
-        bytes = encode_image(im.pixels, im.width, im.height, {"jpeg", options_.jpeg_quality});
+        encoded = encode_gltf_image(im.pixels, im.width, im.height, false, options_.jpeg_quality);
       } catch (const std::exception& e) {
-        throw std::runtime_error(name + ": image: " + e.what());
+        throw std::runtime_error(name + ": " + e.what());
       }
       ++stats_.images_reencoded;
-      texture = add_texture(add_image(bytes, "image/jpeg"), sampler);
+      texture = add_texture(add_image(encoded.bytes, encoded.mime_type), sampler);
     }
     json pbr{{"baseColorFactor", {1, 1, 1, 1}},
              {"metallicFactor", 0},
