@@ -154,6 +154,11 @@ void add_export_command(CLI::App& app) {
                   "Quality of images re-encoded as JPEG (faces stored as AVIF/WebP/JPEG XL, textures)")
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
+  cmd->add_option("--color-bits", opt->exporter.color_bits, "Bits of the linear vertex colours: 8 or 16")
+      ->check(CLI::IsMember({8, 16}))
+      ->capture_default_str();
+  cmd->add_flag("--normals", opt->exporter.normals,
+                "Write chunk normals (int8) for relighting elsewhere; the unlit materials do not use them");
   cmd->add_flag("--json", opt->json, "Print the summary as JSON");
   cmd->callback([opt, cell, cells] {
     if (cell->count() == 0 && cells->count() == 0) throw std::invalid_argument("give --cell ID or --cells SEL");

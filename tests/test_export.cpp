@@ -127,6 +127,17 @@ TEST(VertexStreams, QuantisedPositionsStayWithinTheBound) {
   EXPECT_LE(worst, bound);
   EXPECT_GT(worst, bound / 4);  // the bound is not loose by orders of magnitude
   EXPECT_THROW(quantize_positions(std::vector<Vec3d>{{18, 100, -995}}, pq), std::invalid_argument);
+  // At 12 bits the values are multiples of 16 and the bound 16 times looser.
+  const PositionQuantization p12 = position_quantization(bounds, 12);
+  const std::vector<std::int16_t> q12 = quantize_positions(points, p12);
+  double worst12 = 0;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_EQ(q12[4 * i + a] % 16, 0);
+      worst12 = std::max(worst12, std::abs(p12.translation[a] + p12.scale * q12[4 * i + a] / 32767.0 - points[i][a]));
+    }
+  EXPECT_LE(worst12, position_error_bound(p12));
+  EXPECT_GT(worst12, bound * 4);
 }
 
 TEST(VertexStreams, NormalsUvsAndColoursWithinHalfAStep) {
@@ -151,6 +162,8 @@ TEST(VertexStreams, NormalsUvsAndColoursWithinHalfAStep) {
   EXPECT_NEAR(c[1] / 65535.0, 0.2158605, 1e-5);
   EXPECT_EQ(c[2], 65535);
   EXPECT_EQ(c[3], 128 * 257);
+  const std::vector<std::uint8_t> c8 = linear_colors8(std::vector<Rgba8>{{0, 128, 255, 128}});
+  EXPECT_EQ(c8, std::vector<std::uint8_t>({0, 55, 255, 128}));  // 0.2158605 * 255 = 55.04
 }
 
 // ------------------------------------------------------- affine depth meshes
@@ -357,8 +370,10 @@ TEST(Export, CellGlbHoldsTheCellsTrianglesWithinTheirBounds) {
       EXPECT_TRUE(pos["normalized"].get<bool>());
       EXPECT_EQ(idx["count"].get<std::size_t>() % 3, 0u);
       chunk_triangles += idx["count"].get<std::size_t>() / 3;
-      for (const char* attribute : {"NORMAL", "COLOR_0"})
-        EXPECT_EQ(doc["accessors"][p["attributes"][attribute].get<int>()]["count"], pos["count"]) << attribute;
+      const json& colour = doc["accessors"][p["attributes"]["COLOR_0"].get<int>()];
+      EXPECT_EQ(colour["count"], pos["count"]);
+      EXPECT_EQ(colour["componentType"], gltf::kUnsignedByte);  // 8-bit linear, the default
+      EXPECT_FALSE(p["attributes"].contains("NORMAL"));  // unlit: normals only when asked for
       // min / max are those of the data, and the data lies in the chunk's bounds.
       const auto data = view_bytes(glb, pos["bufferView"]);
       const std::size_t n = pos["count"];
@@ -493,6 +508,13 @@ TEST(ExportCommand, WritesTheFileAndNamesAMissingCellOrStore) {
   const json summary = json::parse(ok.output.substr(ok.output.find('{')));
   EXPECT_EQ(summary["bytes"], std::filesystem::file_size(out));
   EXPECT_EQ(parse_glb(read_bytes(out)).json["nodes"][1]["name"], "cell 1");
+  const auto relit = dir / "relit.glb";
+  ASSERT_EQ(test::run_cellbake("export " + q(baked().tdm) + " --cell 1 --store " + q(baked().store) + " --out " + q(relit) +
+                               " --normals --color-bits 16").exit_code, 0);
+  const json doc = parse_glb(read_bytes(relit)).json;
+  const json& chunk = doc["meshes"][0]["primitives"][0]["attributes"];  // the first near chunk's
+  EXPECT_EQ(doc["accessors"][chunk["NORMAL"].get<int>()]["componentType"], gltf::kByte);
+  EXPECT_EQ(doc["accessors"][chunk["COLOR_0"].get<int>()]["componentType"], gltf::kUnsignedShort);
 
   const test::CommandResult no_cell =
       test::run_cellbake("export " + q(baked().tdm) + " --cell 7 --store " + q(baked().store) + " --out " + q(dir / "x.glb"));

@@ -127,7 +127,7 @@ class SceneWriter {
         colour.a = 255;
         e.indices.push_back(static_cast<std::uint32_t>(e.positions.size()));
         e.positions.push_back(p[k]);
-        e.normals.push_back({static_cast<float>(n.x), static_cast<float>(n.y), static_cast<float>(n.z)});
+        if (options_.normals) e.normals.push_back({static_cast<float>(n.x), static_cast<float>(n.y), static_cast<float>(n.z)});
         e.colors.push_back(colour);
         if (textured) {
           e.uvs.push_back({c.uvs[v].u, 1.0f - c.uvs[v].v});  // the store's origin is bottom-left, glTF's top-left
@@ -159,7 +159,7 @@ class SceneWriter {
     json list = json::array();
     for (std::size_t k = 0; k < primitives.size(); ++k) {
       if (primitives[k].indices.empty()) continue;
-      json primitive = add_primitive_streams(glb_, primitives[k], placed.q, options_.compress);
+      json primitive = add_primitive_streams(glb_, primitives[k], placed.q, options_.compress, options_.color_bits);
       primitive["material"] = materials[k];
       list.push_back(std::move(primitive));
     }

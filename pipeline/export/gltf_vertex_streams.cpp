@@ -61,25 +61,33 @@ int add_stream(GlbBuilder& glb, std::span<const std::uint8_t> bytes, std::size_t
 
 }  // namespace
 
-PositionQuantization position_quantization(const Box3d& bounds) {
+namespace {
+int position_step(int bits) { return 1 << (16 - bits); }
+}  // namespace
+
+PositionQuantization position_quantization(const Box3d& bounds, int bits) {
   if (bounds.empty() || !is_finite(bounds.lo) || !is_finite(bounds.hi))
     throw std::invalid_argument("glTF export: positions need finite, non-empty bounds");
+  if (bits < 8 || bits > 16) throw std::invalid_argument("glTF export: position bits " + std::to_string(bits) + " outside 8..16");
   const Vec3d half = bounds.extent() * 0.5;
-  return {bounds.center(), std::max({half.x, half.y, half.z, 1e-9})};
+  const double largest = std::max({half.x, half.y, half.z, 1e-9});
+  const int step = position_step(bits), levels = 32767 / step;
+  // q = step * round(offset / largest * levels), so that q = +-levels * step at the extremes.
+  return {bounds.center(), largest * kInt16Max / (double(levels) * step), bits};
 }
 
 double position_error_bound(const PositionQuantization& q) {
   const double largest = std::max({std::abs(q.translation.x), std::abs(q.translation.y), std::abs(q.translation.z)}) + q.scale;
-  return q.scale / kInt16Max / 2 + 2 * largest * std::numeric_limits<float>::epsilon();
+  return q.scale * position_step(q.bits) / kInt16Max / 2 + 2 * largest * std::numeric_limits<float>::epsilon();
 }
 
 std::vector<std::int16_t> quantize_positions(std::span<const Vec3d> positions, const PositionQuantization& q) {
+  const int step = position_step(q.bits);
   std::vector<std::int16_t> out(positions.size() * 4, 0);
   for (std::size_t i = 0; i < positions.size(); ++i) {
-    const Vec3d r = (positions[i] - q.translation) * (kInt16Max / q.scale);
+    const Vec3d r = (positions[i] - q.translation) * (kInt16Max / (q.scale * step));
     for (int a = 0; a < 3; ++a) {
-      const double v = std::round(r[a]);
-      // Half a step of slack: the bounds' own corners round onto +-32767.
+      const double v = std::round(r[a]) * step;
       if (!(std::abs(v) <= kInt16Max))
         throw std::invalid_argument("glTF export: position " + std::to_string(i) + " lies outside its quantisation range");
       out[4 * i + a] = static_cast<std::int16_t>(v);
@@ -128,6 +136,13 @@ std::vector<std::uint16_t> linear_colors(std::span<const Rgba8> colors) {
   return out;
 }
 
+std::vector<std::uint8_t> linear_colors8(std::span<const Rgba8> colors) {
+  const std::vector<std::uint16_t> wide = linear_colors(colors);
+  std::vector<std::uint8_t> out(wide.size());
+  for (std::size_t i = 0; i < wide.size(); ++i) out[i] = static_cast<std::uint8_t>((wide[i] * 255 + 32767) / 65535);
+  return out;
+}
+
 std::size_t weld_vertices(ExportMesh& m) {
   check_mesh(m);
   const std::size_t n = m.positions.size();
@@ -154,7 +169,7 @@ void optimize_mesh_order(ExportMesh& m) {
 }
 
 nlohmann::json add_primitive_streams(GlbBuilder& glb, const ExportMesh& m, const PositionQuantization& q,
-                                     bool compress) {
+                                     bool compress, int color_bits) {
   check_mesh(m);
   glb.use_extension("KHR_mesh_quantization", true);
   const std::size_t n = m.positions.size();
@@ -174,8 +189,12 @@ nlohmann::json add_primitive_streams(GlbBuilder& glb, const ExportMesh& m, const
     attributes["NORMAL"] = glb.add_accessor(add_stream(glb, as_bytes_of(quantize_normals(m.normals)), n, 4, compress),
                                             gltf::kByte, true, n, "VEC3");
   if (!m.colors.empty())
-    attributes["COLOR_0"] = glb.add_accessor(add_stream(glb, as_bytes_of(linear_colors(m.colors)), n, 8, compress),
-                                             gltf::kUnsignedShort, true, n, "VEC4");
+    attributes["COLOR_0"] =
+        color_bits == 8
+            ? glb.add_accessor(add_stream(glb, as_bytes_of(linear_colors8(m.colors)), n, 4, compress),
+                               gltf::kUnsignedByte, true, n, "VEC4")
+            : glb.add_accessor(add_stream(glb, as_bytes_of(linear_colors(m.colors)), n, 8, compress),
+                               gltf::kUnsignedShort, true, n, "VEC4");
   if (!m.uvs.empty()) {
     if (uvs_in_unit_square(m.uvs)) {
       attributes["TEXCOORD_0"] = glb.add_accessor(add_stream(glb, as_bytes_of(quantize_uvs(m.uvs)), n, 4, compress),

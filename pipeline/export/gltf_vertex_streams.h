@@ -34,21 +34,25 @@ struct ExportMesh {
 };
 
 // The dequantisation of a mesh's positions: world = translation + scale * q / 32767
-// for int16 values q in [-32767, 32767] (the node's translation and uniform scale).
+// for int16 values q in [-32767, 32767] (the node's translation and uniform
+// scale). With fewer than 16 bits, q are multiples of 2^(16 - bits): the same
+// int16 streams, whose low bits the meshoptimizer codec then codes as zeros.
 struct PositionQuantization {
   Vec3d translation;
   double scale = 1;
+  int bits = 16;
 };
 
-// The quantisation of positions within `bounds` (not empty): the box centre
-// and the largest half extent (at least 1e-9, so a flat or point-like mesh
-// still has a scale). Throws std::invalid_argument for an empty or
-// non-finite box.
-PositionQuantization position_quantization(const Box3d& bounds);
+// The quantisation of positions within `bounds` (not empty) to `bits`
+// (8..16) bits: the box centre, and a scale that maps the largest half extent
+// (at least 1e-9, so a flat or point-like mesh still has one) onto the
+// largest multiple of the step within 32767. Throws std::invalid_argument for
+// an empty or non-finite box or bits outside 8..16.
+PositionQuantization position_quantization(const Box3d& bounds, int bits = 16);
 
 // The largest distance per axis between a position in the quantised bounds
-// and its dequantised value: half a step, scale / 32767 / 2, plus float32
-// rounding of the dequantised value.
+// and its dequantised value: half a step, (largest half extent) / (2^(bits-1) - 1) / 2,
+// plus float32 rounding of the dequantised value.
 double position_error_bound(const PositionQuantization& q);
 
 // Positions as int16 x, y, z and a zero pad (8-byte stride). Throws
@@ -62,6 +66,8 @@ bool uvs_in_unit_square(std::span<const Uv> uvs);
 // sRGB-encoded colours as linear uint16 r, g, b, a (alpha linear already),
 // the sRGB transfer function (IEC 61966-2-1) inverted, rounded to the nearest 1/65535.
 std::vector<std::uint16_t> linear_colors(std::span<const Rgba8> colors);
+// The same at 8 bits (rounded to the nearest 1/255 of linear).
+std::vector<std::uint8_t> linear_colors8(std::span<const Rgba8> colors);
 
 // Merges vertices whose position and attributes are all equal, keeping the
 // first of each in order, and renumbers the indices. Returns the vertices removed.
@@ -74,12 +80,12 @@ void optimize_mesh_order(ExportMesh& mesh);
 
 // Appends the primitive's streams to `glb` (quantised with `q`; compressed
 // with meshoptimizer's codecs when `compress`) and returns its glTF
-// primitive object: attributes (POSITION with min/max, NORMAL, COLOR_0,
-// TEXCOORD_0 as present), indices (uint16 when there are fewer than 65535
+// primitive object: attributes (POSITION with min/max, NORMAL, COLOR_0 as
+// uint16 or, with `color_bits` 8, uint8 linear RGBA, TEXCOORD_0 as present), indices (uint16 when there are fewer than 65535
 // vertices, else uint32) and mode 4 (triangles). Marks KHR_mesh_quantization
 // required. Throws std::invalid_argument for attribute vectors not one per
 // position, an index out of range or an index count not a multiple of 3.
 nlohmann::json add_primitive_streams(GlbBuilder& glb, const ExportMesh& mesh, const PositionQuantization& q,
-                                     bool compress);
+                                     bool compress, int color_bits = 16);
 
 }  // namespace cellbake
