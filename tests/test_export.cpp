@@ -260,28 +260,30 @@ TEST(AffineFaceMesh, RefinementMeetsTheToleranceWithoutCracks) {
 
 // ------------------------------------------------------------- baked cells
 
-// Three bakes of the pillar room from one store, one 2 m cell each at
-// (2, 6, 1.6), 64-pixel faces: `tdm` draws depth meshes only with PNG faces,
-// `tdm_avif` the same with AVIF faces (the bake's default format), `geometry`
-// its far field as exact geometry (the cheapest choice in this small room).
+// Bakes of the pillar room from one store, one 2 m cell each at (2, 6, 1.6),
+// 64-pixel faces, each made when a test first asks for it (CTest runs every
+// test in a process of its own): "tdm" draws depth meshes only with PNG
+// faces, "tdm_avif" the same with AVIF faces (the bake's default format),
+// "geometry" its far field as exact geometry (the cheapest choice in this
+// small room).
 struct BakedCells {
   test::TempDir dir;
-  std::filesystem::path tdm, tdm_avif, geometry, store;
+  BakeConfig base;
+  std::filesystem::path store;
+  std::map<std::string, std::filesystem::path> done;
   BakedCells() {
-    const Box3d region{{1, 5, 1.6}, {3, 7, 1.6}};
-    BakeConfig a = test::obj_room_bake_config(dir.path(), test::pillar_room_obj(), region, 300, 64);
-    a.far_choice = "tdm";
-    a.database = dir / "tdm.db";
-    EXPECT_EQ(test::bake_quietly(a).cells_baked, 1u);
-    BakeConfig b = a;
-    b.image_format = "avif";
-    b.database = dir / "tdm_avif.db";
-    EXPECT_EQ(test::bake_quietly(b).cells_baked, 1u);
-    BakeConfig c = a;
-    c.far_choice = "cheapest";
-    c.database = dir / "geometry.db";
-    EXPECT_EQ(test::bake_quietly(c).cells_baked, 1u);
-    tdm = a.database, tdm_avif = b.database, geometry = c.database, store = a.store;
+    base = test::obj_room_bake_config(dir.path(), test::pillar_room_obj(), Box3d{{1, 5, 1.6}, {3, 7, 1.6}}, 300, 64);
+    base.far_choice = "tdm";
+    store = base.store;
+  }
+  const std::filesystem::path& db(const std::string& name) {
+    if (auto it = done.find(name); it != done.end()) return it->second;
+    BakeConfig c = base;
+    if (name == "tdm_avif") c.image_format = "avif";
+    if (name == "geometry") c.far_choice = "cheapest";
+    c.database = dir / (name + ".db");
+    EXPECT_EQ(test::bake_quietly(c).cells_baked, 1u) << name;
+    return done[name] = c.database;
   }
 };
 
@@ -327,7 +329,7 @@ int child_named(const json& doc, int parent, const std::string& name) {
 }
 
 TEST(Export, CellGlbHoldsTheCellsTrianglesWithinTheirBounds) {
-  const Exported e = export_cell(baked().geometry, false);
+  const Exported e = export_cell(baked().db("geometry"), false);
   ASSERT_FALSE(e.cell.far_pieces.empty() && e.cell.far_whole_ids.empty());
   const ParsedGlb glb = parse_glb(e.bytes);
   const json& doc = glb.json;
@@ -414,7 +416,7 @@ TEST(Export, CellGlbHoldsTheCellsTrianglesWithinTheirBounds) {
 }
 
 TEST(Export, TexturedDepthMeshCarriesItsStoredImage) {
-  const Exported e = export_cell(baked().tdm, false);
+  const Exported e = export_cell(baked().db("tdm"), false);
   ASSERT_FALSE(e.cell.faces.empty());
   EXPECT_TRUE(e.cell.far_pieces.empty() && e.cell.far_whole_ids.empty());
   const ParsedGlb glb = parse_glb(e.bytes);
@@ -447,7 +449,7 @@ TEST(Export, TexturedDepthMeshCarriesItsStoredImage) {
 }
 
 TEST(Export, CompressedStreamsDecodeToTheUncompressedOnes) {
-  const Exported plain = export_cell(baked().tdm_avif, false), packed = export_cell(baked().tdm_avif, true);
+  const Exported plain = export_cell(baked().db("tdm_avif"), false), packed = export_cell(baked().db("tdm_avif"), true);
   const ParsedGlb a = parse_glb(plain.bytes), b = parse_glb(packed.bytes);
   EXPECT_LT(packed.bytes.size(), plain.bytes.size());
   // AVIF faces: re-encoded as JPEG plainly, kept as stored when compressed.
@@ -503,13 +505,13 @@ TEST(ExportCommand, WritesTheFileAndNamesAMissingCellOrStore) {
   test::TempDir dir;
   const auto out = dir / "cell.glb";
   const test::CommandResult ok =
-      test::run_cellbake("export " + q(baked().tdm) + " --cell 1 --store " + q(baked().store) + " --out " + q(out) + " --json");
+      test::run_cellbake("export " + q(baked().db("tdm")) + " --cell 1 --store " + q(baked().store) + " --out " + q(out) + " --json");
   ASSERT_EQ(ok.exit_code, 0) << ok.output;
   const json summary = json::parse(ok.output.substr(ok.output.find('{')));
   EXPECT_EQ(summary["bytes"], std::filesystem::file_size(out));
   EXPECT_EQ(parse_glb(read_bytes(out)).json["nodes"][1]["name"], "cell 1");
   const auto relit = dir / "relit.glb";
-  ASSERT_EQ(test::run_cellbake("export " + q(baked().tdm) + " --cell 1 --store " + q(baked().store) + " --out " + q(relit) +
+  ASSERT_EQ(test::run_cellbake("export " + q(baked().db("tdm")) + " --cell 1 --store " + q(baked().store) + " --out " + q(relit) +
                                " --normals --color-bits 16").exit_code, 0);
   const json doc = parse_glb(read_bytes(relit)).json;
   const json& chunk = doc["meshes"][0]["primitives"][0]["attributes"];  // the first near chunk's
@@ -517,14 +519,14 @@ TEST(ExportCommand, WritesTheFileAndNamesAMissingCellOrStore) {
   EXPECT_EQ(doc["accessors"][chunk["COLOR_0"].get<int>()]["componentType"], gltf::kUnsignedShort);
 
   const test::CommandResult no_cell =
-      test::run_cellbake("export " + q(baked().tdm) + " --cell 7 --store " + q(baked().store) + " --out " + q(dir / "x.glb"));
+      test::run_cellbake("export " + q(baked().db("tdm")) + " --cell 7 --store " + q(baked().store) + " --out " + q(dir / "x.glb"));
   EXPECT_EQ(no_cell.exit_code, 1);
   EXPECT_NE(no_cell.output.find("cell 7 is not in"), std::string::npos) << no_cell.output;
   const test::CommandResult no_store =
-      test::run_cellbake("export " + q(baked().tdm) + " --cells 1- --store " + q(dir / "gone.db") + " --out " + q(dir / "x.glb"));
+      test::run_cellbake("export " + q(baked().db("tdm")) + " --cells 1- --store " + q(dir / "gone.db") + " --out " + q(dir / "x.glb"));
   EXPECT_EQ(no_store.exit_code, 1);
   EXPECT_NE(no_store.output.find("gone.db"), std::string::npos) << no_store.output;
-  const test::CommandResult neither = test::run_cellbake("export " + q(baked().tdm) + " --out " + q(dir / "x.glb"));
+  const test::CommandResult neither = test::run_cellbake("export " + q(baked().db("tdm")) + " --out " + q(dir / "x.glb"));
   EXPECT_NE(neither.exit_code, 0);
   EXPECT_NE(neither.output.find("--cell"), std::string::npos) << neither.output;
   EXPECT_FALSE(std::filesystem::exists(dir / "x.glb"));
@@ -552,7 +554,7 @@ TEST(ExportTools, KhronosValidatorReportsNoErrors) {
     GTEST_SKIP() << "no gltf-validator in " << node_tools() << " (scripts/install-node-tools.sh)";
   test::TempDir dir;
   for (const auto& [db, name] :
-       {std::pair{baked().tdm, "tdm"}, std::pair{baked().tdm_avif, "tdm_avif"}, std::pair{baked().geometry, "geometry"}}) {
+       {std::pair{baked().db("tdm"), "tdm"}, std::pair{baked().db("tdm_avif"), "tdm_avif"}, std::pair{baked().db("geometry"), "geometry"}}) {
     const auto out = dir / (std::string(name) + ".glb");
     const test::CommandResult ex = test::run_cellbake("export " + q(db) + " --cell 1 --store " + q(baked().store) + " --out " + q(out));
     ASSERT_EQ(ex.exit_code, 0) << ex.output;
@@ -585,7 +587,7 @@ TEST(ExportTools, ThreeJsRenderMatchesCellbakeRender) {
   test::TempDir dir;
   const std::string view = " --eye 2,6,1.6 --look 12,6.5,1.4 --size 160x120";  // the cell's root sample point
   for (const auto& [db, compress] :
-       {std::pair{baked().geometry, false}, std::pair{baked().tdm_avif, false}, std::pair{baked().tdm_avif, true}}) {
+       {std::pair{baked().db("geometry"), false}, std::pair{baked().db("tdm_avif"), false}, std::pair{baked().db("tdm_avif"), true}}) {
     const auto glb = dir / "cell.glb", three = dir / "three.png", ours = dir / "ours.png";
     const test::CommandResult ex = test::run_cellbake("export " + q(db) + " --cell 1 --store " + q(baked().store) +
                                                       " --out " + q(glb) + (compress ? " --compress" : ""));
