@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -26,6 +27,7 @@
 #include "storage/cell_db.h"
 #include "storage/geometry_store.h"
 #include "fixture_room_obj.h"
+#include "fixture_textured.h"
 #include "test_support.h"
 
 namespace cellbake {
@@ -499,6 +501,74 @@ TEST(Export, CompressedStreamsDecodeToTheUncompressedOnes) {
     ++compared;
   }
   EXPECT_GT(compared, 10u);
+}
+
+// A store chunk with a material texture: the texture embedded (rows top
+// first, as image files hold them), texture coordinates flipped to glTF's
+// top-left origin, the store's wrap modes. The cell is made by hand over the
+// ingested checker quad (no bake needed: a near field of every chunk).
+TEST(Export, TexturedChunkCarriesItsTextureWithGltfsUvOrigin) {
+  test::TempDir dir;
+  test::write_png_bottom_up(dir / "checker.png", test::checker_texels(8, 8), 64, 64);
+  const auto obj = test::write_textured_quad_obj(dir.path(), "checker", test::checker_wall(), "checker", "checker.png");
+  ingest_models({obj}, dir / "s.db", IngestParams{}, [](std::size_t n, const std::function<void(std::size_t)>& fn) {
+    for (std::size_t i = 0; i < n; ++i) fn(i);
+  });
+  const GeometryStore store(dir / "s.db");
+  CellRow row;
+  row.id = 1;
+  row.status = "done";
+  row.bounds = Box3d{{1, 5, 0.6}, {3, 7, 2.6}};
+  DecodedCell cell;
+  cell.id = 1;
+  cell.bounds = row.bounds;
+  for (const ChunkRef& r : store.query(store.model_bounds())) cell.near_ids.push_back(r.id);
+  ASSERT_EQ(cell.near_ids.size(), 1u);
+  GltfSceneContext context;
+  context.lights = shading_lights(ShadingParams{}, context.up);
+  const ParsedGlb glb = parse_glb(export_cells_glb({{&row, &cell}}, store, context, GltfExportOptions{}));
+  const json& doc = glb.json;
+  const json& primitive = doc["meshes"][0]["primitives"][0];
+  const json& material = doc["materials"][primitive["material"].get<int>()];
+  EXPECT_EQ(material["name"], "checker");
+  const json& texture = doc["textures"][material["pbrMetallicRoughness"]["baseColorTexture"]["index"].get<int>()];
+  EXPECT_EQ(doc["samplers"][texture["sampler"].get<int>()]["minFilter"], 9987);  // trilinear, as the viewer draws it
+  const json& image = doc["images"][texture["source"].get<int>()];
+  EXPECT_EQ(image["mimeType"], "image/jpeg");  // no alpha
+  const auto bytes = view_bytes(glb, image["bufferView"]);
+  const DecodedImage embedded = decode_image(std::vector<std::uint8_t>(bytes.begin(), bytes.end()));
+  ASSERT_EQ(embedded.width, 64);
+  // The image's top-left square is the checker's (u 0, v 1) square: i = 0, j = 7.
+  const Rgba8 top_left = embedded.pixels[3 * 64 + 3], want = test::checker_square_colour(0, 7);
+  EXPECT_NEAR(top_left.r, want.r, 12);
+  EXPECT_NEAR(top_left.g, want.g, 12);
+  EXPECT_NEAR(top_left.b, want.b, 12);
+  // Corner c00 of the quad (world (4, 7, 0.6), the store's uv (0, 0)) has glTF uv (0, 1).
+  const json& node = doc["nodes"][doc["scenes"][0]["nodes"][0].get<int>()];
+  const json& info = node["extras"]["cellbake"];
+  const int chunk_node = doc["nodes"][doc["nodes"][node["children"][0].get<int>()]["children"][0].get<int>()]["children"][0];
+  const json& placed = doc["nodes"][chunk_node];
+  const json& pos = doc["accessors"][primitive["attributes"]["POSITION"].get<int>()];
+  const json& uv = doc["accessors"][primitive["attributes"]["TEXCOORD_0"].get<int>()];
+  const auto p16 = view_bytes(glb, pos["bufferView"]), t16 = view_bytes(glb, uv["bufferView"]);
+  bool found = false;
+  for (std::size_t i = 0; i < pos["count"].get<std::size_t>(); ++i) {
+    Vec3d world;
+    for (int a = 0; a < 3; ++a) {
+      std::int16_t q;
+      std::memcpy(&q, p16.data() + 8 * i + 2 * a, 2);
+      world[a] = info["origin"][a].get<double>() + placed["translation"][a].get<double>() +
+                 placed["scale"][a].get<double>() * q / 32767.0;
+    }
+    if (length(world - Vec3d{4, 7, 0.6}) > 1e-3) continue;
+    std::uint16_t u, v;
+    std::memcpy(&u, t16.data() + 4 * i, 2);
+    std::memcpy(&v, t16.data() + 4 * i + 2, 2);
+    EXPECT_EQ(u, 0);
+    EXPECT_EQ(v, 65535);
+    found = true;
+  }
+  EXPECT_TRUE(found);
 }
 
 TEST(ExportCommand, WritesTheFileAndNamesAMissingCellOrStore) {
