@@ -9,6 +9,8 @@
 #   bench  Google Benchmark (-DCELLBAKE_BUILD_BENCH=ON); libavcodec, libavutil
 #          and libswscale for bench_spatial_video (built only when present)
 #   slurm  the Slurm daemons and munge (scripts/slurm-local.sh, tests/test_slurm)
+#   browser  Node.js and Chromium: the glTF export's validator and three.js
+#          checks (tests/test_export; their npm packages: scripts/install-node-tools.sh)
 #
 # When nothing is missing it runs no apt-get at all. Installing needs root:
 # as root it runs apt-get, else through sudo when there is one; without sudo
@@ -27,13 +29,14 @@ declare -A group_packages=(
   [test]="libgtest-dev assimp-testmodels xvfb xauth"
   [bench]="libbenchmark-dev libavcodec-dev libavutil-dev libswscale-dev"
   [slurm]="slurmctld slurmd slurm-client munge"
+  [browser]="nodejs chromium"
 )
 
 groups=("$@")
 [ ${#groups[@]} -gt 0 ] || groups=(build)
 packages=()
 for g in "${groups[@]}"; do
-  [ -n "${group_packages[$g]+x}" ] || { echo "[deps] unknown group '$g' (build, test, bench, slurm)" >&2; exit 2; }
+  [ -n "${group_packages[$g]+x}" ] || { echo "[deps] unknown group '$g' (build, test, bench, slurm, browser)" >&2; exit 2; }
   # shellcheck disable=SC2206  # word splitting of the package list is intended
   packages+=(${group_packages[$g]})
 done

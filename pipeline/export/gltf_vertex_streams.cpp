@@ -1,0 +1,228 @@
+#include "pipeline/export/gltf_vertex_streams.h"
+
+#include <meshoptimizer.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace cellbake {
+namespace {
+
+constexpr double kInt16Max = 32767.0;
+
+template <class T>
+std::span<const std::uint8_t> as_bytes_of(const std::vector<T>& v) {
+  return {reinterpret_cast<const std::uint8_t*>(v.data()), v.size() * sizeof(T)};
+}
+
+void check_mesh(const ExportMesh& m) {
+  const std::size_t n = m.positions.size();
+  const auto check = [n](std::size_t size, const char* what) {
+    if (size != 0 && size != n)
+      throw std::invalid_argument(std::string("glTF export: ") + std::to_string(size) + " " + what + " for " +
+                                  std::to_string(n) + " positions");
+  };
+  check(m.normals.size(), "normals");
+  check(m.colors.size(), "colours");
+  check(m.uvs.size(), "texture coordinates");
+  if (m.indices.size() % 3 != 0)
+    throw std::invalid_argument("glTF export: " + std::to_string(m.indices.size()) + " indices, not whole triangles");
+  for (std::uint32_t i : m.indices)
+    if (i >= n) throw std::invalid_argument("glTF export: index " + std::to_string(i) + " out of range");
+}
+
+// Reorders every attribute by `remap` (old vertex -> new vertex) into `count` vertices.
+template <class T>
+void remap_stream(std::vector<T>& stream, const std::vector<unsigned>& remap, std::size_t count) {
+  if (stream.empty()) return;
+  std::vector<T> out(count);
+  meshopt_remapVertexBuffer(out.data(), stream.data(), stream.size(), sizeof(T), remap.data());
+  stream = std::move(out);
+}
+
+void remap_mesh(ExportMesh& m, const std::vector<unsigned>& remap, std::size_t count) {
+  remap_stream(m.positions, remap, count);
+  remap_stream(m.normals, remap, count);
+  remap_stream(m.colors, remap, count);
+  remap_stream(m.uvs, remap, count);
+  meshopt_remapIndexBuffer(m.indices.data(), m.indices.data(), m.indices.size(), remap.data());
+}
+
+// A buffer view of `count` elements of `stride` bytes, meshopt-coded when `compress`.
+int add_stream(GlbBuilder& glb, std::span<const std::uint8_t> bytes, std::size_t count, int stride, bool compress) {
+  if (!compress) return glb.add_buffer_view(bytes, stride, gltf::kArrayBuffer);
+  std::vector<std::uint8_t> coded(meshopt_encodeVertexBufferBound(count, stride));
+  coded.resize(meshopt_encodeVertexBuffer(coded.data(), coded.size(), bytes.data(), count, stride));
+  return glb.add_compressed_buffer_view(coded, count, stride, MeshoptMode::attributes, gltf::kArrayBuffer);
+}
+
+}  // namespace
+
+namespace {
+int position_step(int bits) { return 1 << (16 - bits); }
+}  // namespace
+
+PositionQuantization position_quantization(const Box3d& bounds, int bits) {
+  if (bounds.empty() || !is_finite(bounds.lo) || !is_finite(bounds.hi))
+    throw std::invalid_argument("glTF export: positions need finite, non-empty bounds");
+  if (bits < 8 || bits > 16) throw std::invalid_argument("glTF export: position bits " + std::to_string(bits) + " outside 8..16");
+  const Vec3d half = bounds.extent() * 0.5;
+  const double largest = std::max({half.x, half.y, half.z, 1e-9});
+  const int step = position_step(bits), levels = 32767 / step;
+  // q = step * round(offset / largest * levels), so that q = +-levels * step at the extremes.
+  return {bounds.center(), largest * kInt16Max / (double(levels) * step), bits};
+}
+
+double position_error_bound(const PositionQuantization& q) {
+  const double largest = std::max({std::abs(q.translation.x), std::abs(q.translation.y), std::abs(q.translation.z)}) + q.scale;
+  return q.scale * position_step(q.bits) / kInt16Max / 2 + 2 * largest * std::numeric_limits<float>::epsilon();
+}
+
+std::vector<std::int16_t> quantize_positions(std::span<const Vec3d> positions, const PositionQuantization& q) {
+  const int step = position_step(q.bits);
+  std::vector<std::int16_t> out(positions.size() * 4, 0);
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    const Vec3d r = (positions[i] - q.translation) * (kInt16Max / (q.scale * step));
+    for (int a = 0; a < 3; ++a) {
+      const double v = std::round(r[a]) * step;
+      if (!(std::abs(v) <= kInt16Max))
+        throw std::invalid_argument("glTF export: position " + std::to_string(i) + " lies outside its quantisation range");
+      out[4 * i + a] = static_cast<std::int16_t>(v);
+    }
+  }
+  return out;
+}
+
+std::vector<std::int8_t> quantize_normals(std::span<const Vec3f> normals) {
+  std::vector<std::int8_t> out(normals.size() * 4, 0);
+  for (std::size_t i = 0; i < normals.size(); ++i) {
+    const float c[3] = {normals[i].x, normals[i].y, normals[i].z};
+    for (int a = 0; a < 3; ++a)
+      out[4 * i + a] = static_cast<std::int8_t>(std::lround(std::clamp(std::isfinite(c[a]) ? c[a] : 0.0f, -1.0f, 1.0f) * 127));
+  }
+  return out;
+}
+
+bool uvs_in_unit_square(std::span<const Uv> uvs) {
+  return std::all_of(uvs.begin(), uvs.end(), [](const Uv& t) { return t.u >= 0 && t.u <= 1 && t.v >= 0 && t.v <= 1; });
+}
+
+std::vector<std::uint16_t> quantize_uvs(std::span<const Uv> uvs) {
+  std::vector<std::uint16_t> out(uvs.size() * 2);
+  for (std::size_t i = 0; i < uvs.size(); ++i) {
+    out[2 * i] = static_cast<std::uint16_t>(std::lround(std::clamp(uvs[i].u, 0.0f, 1.0f) * 65535));
+    out[2 * i + 1] = static_cast<std::uint16_t>(std::lround(std::clamp(uvs[i].v, 0.0f, 1.0f) * 65535));
+  }
+  return out;
+}
+
+std::vector<std::uint16_t> linear_colors(std::span<const Rgba8> colors) {
+  std::array<std::uint16_t, 256> table;
+  for (int c = 0; c < 256; ++c) {
+    const double s = c / 255.0;
+    const double linear = s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4);
+    table[std::size_t(c)] = static_cast<std::uint16_t>(std::lround(linear * 65535));
+  }
+  std::vector<std::uint16_t> out(colors.size() * 4);
+  for (std::size_t i = 0; i < colors.size(); ++i) {
+    out[4 * i] = table[colors[i].r];
+    out[4 * i + 1] = table[colors[i].g];
+    out[4 * i + 2] = table[colors[i].b];
+    out[4 * i + 3] = static_cast<std::uint16_t>(colors[i].a * 257);
+  }
+  return out;
+}
+
+std::vector<std::uint8_t> linear_colors8(std::span<const Rgba8> colors) {
+  const std::vector<std::uint16_t> wide = linear_colors(colors);
+  std::vector<std::uint8_t> out(wide.size());
+  for (std::size_t i = 0; i < wide.size(); ++i) out[i] = static_cast<std::uint8_t>((wide[i] * 255 + 32767) / 65535);
+  return out;
+}
+
+std::size_t weld_vertices(ExportMesh& m) {
+  check_mesh(m);
+  const std::size_t n = m.positions.size();
+  if (n == 0) return 0;
+  std::vector<meshopt_Stream> streams{{m.positions.data(), sizeof(Vec3d), sizeof(Vec3d)}};
+  if (!m.normals.empty()) streams.push_back({m.normals.data(), sizeof(Vec3f), sizeof(Vec3f)});
+  if (!m.colors.empty()) streams.push_back({m.colors.data(), sizeof(Rgba8), sizeof(Rgba8)});
+  if (!m.uvs.empty()) streams.push_back({m.uvs.data(), sizeof(Uv), sizeof(Uv)});
+  std::vector<unsigned> remap(n);
+  const std::size_t kept =
+      meshopt_generateVertexRemapMulti(remap.data(), m.indices.data(), m.indices.size(), n, streams.data(), streams.size());
+  remap_mesh(m, remap, kept);
+  return n - kept;
+}
+
+void optimize_mesh_order(ExportMesh& m) {
+  check_mesh(m);
+  const std::size_t n = m.positions.size();
+  if (m.indices.empty()) return;
+  meshopt_optimizeVertexCache(m.indices.data(), m.indices.data(), m.indices.size(), n);
+  std::vector<unsigned> remap(n);
+  const std::size_t used = meshopt_optimizeVertexFetchRemap(remap.data(), m.indices.data(), m.indices.size(), n);
+  remap_mesh(m, remap, used);
+}
+
+nlohmann::json add_primitive_streams(GlbBuilder& glb, const ExportMesh& m, const PositionQuantization& q,
+                                     bool compress, int color_bits) {
+  check_mesh(m);
+  glb.use_extension("KHR_mesh_quantization", true);
+  const std::size_t n = m.positions.size();
+  nlohmann::json attributes;
+
+  const std::vector<std::int16_t> positions = quantize_positions(m.positions, q);
+  std::vector<double> lo(3, kInt16Max), hi(3, -kInt16Max);
+  for (std::size_t i = 0; i < n; ++i)
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], double(positions[4 * i + a]));
+      hi[a] = std::max(hi[a], double(positions[4 * i + a]));
+    }
+  if (n == 0) lo.assign(3, 0), hi.assign(3, 0);
+  attributes["POSITION"] = glb.add_accessor(add_stream(glb, as_bytes_of(positions), n, 8, compress), gltf::kShort,
+                                            true, n, "VEC3", lo, hi);
+  if (!m.normals.empty())
+    attributes["NORMAL"] = glb.add_accessor(add_stream(glb, as_bytes_of(quantize_normals(m.normals)), n, 4, compress),
+                                            gltf::kByte, true, n, "VEC3");
+  if (!m.colors.empty())
+    attributes["COLOR_0"] =
+        color_bits == 8
+            ? glb.add_accessor(add_stream(glb, as_bytes_of(linear_colors8(m.colors)), n, 4, compress),
+                               gltf::kUnsignedByte, true, n, "VEC4")
+            : glb.add_accessor(add_stream(glb, as_bytes_of(linear_colors(m.colors)), n, 8, compress),
+                               gltf::kUnsignedShort, true, n, "VEC4");
+  if (!m.uvs.empty()) {
+    if (uvs_in_unit_square(m.uvs)) {
+      attributes["TEXCOORD_0"] = glb.add_accessor(add_stream(glb, as_bytes_of(quantize_uvs(m.uvs)), n, 4, compress),
+                                                  gltf::kUnsignedShort, true, n, "VEC2");
+    } else {
+      attributes["TEXCOORD_0"] =
+          glb.add_accessor(add_stream(glb, as_bytes_of(m.uvs), n, 8, compress), gltf::kFloat, false, n, "VEC2");
+    }
+  }
+
+  // glTF forbids the index type's largest value (primitive restart).
+  const bool short_indices = n < 65535;
+  const int index_size = short_indices ? 2 : 4;
+  int view;
+  if (compress) {
+    std::vector<std::uint8_t> coded(meshopt_encodeIndexBufferBound(m.indices.size(), n));
+    coded.resize(meshopt_encodeIndexBuffer(coded.data(), coded.size(), m.indices.data(), m.indices.size()));
+    view = glb.add_compressed_buffer_view(coded, m.indices.size(), index_size, MeshoptMode::triangles,
+                                          gltf::kElementArrayBuffer);
+  } else if (short_indices) {
+    std::vector<std::uint16_t> narrow(m.indices.begin(), m.indices.end());
+    view = glb.add_buffer_view(as_bytes_of(narrow), std::nullopt, gltf::kElementArrayBuffer);
+  } else {
+    view = glb.add_buffer_view(as_bytes_of(m.indices), std::nullopt, gltf::kElementArrayBuffer);
+  }
+  const int indices = glb.add_accessor(view, short_indices ? gltf::kUnsignedShort : gltf::kUnsignedInt, false,
+                                       m.indices.size(), "SCALAR");
+  return {{"attributes", attributes}, {"indices", indices}, {"mode", 4}};
+}
+
+}  // namespace cellbake
