@@ -298,7 +298,7 @@ TEST_F(CellSemantics, VerifyFallsBackPerCellOnDamagedFarGeometry) {
               {"UPDATE far_geometry SET geometry = x'" + list_hex + "', triangles = 1" + in(cells[0]),
                "UPDATE far_geometry SET chunk_id = -chunk_id" + in(cells[1]),
                "UPDATE far_geometry SET min_x = max_x + 1" + in(cells[2])});
-  const auto v = test::run_cellbake("verify " + db + " --report " + path("report") +
+  const auto v = test::run_cellbake("verify --walk-seconds 0 " + db + " --report " + path("report") +
                                     " --views-per-cell 1 --size 16x16 --threads 1 --quiet");
   EXPECT_NE(v.exit_code, 0) << v.output;  // failed cells are an error, after every other cell was verified
   EXPECT_NE(v.output.find("verified 4 cells (4 rendered, 0 reused, 3 failed)"), std::string::npos)
