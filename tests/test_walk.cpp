@@ -276,12 +276,18 @@ TEST(WalkCli, PathFileJsonAndErrorsNamingTheLine) {
   const auto db = bake_three_room_cells(dir);
   test::write_text(dir / "path.txt", "# eye, look\n2 2 1.6 6 2 1.6\n3 2 1.6 7 2 1.6\n4 2 1.6 8 2 1.6\n5 2 1.6 9 2 1.6\n");
   const std::string base = std::string("walk '") + db.string() + "' --size 32x24 --no-video -q ";
-  const auto ok = test::run_cellbake(base + "--path '" + (dir / "path.txt").string() + "' --out '" +
-                                     (dir / "out").string() + "' --json");
+  // No ffmpeg on PATH: PNG frames, and a note saying why.
+  const auto ok = test::run_shell("env PATH=/nonexistent " + std::string(CELLBAKE_BINARY) + " walk '" + db.string() +
+                                  "' --size 32x24 -q --path '" + (dir / "path.txt").string() + "' --out '" +
+                                  (dir / "out").string() + "' --json");
   ASSERT_EQ(ok.exit_code, 0) << ok.output;
+  EXPECT_NE(ok.output.find("note: no ffmpeg program on PATH"), std::string::npos) << ok.output;
   const nlohmann::json j = nlohmann::json::parse(ok.output.substr(ok.output.find('{')));
   EXPECT_EQ(j["frames"].get<int>(), 4);
   EXPECT_EQ(j["cells_visited"], (nlohmann::json{1, 2}));
+  EXPECT_EQ(j["encoder"], "png");
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "frames" / "frame_0003.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "out" / "walk.mp4"));
 
   test::write_text(dir / "bad.txt", "2 2 1.6 6 2 1.6\n2 2 oops\n");
   const auto bad = test::run_cellbake(base + "--path '" + (dir / "bad.txt").string() + "' --out '" +
