@@ -251,6 +251,7 @@ TEST(ReportBrowser, VerifyReportWithItsWalkOpensInChromium) {
   const VerifySummary s = run_verify(c.database, dir / "report", vo);
   const std::string html = read_text(s.report_html);
   EXPECT_NE(html.find("<h2 id=\"walk\">Walk</h2>"), std::string::npos);
+  EXPECT_LT(html.find("<a href=\"#walk\">"), html.find("<h2>Summary</h2>"));  // linked at the top
   EXPECT_EQ(count_of(html, "<!-- walk/walk.svg -->"), 1u);
   EXPECT_NE(html.find("alt=\"worst walk frame (walk/worst.png)\""), std::string::npos);
   const nlohmann::json report = nlohmann::json::parse(read_text(s.report_json));

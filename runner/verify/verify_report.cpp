@@ -529,6 +529,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
     << " could not be verified), " << summary["views"].get<std::size_t>()
     << " views: each rendered as the cell's impostor (near field + textured depth meshes) and as ground "
        "truth.</p>\n";
+  if (input.walk) h << "<p>A walk through the cells: <a href=\"#walk\">its video, plot and summary</a>.</p>\n";
   if (input.params.contains("lighting"))
     h << "<p>Lighting (truth and samples alike): " << escape_xml(input.params["lighting"].get<std::string>())
       << ".</p>\n";
