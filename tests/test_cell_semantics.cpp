@@ -254,7 +254,7 @@ TEST_F(CellSemantics, FaceMeshesAreCheckedAgainstTheirFaceAndTheFarChoice) {
 TEST_F(CellSemantics, VerifyLodCutMeasuresEveryViewAgainstTheStoresLevels) {
   bake("lod.db");
   const std::string report = path("cut-report");
-  const auto v = test::run_cellbake("verify " + path("lod.db") + " --report " + report +
+  const auto v = test::run_cellbake("verify --walk-seconds 0 " + path("lod.db") + " --report " + report +
                                     " --views-per-cell 2 --size 32x24 --threads 1 --quiet --lod-cut");
   ASSERT_EQ(v.exit_code, 0) << v.output;
   std::ifstream in(report + "/report.json");
