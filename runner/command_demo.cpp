@@ -82,6 +82,7 @@ void add_demo_command(CLI::App& app) {
     vo.width = 256;
     vo.height = 192;
     vo.threads = opt->threads;
+    vo.walk_seconds = 8;  // a short walk video in the report
     vo.quiet = quiet_output();
     vo.verbose = verbose_output();
     const std::filesystem::path report = out / "report";

@@ -1,5 +1,5 @@
 // `cellbake verify DB [--views-per-cell N] [--cells SEL] [--size WxH]
-//  [--threads N] --report DIR`: renders each cell's impostor against the ground
+//  [--threads N] [--walk-seconds N] --report DIR`: renders each cell's impostor against the ground
 // truth from viewpoints inside the cell and writes DIR/report.html +
 // DIR/report.json (runner/verify/verify_runner.h). Also registers its helper
 // `cellbake plot CSV --x COL --y COL [--series COL] --out FILE.svg` (the
@@ -75,6 +75,12 @@ void add_verify_command(CLI::App& app) {
   cmd->add_option("--max-samples", opt->verify.max_samples,
                   "At most this many samples per view (0 = no cap; 1 = the root sample alone, the "
                   "single-sample far field)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  opt->verify.walk_seconds = 8;
+  cmd->add_option("--walk-seconds", opt->verify.walk_seconds,
+                  "A walk this long through the verified cells (truth | cells | difference video, plot of PSNR and "
+                  "frame time; as `cellbake walk`) into DIR/walk/, shown in the report; 0: none")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->callback([opt] {

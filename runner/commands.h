@@ -21,5 +21,6 @@ void add_render_command(CLI::App& app);
 void add_view_command(CLI::App& app);
 void add_verify_command(CLI::App& app);
 void add_export_command(CLI::App& app);
+void add_walk_command(CLI::App& app);
 
 }  // namespace cellbake

@@ -57,6 +57,7 @@ int main(int argc, char** argv) {
   cellbake::add_view_command(app);
   cellbake::add_verify_command(app);
   cellbake::add_export_command(app);
+  cellbake::add_walk_command(app);
   // The global options are taken after a command's own too; `view` passes everything to cellbake-view.
   for (CLI::App* sub : commands(app))
     if (sub->get_name() != "view") sub->fallthrough();

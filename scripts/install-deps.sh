@@ -5,7 +5,9 @@
 #
 #   build  compilers, CMake, the lld linker and the libraries `cellbake` links; GLFW and
 #          Dear ImGui for `cellbake-view` (built only when they are present)
-#   test   GoogleTest, assimp's test models, Xvfb (the viewer screenshot test)
+#   test   GoogleTest, assimp's test models, Xvfb (the viewer screenshot test), ffmpeg (walk
+#          videos: tests/test_walk), Chromium (the report in a browser: tests/test_report_browser;
+#          ~110 s to install); the tests that need ffmpeg or Chromium skip without them
 #   bench  Google Benchmark (-DCELLBAKE_BUILD_BENCH=ON); libavcodec, libavutil
 #          and libswscale for bench_spatial_video (built only when present)
 #   slurm  the Slurm daemons and munge (scripts/slurm-local.sh, tests/test_slurm)
@@ -26,7 +28,7 @@ declare -A group_packages=(
            libcli11-dev nlohmann-json3-dev libspdlog-dev libxxhash-dev zlib1g-dev
            libembree-dev libegl-dev libzstd-dev libavif-dev libjxl-dev
            libglfw3-dev libimgui-dev libstb-dev"
-  [test]="libgtest-dev assimp-testmodels xvfb xauth"
+  [test]="libgtest-dev assimp-testmodels xvfb xauth ffmpeg chromium"
   [bench]="libbenchmark-dev libavcodec-dev libavutil-dev libswscale-dev"
   [slurm]="slurmctld slurmd slurm-client munge"
   [browser]="nodejs chromium"

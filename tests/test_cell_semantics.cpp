@@ -254,7 +254,7 @@ TEST_F(CellSemantics, FaceMeshesAreCheckedAgainstTheirFaceAndTheFarChoice) {
 TEST_F(CellSemantics, VerifyLodCutMeasuresEveryViewAgainstTheStoresLevels) {
   bake("lod.db");
   const std::string report = path("cut-report");
-  const auto v = test::run_cellbake("verify " + path("lod.db") + " --report " + report +
+  const auto v = test::run_cellbake("verify --walk-seconds 0 " + path("lod.db") + " --report " + report +
                                     " --views-per-cell 2 --size 32x24 --threads 1 --quiet --lod-cut");
   ASSERT_EQ(v.exit_code, 0) << v.output;
   std::ifstream in(report + "/report.json");
@@ -298,7 +298,7 @@ TEST_F(CellSemantics, VerifyFallsBackPerCellOnDamagedFarGeometry) {
               {"UPDATE far_geometry SET geometry = x'" + list_hex + "', triangles = 1" + in(cells[0]),
                "UPDATE far_geometry SET chunk_id = -chunk_id" + in(cells[1]),
                "UPDATE far_geometry SET min_x = max_x + 1" + in(cells[2])});
-  const auto v = test::run_cellbake("verify " + db + " --report " + path("report") +
+  const auto v = test::run_cellbake("verify --walk-seconds 0 " + db + " --report " + path("report") +
                                     " --views-per-cell 1 --size 16x16 --threads 1 --quiet");
   EXPECT_NE(v.exit_code, 0) << v.output;  // failed cells are an error, after every other cell was verified
   EXPECT_NE(v.output.find("verified 4 cells (4 rendered, 0 reused, 3 failed)"), std::string::npos)

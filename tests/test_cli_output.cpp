@@ -139,7 +139,7 @@ TEST(JsonSummaries, IngestBakeVerifyAndMergePrintOneJsonObject) {
   EXPECT_EQ(b["cells_failed"], 0);
   EXPECT_EQ(b["database"], (dir / "c.db").string());
 
-  const auto verify = run_cellbake("verify " + q(dir / "c.db") + " --report " + q(dir / "report") +
+  const auto verify = run_cellbake("verify --walk-seconds 0 " + q(dir / "c.db") + " --report " + q(dir / "report") +
                                    " --views-per-cell 1 --size 64x48 --threads 2 --json -q");
   ASSERT_EQ(verify.exit_code, 0) << verify.output;
   const auto v = nlohmann::json::parse(verify.output);
@@ -149,7 +149,7 @@ TEST(JsonSummaries, IngestBakeVerifyAndMergePrintOneJsonObject) {
   EXPECT_TRUE(v["psnr_median_db"].is_number() || v["psnr_median_infinite"].get<bool>()) << verify.output;
   EXPECT_TRUE(std::filesystem::exists(v["report_html"].get<std::string>())) << verify.output;
 
-  const auto verbose_verify = run_cellbake("verify " + q(dir / "c.db") + " --report " + q(dir / "report2") +
+  const auto verbose_verify = run_cellbake("verify --walk-seconds 0 " + q(dir / "c.db") + " --report " + q(dir / "report2") +
                                            " --views-per-cell 1 --size 64x48 --threads 2 -v");
   ASSERT_EQ(verbose_verify.exit_code, 0) << verbose_verify.output;
   EXPECT_EQ(count_matching(verbose_verify.output, "^cell \\d+: \\d+ views, median PSNR"), 4u) << verbose_verify.output;

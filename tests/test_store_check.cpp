@@ -183,7 +183,7 @@ TEST_F(StoreCheck, VerifyAndRenderSayWhenTheStoreIsNotTheOneBakedFrom) {
                 .exit_code,
             0);
   const std::string cells = (dir_ / "cells.db").string(), other = (dir_ / "other.db").string();
-  const auto v = test::run_cellbake("verify " + cells + " --store " + other + " --report " +
+  const auto v = test::run_cellbake("verify --walk-seconds 0 " + cells + " --store " + other + " --report " +
                                     (dir_ / "report").string() + " --views-per-cell 1 --size 16x16 --quiet");
   EXPECT_NE(v.exit_code, 0) << v.output;
   EXPECT_NE(v.output.find("was baked from a geometry store with content hash"), std::string::npos)

@@ -366,7 +366,7 @@ TEST(VerifyRun, BlackModelReportsBlankTruthViews) {
   // And the command's summary line says so (one random view and the centre: the
   // region is a point, so the navigable part has no corners apart from it).
   const auto cli =
-      test::run_cellbake("verify " + c.database.string() + " --report " + (dir / "cli").string() +
+      test::run_cellbake("verify --walk-seconds 0 " + c.database.string() + " --report " + (dir / "cli").string() +
                          " --views-per-cell 1 --size 16x16 --threads 1 --quiet");
   EXPECT_EQ(cli.exit_code, 0) << cli.output;
   EXPECT_NE(cli.output.find("2 of 2 truth views blank"), std::string::npos) << cli.output;
@@ -417,7 +417,7 @@ TEST(VerifyRun, ViewsDrawnAsExactGeometryAreCountedAsIdentical) {
   EXPECT_TRUE(std::isinf(s.psnr_median_db));
 
   const auto cli = test::run_cellbake(
-      "verify " + c.database.string() + " --report " + (dir / "cli").string() +
+      "verify --walk-seconds 0 " + c.database.string() + " --report " + (dir / "cli").string() +
       " --views-per-cell 2 --no-reference-views --no-sample-views --size 64x48 --threads 1");
   EXPECT_EQ(cli.exit_code, 0) << cli.output;
   EXPECT_NE(cli.output.find("2 of 2 views identical to the truth"), std::string::npos) << cli.output;

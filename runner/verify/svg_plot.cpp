@@ -18,6 +18,11 @@ std::string num(double v) {
   return buf;
 }
 
+// Pixels a cell id's label needs across at kCellLabelFontPx (digits ~0.6 em wide, 2 px each side).
+double cell_label_width(std::int64_t id) {
+  return 0.62 * kCellLabelFontPx * double(std::to_string(id).size()) + 4;
+}
+
 bool drawable(const PlotPoint& p, bool log_x) {
   return std::isfinite(p.x) && std::isfinite(p.y) && (!log_x || p.x > 0);
 }
@@ -236,7 +241,16 @@ std::string cell_map_svg(const CellMap& map) {
   const bool absolute = std::isfinite(map.scale_worst) && std::isfinite(map.scale_best) &&
                         map.scale_worst != map.scale_best;
   const double margin = 20, top = 56, legend_h = 60;
-  const double plan_w = map.width - 2 * margin;
+  // Labels at kCellLabelFontPx (readable in a browser at 1:1): the map grows
+  // (up to kCellMapMaxWidth) until the smallest cell holds its label.
+  double needed_scale = 0;
+  for (const auto& c : map.cells)
+    if (c.x1 > c.x0 && c.y1 > c.y0)
+      needed_scale = std::max({needed_scale, cell_label_width(c.id) / (c.x1 - c.x0),
+                               (kCellLabelFontPx + 2) / (c.y1 - c.y0)});
+  const int width = int(std::clamp(std::ceil(needed_scale * (x1 - x0) + 2 * margin), double(map.width),
+                                   double(std::max(map.width, kCellMapMaxWidth))));
+  const double plan_w = width - 2 * margin;
   const double scale = plan_w / (x1 - x0);
   const double plan_h = (y1 - y0) * scale;
   const double height = top + plan_h + legend_h;
@@ -255,10 +269,10 @@ std::string cell_map_svg(const CellMap& map) {
   const std::string perfect_fill = "#1a7f3c", no_data_fill = "#bbbbbb";
 
   std::ostringstream o;
-  o << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << map.width << "\" height=\"" << num(height)
-    << "\" viewBox=\"0 0 " << map.width << " " << num(height) << "\" font-family=\"sans-serif\" font-size=\"11\">\n";
-  o << "<rect x=\"0\" y=\"0\" width=\"" << map.width << "\" height=\"" << num(height) << "\" fill=\"white\"/>\n";
-  o << "<text x=\"" << num(map.width / 2.0) << "\" y=\"20\" text-anchor=\"middle\" font-size=\"15\" font-weight=\"bold\">"
+  o << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << num(height)
+    << "\" viewBox=\"0 0 " << width << " " << num(height) << "\" font-family=\"sans-serif\" font-size=\"11\">\n";
+  o << "<rect x=\"0\" y=\"0\" width=\"" << width << "\" height=\"" << num(height) << "\" fill=\"white\"/>\n";
+  o << "<text x=\"" << num(width / 2.0) << "\" y=\"20\" text-anchor=\"middle\" font-size=\"15\" font-weight=\"bold\">"
     << escape_xml(map.title) << "</text>\n";
   std::string subtitle = "no cell has a finite value";
   if (worst) {
@@ -267,9 +281,14 @@ std::string cell_map_svg(const CellMap& map) {
     subtitle = "worst: cell " + std::to_string(worst->id) + " (" + map.value_label + " " + buf +
                "), outlined in black; plan view";
   }
-  o << "<text x=\"" << num(map.width / 2.0) << "\" y=\"40\" text-anchor=\"middle\">" << escape_xml(subtitle)
+  std::size_t unlabelled = 0;
+  for (const auto& c : map.cells)
+    unlabelled += !((c.x1 - c.x0) * scale >= cell_label_width(c.id) && (c.y1 - c.y0) * scale >= kCellLabelFontPx + 2);
+  if (unlabelled > 0)
+    subtitle += "; " + std::to_string(unlabelled) + " cells too small to label: hover them for their ids";
+  o << "<text x=\"" << num(width / 2.0) << "\" y=\"40\" text-anchor=\"middle\">" << escape_xml(subtitle)
     << "</text>\n";
-  const double font = std::clamp(scale * 0.3, 6.0, 12.0);
+  const double font = kCellLabelFontPx;
   for (const auto& c : map.cells) {
     std::string fill = ramp_color(t_of(c.value));
     char value_text[64];
@@ -280,8 +299,10 @@ std::string cell_map_svg(const CellMap& map) {
       << num((c.x1 - c.x0) * scale) << "\" height=\"" << num((c.y1 - c.y0) * scale) << "\" fill=\"" << fill
       << "\" stroke=\"white\" stroke-width=\"1\"><title>cell " << c.id << ": " << escape_xml(map.value_label) << " "
       << value_text << "</title></rect>\n";
-    o << "<text x=\"" << num(sx(0.5 * (c.x0 + c.x1))) << "\" y=\"" << num(sy(0.5 * (c.y0 + c.y1)) + font / 3)
-      << "\" text-anchor=\"middle\" font-size=\"" << num(font) << "\" pointer-events=\"none\">" << c.id << "</text>\n";
+    if ((c.x1 - c.x0) * scale >= cell_label_width(c.id) && (c.y1 - c.y0) * scale >= font + 2)
+      o << "<text class=\"cell-label\" x=\"" << num(sx(0.5 * (c.x0 + c.x1))) << "\" y=\""
+        << num(sy(0.5 * (c.y0 + c.y1)) + font / 3) << "\" text-anchor=\"middle\" font-size=\"" << num(font)
+        << "\" pointer-events=\"none\">" << c.id << "</text>\n";
   }
   if (worst)
     o << "<rect x=\"" << num(sx(worst->x0)) << "\" y=\"" << num(sy(worst->y1)) << "\" width=\""

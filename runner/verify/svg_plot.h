@@ -67,10 +67,17 @@ struct CellMapEntry {
   double value = 0;
 };
 
+// The cell map's id labels: this font size in pixels (at least 10 px high in
+// a browser showing the SVG at 1:1, as report.html does at 1400 px wide), and
+// the widest the map grows to fit them.
+inline constexpr double kCellLabelFontPx = 12;
+inline constexpr int kCellMapMaxWidth = 1300;
+
 struct CellMap {
   std::string title, value_label;
   bool higher_is_better = true;  // colour ramp: the worst end is red
-  int width = 720;               // pixels; the height follows the footprint's aspect
+  int width = 720;  // pixels, at least; wider (up to kCellMapMaxWidth) when the smallest cell needs it for its
+                    // label; the height follows the footprint's aspect
   std::vector<CellMapEntry> cells;
   // An absolute colour scale: values at or past `scale_worst` are red, at or
   // past `scale_best` green, linear in between (so a uniformly mediocre bake
@@ -82,7 +89,9 @@ struct CellMap {
 
 // A top-down map: one <rect> per cell (class "cell"), coloured from green
 // (best value) through yellow to red (worst value), on the map's absolute
-// scale when it has one, labelled with its id, a <title> tooltip naming the
+// scale when it has one, labelled with its id (class "cell-label", at
+// kCellLabelFontPx; cells too small for it even at kCellMapMaxWidth go
+// unlabelled and the subtitle says how many), a <title> tooltip naming the
 // cell and its value ("perfect" for the best infinity, "no data" for NaN), the
 // worst cell outlined in black and named in the subtitle, plus a colour-bar
 // legend (the scale's thresholds, or the value range) with "perfect" and

@@ -137,6 +137,23 @@ std::vector<PlotSeries> per_view_series(const std::vector<VerifyCellResult>& cel
   return series;
 }
 
+// How many distinct eye-to-sample distances the distance plots would show
+// (views with a finite distance and PSNR; distances within 1e-6 of the
+// largest, or of 1, count as one; all below that count as none).
+std::size_t distinct_sample_distances(const std::vector<VerifyCellResult>& cells) {
+  std::vector<double> d;
+  for (const auto& c : cells)
+    for (const auto& v : c.views)
+      if (std::isfinite(v.distance_from_sample) && std::isfinite(v.psnr_db)) d.push_back(v.distance_from_sample);
+  if (d.empty()) return 0;
+  std::sort(d.begin(), d.end());
+  const double eps = 1e-6 * std::max(1.0, d.back());
+  if (d.back() <= eps) return 0;
+  std::size_t n = 1;
+  for (std::size_t i = 1; i < d.size(); ++i) n += d[i] - d[i - 1] > eps;
+  return n;
+}
+
 }  // namespace
 
 double VerifyCellResult::bake_seconds_total() const {
@@ -410,6 +427,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
   nlohmann::json report{{"database", input.database}, {"params", input.params}, {"summary", summary}};
   report["cells"] = nlohmann::json::array();
   for (const auto& c : cells) report["cells"].push_back(to_json(c));
+  if (input.walk) report["walk"] = input.walk->summary;
   files.json = dir / "report.json";
   write_text_file_atomically(files.json, report.dump(1), input.inputs);
 
@@ -437,14 +455,17 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
                                   [](const VerifyViewResult& v) { return v.psnr_db; })};
     write_svg(dir / "plots" / "psnr_vs_triangles.svg", scatter_plot_svg(p), files, input.inputs);
   }
-  {
+  // Error against distance says nothing when every view sits at (nearly) one distance.
+  const std::size_t distances = distinct_sample_distances(cells);
+  const bool distance_plots = distances >= 3;
+  if (distance_plots) {
     ScatterPlot p{"Error vs distance from the sample point", "eye distance from the nearest sample point (model units)",
                   "PSNR per view, dB (higher is better)", false, 640, 420,
                   per_view_series(cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return v.distance_from_sample; },
                                   [](const VerifyViewResult& v) { return v.psnr_db; })};
     write_svg(dir / "plots" / "psnr_vs_distance.svg", scatter_plot_svg(p), files, input.inputs);
   }
-  {
+  if (distance_plots) {
     ScatterPlot p{"Holes vs distance from the sample point", "eye distance from the nearest sample point (model units)",
                   "hole fraction per view (lower is better)", false, 640, 420,
                   per_view_series(cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return v.distance_from_sample; },
@@ -508,6 +529,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
     << " could not be verified), " << summary["views"].get<std::size_t>()
     << " views: each rendered as the cell's impostor (near field + textured depth meshes) and as ground "
        "truth.</p>\n";
+  if (input.walk) h << "<p>A walk through the cells: <a href=\"#walk\">its video, plot and summary</a>.</p>\n";
   if (input.params.contains("lighting"))
     h << "<p>Lighting (truth and samples alike): " << escape_xml(input.params["lighting"].get<std::string>())
       << ".</p>\n";
@@ -581,6 +603,16 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
   h << "</div>\n<p class=\"note\">Views whose impostor equals the truth exactly (PSNR = &infin;) are not "
        "drawn in "
        "PSNR plots.</p>\n";
+  if (!distance_plots)
+    h << "<p class=\"note\">Error and holes vs distance from the sample point: not plotted, the views lie at "
+      << distances << " distinct distance(s) from their cell's sample points (fewer than 3).</p>\n";
+  if (input.walk) {
+    std::ifstream plot_in(dir / input.walk->plot, std::ios::binary);
+    std::ostringstream plot_svg;
+    if (!input.walk->plot.empty() && plot_in) plot_svg << plot_in.rdbuf();
+    h << walk_section_html(*input.walk, input.walk->worst_png.empty() ? "" : png_data_uri(dir / input.walk->worst_png),
+                           plot_svg.str());
+  }
 
   // Worst views: each cell's worst view, worst first.
   std::vector<const VerifyCellResult*> worst;

@@ -9,12 +9,14 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "runner/verify/far_budget_sweep.h"
 #include "runner/verify/verify_views.h"
+#include "runner/verify/verify_walk_section.h"
 #include "stages/geometry.h"
 #include "storage/output_file.h"
 
@@ -139,6 +141,7 @@ struct VerifyReportInput {
   std::vector<VerifyCellResult> cells;  // in id order
   int worst_views = 6;     // triptychs shown (cells with the worst views)
   InputFiles inputs;       // the files verify read (database, store): no report file may be one of them
+  std::optional<VerifyWalkSection> walk;  // `verify --walk-seconds`: its section and report.json "walk"
 };
 
 // The report's absolute colour scale for a cell's median PSNR, dB: at or below

@@ -19,6 +19,7 @@
 #include "pipeline/cell_grid.h"
 #include "runner/progress.h"
 #include "runner/verify/verify_report.h"
+#include "runner/walk/walk_runner.h"
 #include "stages/render/gl_context.h"
 #include "stages/sample_points.h"
 #include "storage/cell_db.h"
@@ -31,6 +32,7 @@
 #include "viewer/image_metrics.h"
 #include "viewer/png_file.h"
 #include "viewer/scene_drawer.h"
+#include "viewer/triptych.h"
 #include "viewer/view_camera.h"
 
 namespace cellbake {
@@ -93,19 +95,34 @@ void save_cache(const std::filesystem::path& file, const std::map<std::int64_t, 
   write_text_file_atomically(file, j.dump(), inputs);
 }
 
-// Side by side: truth | impostor | error image.
-std::vector<Rgba8> triptych(const ViewFrame& truth, const ViewFrame& impostor,
-                            const std::vector<Rgba8>& diff) {
-  const int w = truth.width, h = truth.height;
-  std::vector<Rgba8> out(std::size_t(3) * w * h);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const std::size_t i = std::size_t(y) * w + x, o = std::size_t(y) * 3 * w + x;
-      out[o] = truth.color[i];
-      out[o + w] = impostor.color[i];
-      out[o + 2 * w] = diff[i];
-    }
-  return out;
+// `--walk-seconds`: a walk through the selected cells into DIR/walk/ at the
+// views' size, for the report; a walk that fails is reported, not fatal.
+VerifyWalkSection verify_walk(const std::filesystem::path& database, const std::filesystem::path& report_dir,
+                              const std::vector<CellSpec>& specs, const VerifyOptions& options) {
+  VerifyWalkSection section;
+  try {
+    WalkOptions wo;
+    wo.store = options.store;
+    for (const CellSpec& s : specs) wo.cells += (wo.cells.empty() ? "" : ",") + std::to_string(s.id);
+    wo.seconds = options.walk_seconds;
+    wo.width = options.width;
+    wo.height = options.height;
+    wo.fov_y_deg = options.fov_y_deg;
+    wo.near_plane = options.near_plane;
+    wo.quiet = options.quiet;
+    const WalkResult r = run_walk(database, report_dir / "walk", wo);
+    const auto rel = [](const std::filesystem::path& p) { return p.empty() ? "" : "walk/" + p.filename().string(); };
+    section.video = rel(r.video);
+    section.frames_dir = rel(r.frames_dir);
+    section.plot = rel(r.plot);
+    section.worst_png = rel(r.worst_png);
+    section.summary_text = walk_summary_text(r.summary);
+    section.summary = walk_summary_json(r.summary);
+  } catch (const std::exception& e) {
+    section.error = e.what();
+    std::fprintf(stderr, "warning: verify: the walk failed: %s\n", e.what());
+  }
+  return section;
 }
 
 }  // namespace
@@ -381,6 +398,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
   input.worst_views = options.worst_views;
   input.inputs = inputs;
   for (auto& [id, r] : results) input.cells.push_back(r);
+  if (options.walk_seconds > 0) input.walk = verify_walk(database, report_dir, specs, options);
   const VerifyReportFiles files = write_verify_report(report_dir, input);
   summary.report_html = files.html;
   summary.report_json = files.json;

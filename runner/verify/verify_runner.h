@@ -43,6 +43,9 @@ struct VerifyOptions {
   // (stages/lod_cut.h) with the impostor's triangles and at 1 pixel of
   // error: the yardstick of the far field (VerifyViewResult::psnr_db_cut).
   bool lod_cut = false;
+  // A walk through the selected cells this many seconds long (runner/walk/walk_runner.h) into
+  // DIR/walk/, shown in the report; 0: none (the CLI and the demo default to 8).
+  double walk_seconds = 0;
 };
 
 struct VerifySummary {
