@@ -145,7 +145,7 @@ TEST(HostileModels, ColladaSharedInstanceNodes30LevelsAreCountedAndRefusedBefore
   write_text(dir / "shared.dae", test::collada_instance_nodes(30, 2));
   expect_named_error_quickly("ingest " + (dir / "shared.dae").string() + " --store " + (dir / "s.db").string(),
                              "shared.dae",
-                             "node graph places 2147483648 node instances (a node placed by several "
+                             "node graph places 2147483649 node instances (a node placed by several "
                              "instance_node references is copied per path), more than 1000000");
   EXPECT_FALSE(std::filesystem::exists(dir / "s.db"));
 }
@@ -156,14 +156,18 @@ TEST(HostileModels, ColladaInstanceNodeChainsAndCyclesAreRefused) {
   write_text(dir / "chain.dae", test::collada_instance_nodes(100000));
   write_gz(dir / "chain.dae.gz", test::collada_instance_nodes(100000));
   write_text(dir / "cycle.dae", test::collada_instance_nodes(3, 1, true));
-  EXPECT_NE(read_error(dir / "chain.dae").find("chain.dae: node hierarchy 100002 levels deep (instance_node "
+  // "#" names what has no name: the visual scene itself (found by fuzz_collada_reader: assimp recursed until the stack ran out).
+  write_text(dir / "empty_url.dae", test::collada_document("", R"(<node id="r"><instance_node url="#"/></node>)"));
+  EXPECT_NE(read_error(dir / "chain.dae").find("chain.dae: node hierarchy 100003 levels deep (instance_node "
                                                "included), more than 1024"),
             std::string::npos)
       << read_error(dir / "chain.dae");
-  EXPECT_NE(read_error(dir / "chain.dae.gz").find("chain.dae.gz: node hierarchy 100002 levels deep"),
+  EXPECT_NE(read_error(dir / "chain.dae.gz").find("chain.dae.gz: node hierarchy 100003 levels deep"),
             std::string::npos);
   EXPECT_NE(read_error(dir / "cycle.dae").find("cycle.dae:node 'n0': is its own ancestor"), std::string::npos)
       << read_error(dir / "cycle.dae");
+  EXPECT_NE(read_error(dir / "empty_url.dae").find("empty_url.dae:node 's': is its own ancestor"), std::string::npos)
+      << read_error(dir / "empty_url.dae");
 }
 
 TEST(HostileModels, ColladaSharedInstanceNodesWithinTheLimitArePlacedOncePerPath) {
@@ -220,21 +224,28 @@ TEST(ColladaNodeGraph, CountsDepthAndInstancesThroughNestingAndReferences) {
   };
   for (const std::size_t piece : {std::size_t{1}, std::size_t{7}, std::size_t{1} << 20}) {
     SCOPED_TRACE(piece);
-    // root -> n0 -> 2 x n1 -> 2 x n2 (places the mesh): 1 + 1 + 2 + 4 nodes, 4 deep.
+    // The visual scene -> root -> n0 -> 2 x n1 -> 2 x n2 (places the mesh): 1 + 1 + 1 + 2 + 4 nodes, 5 deep.
     const ColladaNodeGraph shared = measure(test::collada_instance_nodes(2, 2), piece);
-    EXPECT_EQ(shared.depth, 4);
-    EXPECT_EQ(shared.node_instances, 8u);
+    EXPECT_EQ(shared.depth, 5);
+    EXPECT_EQ(shared.node_instances, 9u);
     const ColladaNodeGraph nested = measure(test::collada_nested_nodes(5), piece);
-    EXPECT_EQ(nested.depth, 5);
-    EXPECT_EQ(nested.node_instances, 5u);
-    // References and ids inside comments, CDATA and attribute values are not nodes; names resolve too.
+    EXPECT_EQ(nested.depth, 6);
+    EXPECT_EQ(nested.node_instances, 6u);
+    // References and ids inside comments, CDATA and attribute values are not nodes.
     const ColladaNodeGraph hidden = measure(
-        test::collada_document(R"(<node name="a"><!-- <node id="x"> --><![CDATA[<node>]]></node>)",
+        test::collada_document(R"(<node id="a"><!-- <node id="x"> --><![CDATA[<node>]]></node>)",
                                R"(<node note="<node>"><instance_node url="#a"/><instance_node url="#a"/>)"
                                R"(<instance_node url="#missing"/></node>)"),
         piece);
-    EXPECT_EQ(hidden.depth, 2);
-    EXPECT_EQ(hidden.node_instances, 3u);
+    EXPECT_EQ(hidden.depth, 3);
+    EXPECT_EQ(hidden.node_instances, 4u);
+    // Scene nodes resolve by name too; a library node by id only, as assimp looks them up.
+    const ColladaNodeGraph named = measure(
+        test::collada_document(R"(<node name="lib"/>)", R"(<node name="b"/><node><instance_node url="#b"/>)"
+                                                        R"(<instance_node url="#lib"/></node>)"),
+        piece);
+    EXPECT_EQ(named.depth, 3);
+    EXPECT_EQ(named.node_instances, 4u);
   }
 }
 

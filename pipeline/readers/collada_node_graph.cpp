@@ -75,9 +75,12 @@ struct ColladaNodeScan::State {
   std::string tag;        // the start or end tag's text after '<', at most kMaxTagBytes
   char tag_last = 0;      // its last byte (tag may be cut)
 
+  // A <node>, or a <visual_scene> (the root assimp builds the scene from).
   struct Node {
-    std::string id, name;
-    std::vector<std::size_t> children;  // nested <node>s
+    std::string id, name;                 // "" when the attribute is absent (assimp matches "" then)
+    bool library_top = false;             // directly inside <library_nodes>: assimp's node library
+    bool scene_tree = false;              // a visual scene or a node inside one
+    std::vector<std::size_t> children;    // nested <node>s
     std::vector<std::string> references;  // <instance_node> urls without '#'
   };
   std::vector<Node> nodes;
@@ -87,7 +90,21 @@ struct ColladaNodeScan::State {
     std::size_t node;
     bool visual_scene;
     bool index_list;
+    std::size_t accessor;  // index in `accessors`, or npos
+    bool primitive;        // the innermost of open_primitives
   };
+
+  void end_primitive() {
+    const Primitive p = open_primitives.back();
+    open_primitives.pop_back();
+    const bool polygons = p.element == "polygons";
+    if (!primitive_problem.empty() || (polygons ? p.lists == p.count : (p.count == 0 || p.lists == 1))) return;
+    primitive_problem = "<" + p.element + " count=\"" + std::to_string(p.count) + "\"> holds " +
+                        std::to_string(p.lists) + " <p> lists, not " +
+                        (polygons ? std::to_string(p.count) + " (one per polygon)" : std::string("1")) +
+                        " (assimp asserts they match and aborts)";
+    primitive_problem_at = p.at;
+  }
   std::vector<Open> open;
   std::vector<std::size_t> open_nodes;
   int visual_scenes = 0;  // open <visual_scene> elements
@@ -102,6 +119,24 @@ struct ColladaNodeScan::State {
   std::string index_element;     // the innermost open index list's name
   std::uint64_t vcount_sum = 0, vcount_number = 0, max_vcount_sum = 0;
   bool in_vcount = false;
+  // Float arrays by id (their `count`: assimp reads that many values or
+  // fails), string arrays, and accessors: what they read from which array.
+  std::unordered_map<std::string, std::uint64_t> float_arrays;
+  std::unordered_map<std::string, bool> string_arrays;
+  struct Accessor {
+    std::string source;
+    std::uint64_t count, offset, stride, params = 0, at;
+  };
+  std::vector<Accessor> accessors;
+  // Primitive elements whose count assimp asserts against the <p> lists read
+  // (triangles, polylist: one <p> when count > 0; polygons: one per polygon).
+  struct Primitive {
+    std::string element;
+    std::uint64_t count, lists = 0, at;
+  };
+  std::vector<Primitive> open_primitives;
+  std::string primitive_problem;
+  std::uint64_t primitive_problem_at = 0;
   // The largest `count` attribute of an array, primitive or accessor.
   std::uint64_t max_count = 0, max_count_at = 0;
   std::string max_count_element;
@@ -117,6 +152,7 @@ struct ColladaNodeScan::State {
         if (open.back().node != std::string::npos) open_nodes.pop_back();
         if (open.back().visual_scene) --visual_scenes;
         if (open.back().index_list) --open_index_lists;
+        if (open.back().primitive) end_primitive();
         if (in_vcount && open.back().index_list) {
           end_vcount_number();
           max_vcount_sum = std::max(max_vcount_sum, vcount_sum);
@@ -136,21 +172,45 @@ struct ColladaNodeScan::State {
       if (count > max_count) max_count = count, max_count_at = offset, max_count_element = element;
     }
     const bool index_list = element == "p" || element == "vcount" || element == "v" || element == "h";
+    if (element == "float_array") {
+      float_arrays.emplace(attribute(tag, end, "id"), number(attribute(tag, end, "count")));
+    } else if (element == "Name_array" || element == "IDREF_array") {
+      string_arrays.emplace(attribute(tag, end, "id"), true);
+    } else if (element == "param" && !open.empty() && open.back().accessor != std::string::npos) {
+      ++accessors[open.back().accessor].params;
+    }
+    if (element == "p" && !open.empty() && open.back().primitive) ++open_primitives.back().lists;
+    const bool primitive = element == "triangles" || element == "polylist" || element == "polygons";
+    if (primitive && !self_closing) open_primitives.push_back({element, number(attribute(tag, end, "count")), 0, offset});
+    std::size_t accessor = std::string::npos;
+    if (element == "accessor") {
+      std::string source = attribute(tag, end, "source");
+      if (!source.empty() && source[0] == '#') source.erase(0, 1);
+      const std::string stride = attribute(tag, end, "stride");
+      accessor = accessors.size();
+      accessors.push_back({source, number(attribute(tag, end, "count")), number(attribute(tag, end, "offset")),
+                           stride.empty() ? 1 : number(stride), 0, offset});
+    }
     std::size_t node = std::string::npos;
-    if (element == "node") {
+    if (element == "node" || element == "visual_scene") {
       node = nodes.size();
-      nodes.push_back({attribute(tag, end, "id"), attribute(tag, end, "name"), {}, {}});
-      if (!open_nodes.empty())
-        nodes[open_nodes.back()].children.push_back(node);
-      else if (visual_scenes > 0)
+      Node n;
+      n.id = attribute(tag, end, "id");
+      n.name = attribute(tag, end, "name");
+      n.scene_tree = visual_scenes > 0 || element == "visual_scene";
+      n.library_top = element == "node" && open_nodes.empty() && visual_scenes == 0;
+      nodes.push_back(std::move(n));
+      if (element == "visual_scene")
         roots.push_back(node);
+      else if (!open_nodes.empty())
+        nodes[open_nodes.back()].children.push_back(node);
     } else if (element == "instance_node" && !open_nodes.empty()) {
       std::string url = attribute(tag, end, "url");
       if (!url.empty() && url[0] == '#') nodes[open_nodes.back()].references.push_back(url.substr(1));
     }
     if (self_closing) return;
     const bool visual_scene = element == "visual_scene";
-    open.push_back({node, visual_scene, index_list});
+    open.push_back({node, visual_scene, index_list, accessor, primitive});
     if (node != std::string::npos) open_nodes.push_back(node);
     if (visual_scene) ++visual_scenes;
     if (index_list) {
@@ -286,6 +346,25 @@ void ColladaNodeScan::check_lists(const std::string& name) const {
     throw InputError(name, at_byte(s.max_count_at),
                      "<" + s.max_count_element + " count=\"" + std::to_string(s.max_count) +
                          "\">: more than the file's " + std::to_string(s.offset) + " bytes can hold");
+  if (!s.primitive_problem.empty()) throw InputError(name, at_byte(s.primitive_problem_at), s.primitive_problem);
+  for (const State::Accessor& a : s.accessors) {
+    const auto array = s.float_arrays.find(a.source);
+    if (array == s.float_arrays.end()) continue;  // a string array, another document, or none: assimp's to say
+    const std::string accessor = "<accessor source=\"#" + a.source + "\">";
+    if (a.params > a.stride)
+      throw InputError(name, at_byte(a.at),
+                       accessor + " has " + std::to_string(a.params) + " params but a stride of " +
+                           std::to_string(a.stride) + " (assimp would read past each element)");
+    const std::uint64_t reach = saturating_add(a.offset, a.count > 0 && a.stride > (std::uint64_t{1} << 62) / a.count
+                                                             ? std::numeric_limits<std::uint64_t>::max()
+                                                             : a.count * a.stride);
+    if (reach > array->second)
+      throw InputError(name, at_byte(a.at),
+                       accessor + " reads " + std::to_string(a.count) + " elements of stride " +
+                           std::to_string(a.stride) + " from offset " + std::to_string(a.offset) +
+                           ", past the " + std::to_string(array->second) +
+                           " values of its float_array (assimp does not check and would read beyond it)");
+  }
   if (s.max_vcount_sum > s.offset)
     throw InputError(name, "",
                      "a <vcount> sums to " + std::to_string(s.max_vcount_sum) + " corners, more than the file's " +
@@ -295,20 +374,29 @@ void ColladaNodeScan::check_lists(const std::string& name) const {
 ColladaNodeGraph ColladaNodeScan::measure(const std::string& name) const {
   const auto& nodes = state_->nodes;
   const std::size_t n = nodes.size();
-  std::unordered_map<std::string, std::size_t> by_id, by_name;
+  // Where assimp looks a reference up: its node library (the nodes directly
+  // inside <library_nodes>, by id), else the scene's tree by name or id. A
+  // reference counts every node it could resolve to (ids need not be unique,
+  // nor is it told here which visual scene is the scene's), "" included.
+  std::unordered_map<std::string, std::vector<std::size_t>> library, scene;
   for (std::size_t i = 0; i < n; ++i) {
-    if (!nodes[i].id.empty()) by_id.emplace(nodes[i].id, i);
-    if (!nodes[i].name.empty()) by_name.emplace(nodes[i].name, i);
+    if (nodes[i].library_top) library[nodes[i].id].push_back(i);
+    if (nodes[i].scene_tree) {
+      scene[nodes[i].id].push_back(i);
+      if (nodes[i].name != nodes[i].id) scene[nodes[i].name].push_back(i);
+    }
   }
   // Every node's successors: nested nodes, then the nodes it instances.
   std::vector<std::vector<std::size_t>> next(n);
   for (std::size_t i = 0; i < n; ++i) {
     next[i] = nodes[i].children;
     for (const std::string& url : nodes[i].references) {
-      if (const auto it = by_id.find(url); it != by_id.end())
-        next[i].push_back(it->second);
-      else if (const auto named = by_name.find(url); named != by_name.end())
-        next[i].push_back(named->second);
+      const std::vector<std::size_t>* targets = nullptr;
+      if (const auto in_library = library.find(url); in_library != library.end())
+        targets = &in_library->second;
+      else if (const auto in_scene = scene.find(url); in_scene != scene.end())
+        targets = &in_scene->second;
+      if (targets) next[i].insert(next[i].end(), targets->begin(), targets->end());
     }
   }
   // Post order over the graph (iterative: a chain of references may be long), each node once.

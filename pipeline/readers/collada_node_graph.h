@@ -25,7 +25,7 @@ inline constexpr int kMaxColladaNodeDepth = 1024;                     // the nod
 inline constexpr std::uint64_t kMaxColladaNodeInstances = 1'000'000;  // node copies assimp would make
 
 struct ColladaNodeGraph {
-  int depth = 0;                     // longest chain of nodes from a visual scene's node, in nodes
+  int depth = 0;                     // longest chain of nodes from a visual scene (counted), in nodes
   std::uint64_t node_instances = 0;  // node copies the visual scenes place (saturating at UINT64_MAX)
 };
 
@@ -38,17 +38,23 @@ class ColladaNodeScan {
   ColladaNodeScan();
   ~ColladaNodeScan();
   void feed(const char* data, std::size_t size);
-  // The graph of what was fed. Roots are the nodes directly inside any
-  // <visual_scene>; a reference resolves to the first node with that id,
-  // else with that name (as assimp looks them up); unresolved ones count
-  // nothing. Throws InputError naming `name` when a node is its own ancestor.
+  // The graph of what was fed. Roots are the <visual_scene>s (a node of
+  // their own, as in assimp's scene). A reference resolves as assimp looks it
+  // up: among the nodes directly inside <library_nodes> by id, else among the
+  // visual scenes and their nodes by id or name; it counts every node it
+  // could resolve to (an empty one matches nodes without that attribute);
+  // unresolved ones count nothing. Throws InputError naming `name` when a
+  // node is its own ancestor.
   ColladaNodeGraph measure(const std::string& name) const;
   // Throws InputError naming `name` (and the byte) for what would make
   // assimp's COLLADA reader loop or allocate without bound: a byte other than
   // digits, signs and blanks in an index list (<p>, <vcount>, <v>, <h>: its
   // number loop never advances past it), a `count` attribute of an array,
   // accessor or primitive larger than the bytes fed (it reserves that many
-  // values), a <vcount> whose numbers sum to more than the bytes fed.
+  // values), a <vcount> whose numbers sum to more than the bytes fed, an
+  // <accessor> of a float_array in this document that reads past the array's
+  // `count` values or has more params than its stride (assimp indexes the
+  // array unchecked).
   void check_lists(const std::string& name) const;
 
  private:
