@@ -1,6 +1,7 @@
 // The replay driver: a main() for the fuzz targets of tests/fuzz without
 // libFuzzer, so any compiler builds them as regression tests (ctest
-// `fuzz_replay.*`; scripts/fuzz.sh replay runs them under ASan + UBSan).
+// `fuzz_replay.*`; the asan job of scripts/sanitize.sh and scripts/fuzz.sh
+// replay run them under ASan + UBSan).
 //
 //   fuzz_X [--runs N] [--seed S] [--max-len BYTES] INPUT...
 //
