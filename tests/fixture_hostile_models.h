@@ -103,4 +103,14 @@ inline std::string x3d_nested_transforms(int depth) {
   return s + "</Scene></X3D>";
 }
 
+// A DirectX .x text file with one triangle inside `depth` nested Frames
+// (assimp's .x parser recurses per Frame: 100,000 overflow its stack).
+inline std::string directx_nested_frames(int depth) {
+  std::string s = "xof 0303txt 0032\n";
+  for (int i = 0; i < depth; ++i) s += "Frame F" + std::to_string(i) + " {\n";
+  s += "Mesh { 3; 0.0;0.0;0.0;, 1.0;0.0;0.0;, 0.0;1.0;0.0;; 1; 3;0,1,2;; }\n";
+  for (int i = 0; i < depth; ++i) s += "}\n";
+  return s;
+}
+
 }  // namespace cellbake::test

@@ -171,6 +171,25 @@ TEST(IsolatedRead, ACrashInTheImporterIsAnErrorNamingTheFileAndSignal) {
   expect_no_children_left();
 }
 
+TEST(IsolatedRead, AssimpCrashingOnAFileIsAnIngestErrorNamingTheFile) {
+  TempDir dir;
+  // Frames nested 100,000 deep: assimp's .x parser overflows its stack (no check
+  // before import covers .x); in the child that is an error, not cellbake's death.
+  write_text(dir / "deep.x", test::directx_nested_frames(100000));
+  const test::CommandResult r =
+      test::run_cellbake("ingest " + (dir / "deep.x").string() + " --store " + (dir / "s.db").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("deep.x: assimp crashed while reading it (signal 11, Segmentation fault)"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "s.db"));
+  // The same format nested 10 deep reads.
+  write_text(dir / "frames.x", test::directx_nested_frames(10));
+  const test::CommandResult ok =
+      test::run_cellbake("ingest " + (dir / "frames.x").string() + " --store " + (dir / "t.db").string());
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+}
+
 TEST(IsolatedRead, AnImportOverTheMemoryLimitIsStopped) {
 #ifdef CELLBAKE_TEST_ASAN
   GTEST_SKIP() << "AddressSanitizer's allocator reports the limit as its own error";

@@ -230,6 +230,8 @@ std::uint64_t mapped_bytes() {
   if (fd > 3) ::close_range(3, unsigned(fd) - 1, 0);
   ::close_range(unsigned(fd) + 1, ~0U, 0);
   ::signal(SIGPIPE, SIG_DFL);
+  const rlimit no_core{0, 0};  // a crashed import leaves no core file of the whole process
+  ::setrlimit(RLIMIT_CORE, &no_core);
   if (limits.memory_bytes > 0) {
     const rlim_t cap = rlim_t(mapped_bytes() + limits.memory_bytes);
     const rlimit limit{cap, cap};
