@@ -213,6 +213,16 @@ void choose_up_axis(const std::string& given, const std::string& from_files, boo
                                      : "");
 }
 
+// What the readers get from ingest's parameters.
+ReadOptions read_options(const IngestParams& params) {
+  ReadOptions options;
+  options.allow_outside_paths = params.allow_outside_paths;
+  options.import_in_child_process = params.import_in_child_process;
+  options.import_memory_bytes = params.import_memory_bytes;
+  options.import_seconds = params.import_seconds;
+  return options;
+}
+
 }  // namespace
 
 IngestReport ingest_models(const std::vector<std::filesystem::path>& models, const std::filesystem::path& store,
@@ -273,7 +283,7 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
       ++file_triangles;
       if (progress && (report.triangles_read & 0xFFFF) == 0)
         progress("read " + model.filename().string(), report.triangles_read, 0);
-    }, ReadOptions{params.allow_outside_paths});
+    }, read_options(params));
     if (progress) progress("read " + model.filename().string(), report.triangles_read, 0);  // the file's last count
     for (std::uint32_t m = 0; m < info.materials.size(); ++m) {
       Material material = info.materials[m];

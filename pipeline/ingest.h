@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "pipeline/readers/isolated_read.h"
 #include "stages/chunk_lod.h"
 #include "stages/geometry.h"
 #include "stages/up_axis_from_geometry.h"
@@ -39,6 +40,13 @@ struct IngestParams {
   // is a warning (input_warnings, texture_warnings), or an error when the
   // model cannot load without it (pipeline/readers/contained_paths.h).
   bool allow_outside_paths = false;
+  // Models read through assimp are imported in a child process that may map
+  // `import_memory_bytes` more than it inherits and keep ingest waiting
+  // `import_seconds` (0 = no limit); a crash or a limit reached there is an
+  // InputError naming the file (pipeline/readers/isolated_read.h).
+  bool import_in_child_process = true;
+  std::uint64_t import_memory_bytes = default_import_memory_bytes();
+  double import_seconds = 3600;
   // The up axis to record in the store: "z" or "y"; "" = what the files say
   // (ModelInfo::up), else what the geometry says when it is sure
   // (stages/up_axis_from_geometry.h), else none.

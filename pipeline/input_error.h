@@ -14,6 +14,10 @@ class InputError : public std::runtime_error {
   // `where` is e.g. "line 12" or "byte 4096"; may be empty when the whole file is at fault.
   InputError(const std::string& file, const std::string& where, const std::string& what)
       : std::runtime_error(file + (where.empty() ? "" : ":" + where) + ": " + what) {}
+  // An error whose whole message is already formed (one InputError's what(),
+  // carried across a process boundary: pipeline/readers/isolated_read.h).
+  struct Formed {};
+  InputError(Formed, const std::string& message) : std::runtime_error(message) {}
 };
 
 inline std::string at_line(std::uint64_t line) { return "line " + std::to_string(line); }

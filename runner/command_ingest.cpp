@@ -17,6 +17,9 @@ void add_ingest_command(CLI::App& app) {
     std::string units = "m";
     int max_texture_size = 2048;
     bool allow_outside_paths = false;
+    bool import_in_process = false;
+    double import_memory_gb = 0;
+    double import_seconds = 3600;
     std::string up;
     bool json = false;
   };
@@ -37,6 +40,18 @@ void add_ingest_command(CLI::App& app) {
   cmd->add_flag("--allow-outside-paths", opt->allow_outside_paths,
                 "Read files the models name (mtllib, map_Kd, glTF buffers and images) outside the model's folder; "
                 "by default such references are skipped with a warning");
+  cmd->add_flag("--import-in-process", opt->import_in_process,
+                "Run assimp's import in this process; by default formats read through assimp (glTF, COLLADA, FBX, "
+                "X3D, ...) are imported in a child process, so that a crash or a runaway import is an error "
+                "naming the file");
+  cmd->add_option("--import-memory-gb", opt->import_memory_gb,
+                  "Memory an assimp import may use beyond the process's own, in GiB (default: half the machine's "
+                  "memory); more is an error naming the file")
+      ->check(CLI::Range(0.01, 1e6));
+  cmd->add_option("--import-seconds", opt->import_seconds,
+                  "Seconds an assimp import may take before it is stopped with an error naming the file")
+      ->capture_default_str()
+      ->check(CLI::Range(0.1, 1e7));
   cmd->add_option("--up", opt->up,
                   "The model's up axis, recorded in the store for bake: z or y (default: what the format says: "
                   "glTF, IFC and COLLADA y, FBX its UpAxis; for OBJ/PLY/OFF/STL what the geometry shows (large "
@@ -51,6 +66,9 @@ void add_ingest_command(CLI::App& app) {
     params.max_texture_size = opt->max_texture_size;
     params.allow_outside_paths = opt->allow_outside_paths;
     params.up = opt->up;
+    params.import_in_child_process = !opt->import_in_process;
+    if (opt->import_memory_gb > 0) params.import_memory_bytes = std::uint64_t(opt->import_memory_gb * double(1 << 30));
+    params.import_seconds = opt->import_seconds;
     if (opt->translate.size() == 3) params.translate = {opt->translate[0], opt->translate[1], opt->translate[2]};
     const IngestReport r = ingest_models(models, opt->store, params, tbb_parallel_for(), ingest_progress());
     print_ingest_summary(r, opt->store, opt->json);

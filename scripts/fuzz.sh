@@ -8,7 +8,8 @@
 # ${dir}/crashes/TARGET-*, to be fixed and added to the unit tests.
 #   scripts/fuzz.sh [SECONDS] [TARGET...]     (targets: fuzz_obj_reader, ...)
 #
-# `replay` mode (what scripts/test.sh runs; no clang): the same targets built
+# `replay` mode (no clang; CI replays the same targets in the asan job of
+# scripts/sanitize.sh instead, docs/reliability.md): the same targets built
 # with the default compiler, -O1 and ASan + UBSan, each linked with the replay
 # driver (tests/fuzz/fuzz_replay.cpp: seeds + RUNS fixed pseudo-random mutants,
 # default 10000) in ${CELLBAKE_FUZZ_REPLAY_DIR:-build-fuzz-replay}, run with

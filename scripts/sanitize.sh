@@ -3,14 +3,18 @@
 # CELLBAKE_QUICK=1 skips them; docs/reliability.md says what they cover):
 #   asan  AddressSanitizer + UndefinedBehaviorSanitizer (leaks checked, the
 #         first report fatal) over the parser, codec, storage and runner tests,
-#         in ${CELLBAKE_ASAN_DIR:-build-asan};
+#         then the fuzz targets' replay (tests/fuzz: their seeds and 10 000
+#         mutants each of seed 2, other than the suite's seed 1; what
+#         `scripts/fuzz.sh replay` runs in a build of its own), in
+#         ${CELLBAKE_ASAN_DIR:-build-asan};
 #   tsan  ThreadSanitizer over the bake graph (GL and Embree bakes on 2
 #         threads), parallel ingest, merge, the bake lock and concurrent
 #         schema creation, in ${CELLBAKE_TSAN_DIR:-build-tsan}; first it checks
 #         that TSan still reports races planted in TBB tasks
 #         (tests/sanitizers/tsan_canary.cpp).
 # Each job builds with the default compiler (gcc), -O1, only `cellbake` (the
-# tests run it) and its test executables (the runner library as a unity build,
+# tests run it) and its test executables (asan: and the fuzz targets, fuzz_all;
+# the runner library as a unity build,
 # CELLBAKE_UNITY_RUNNER), then runs the selected tests with CTest; a sanitizer
 # report fails the test that made it. Known third-party reports are suppressed
 # (tests/sanitizers/*.supp), never cellbake's own.
@@ -36,6 +40,9 @@ tsan_exclude='^(Bake\.(KilledBakeResumesToTheSameDatabase|ChangedParametersRecom
 bash scripts/install-deps.sh build test
 
 supp="${PWD}/tests/sanitizers"
+# The fuzz replay's ASan options (scripts/fuzz.sh replay): full unwinding on
+# malloc for the suppressions, one allocation over 2560 MiB a finding (libFuzzer's -rss_limit_mb).
+fuzz_asan_options="detect_leaks=1:fast_unwind_on_malloc=0:max_allocation_size_mb=2560:${ASAN_OPTIONS:-}"
 # ASan's fast (frame-pointer) unwinding on malloc: it reaches the library frames
 # lsan.supp names (OpenImageIO's leaked error string), and unlike the full
 # unwinder (fast_unwind_on_malloc=0, scripts/fuzz.sh) it never takes libgcc's
@@ -56,7 +63,7 @@ configure_and_build() {
     -DCMAKE_C_FLAGS="-O1 -g1 ${flags}" -DCMAKE_CXX_FLAGS="-O1 -g1 ${flags}" \
     -DCMAKE_EXE_LINKER_FLAGS="${flags}" -DCMAKE_SHARED_LINKER_FLAGS="${flags}" \
     -DCELLBAKE_BUILD_TESTS=ON -DCELLBAKE_BUILD_BENCH=OFF -DCELLBAKE_BUILD_VIEWER_APP=OFF -DCELLBAKE_UNITY_RUNNER=ON \
-    -DCELLBAKE_TEST_TIMEOUT=1800 > "${dir}.configure.log" 2>&1 \
+    -DCELLBAKE_TEST_TIMEOUT=1800 -DCELLBAKE_FUZZ_REPLAY_SEED=2 > "${dir}.configure.log" 2>&1 \
     || { cat "${dir}.configure.log"; return 1; }
   cmake --build "${dir}" -j "$(nproc)" --target cellbake "$@"
 }
@@ -97,10 +104,16 @@ run_job() {
     asan)
       local dir="${CELLBAKE_ASAN_DIR:-build-asan}"
       configure_and_build asan "${dir}" "-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer" \
-        "${asan_tests[@]}" || return 1
+        "${asan_tests[@]}" fuzz_all || return 1
       built=$(date +%s)
       echo "[sanitize] asan: built in $(( built - start )) s; running ${asan_tests[*]} (except ${asan_exclude})"
-      run_tests "${dir}" "${asan_exclude}" "${asan_tests[@]}" || status=1 ;;
+      run_tests "${dir}" "${asan_exclude}" "${asan_tests[@]}" || status=1
+      local fuzz_start
+      fuzz_start=$(date +%s)
+      echo "[sanitize] asan: fuzz replay (ctest -L fuzz_replay)"
+      (cd "${dir}" && ASAN_OPTIONS="${fuzz_asan_options}" ctest --output-on-failure -j "$(nproc)" --timeout 900 \
+        -L '^fuzz_replay$') || status=1
+      echo "[sanitize] asan: fuzz replay $(( $(date +%s) - fuzz_start )) s" ;;
     tsan)
       local dir="${CELLBAKE_TSAN_DIR:-build-tsan}"
       configure_and_build tsan "${dir}" "-fsanitize=thread" "${tsan_tests[@]}" || return 1

@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # The test command: installs what is missing (build and test packages, and the
 # Slurm daemons tests/test_slurm runs a one-node cluster with), builds with the
-# tests, and runs the whole suite with CTest; then the fuzz targets' replay
-# under ASan + UBSan (scripts/fuzz.sh replay) and the sanitizer jobs
-# (scripts/sanitize.sh: asan, tsan), each in a build folder of its own
-# (BUILD-fuzz-replay, BUILD-asan, BUILD-tsan); CELLBAKE_QUICK=1 skips those
-# three, CELLBAKE_SANITIZE=0 only the sanitizer jobs (their measured cost:
-# docs/reliability.md, "What CI runs"). Idempotent. Exit code 1 when any step failed; the last line names them.
+# tests, and runs the whole suite with CTest; then the sanitizer jobs
+# (scripts/sanitize.sh: asan, whose build also replays the fuzz targets
+# under ASan + UBSan, and tsan), each in a build folder of its own
+# (BUILD-asan, BUILD-tsan); CELLBAKE_QUICK=1 or CELLBAKE_SANITIZE=0 skips
+# them (their measured cost: docs/reliability.md, "What CI runs").
+# Idempotent. Exit code 1 when any step failed; the last line names them.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 start=$(date +%s)
@@ -25,14 +25,11 @@ step() {  # step NAME COMMAND...: runs it, timed; a failure is recorded, not fat
   [ ${status} = 0 ] || failed+=("${name}")
 }
 step "ctest" bash -c "cd '${build_dir}' && ctest --output-on-failure -j '$(nproc)' --timeout 900"
-if [ "${CELLBAKE_QUICK:-0}" != 1 ]; then
-  # The fuzz targets again, built apart with ASan + UBSan (gcc, -O1): their seeds
-  # and fixed pseudo-random mutants (docs/reliability.md).
-  step "fuzz replay" env CELLBAKE_FUZZ_REPLAY_DIR="${CELLBAKE_FUZZ_REPLAY_DIR:-${build_dir}-fuzz-replay}" bash scripts/fuzz.sh replay
-  if [ "${CELLBAKE_SANITIZE:-1}" != 0 ]; then
-    step "sanitize asan" env CELLBAKE_ASAN_DIR="${CELLBAKE_ASAN_DIR:-${build_dir}-asan}" bash scripts/sanitize.sh asan
-    step "sanitize tsan" env CELLBAKE_TSAN_DIR="${CELLBAKE_TSAN_DIR:-${build_dir}-tsan}" bash scripts/sanitize.sh tsan
-  fi
+if [ "${CELLBAKE_QUICK:-0}" != 1 ] && [ "${CELLBAKE_SANITIZE:-1}" != 0 ]; then
+  # The asan job also replays the fuzz targets (their seeds and fixed
+  # pseudo-random mutants) under ASan + UBSan (docs/reliability.md).
+  step "sanitize asan" env CELLBAKE_ASAN_DIR="${CELLBAKE_ASAN_DIR:-${build_dir}-asan}" bash scripts/sanitize.sh asan
+  step "sanitize tsan" env CELLBAKE_TSAN_DIR="${CELLBAKE_TSAN_DIR:-${build_dir}-tsan}" bash scripts/sanitize.sh tsan
 fi
 if [ ${#failed[@]} -gt 0 ]; then
   echo "[test] FAILED after $(( $(date +%s) - start )) s: $(IFS=,; echo "${failed[*]}" | sed 's/,/, /g')"

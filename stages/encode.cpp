@@ -158,4 +158,9 @@ DecodedImage decode_image(const std::uint8_t* data, std::size_t size) {
   return image;
 }
 
+std::string encoded_image_format(const std::vector<std::uint8_t>& bytes) {
+  const std::string format = sniff_format(bytes.data(), bytes.size());
+  return format == "jpg" ? "jpeg" : format;
+}
+
 }  // namespace cellbake

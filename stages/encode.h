@@ -45,6 +45,11 @@ std::vector<std::uint8_t> encode_image(const std::vector<Rgba8>& pixels, int wid
 // in all, and on damaged images a decoder would fill in: a PNG or JPEG cut
 // short (no IEND chunk / EOI marker at the end) or one its decoder warns
 // about. Never crashes on garbage.
+// The format of encoded image bytes, told by their magic bytes as
+// decode_image tells it: "jpeg", "webp", "png", "avif", "jxl" (the names
+// encode_image takes), or "" when none of them.
+std::string encoded_image_format(const std::vector<std::uint8_t>& bytes);
+
 DecodedImage decode_image(const std::uint8_t* data, std::size_t size);
 inline DecodedImage decode_image(const std::vector<std::uint8_t>& bytes) {
   return decode_image(bytes.data(), bytes.size());

@@ -219,6 +219,9 @@ std::string check_cell(const CellDb& db, std::int64_t id, const CellCheckContext
       } catch (const std::exception& e) {
         return face + " image: " + e.what();
       }
+      // Another valid image put in its place (a PNG of zeros for an AVIF face) draws wrong.
+      if (const std::string format = encoded_image_format(f.image); format != f.image_format)
+        return face + " image: a " + format + " image, but the face's row says " + f.image_format;
       if (!(image.width == 1 && image.height == 1 && f.triangles == 0)) {
         if (face_size == 0) face_size = image.width;  // unknown: the first face's size holds for the rest
         if (image.width != face_size || image.height != face_size)

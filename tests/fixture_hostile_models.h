@@ -1,7 +1,8 @@
 // Generators of hostile model files for the reliability tests (issue #37):
 // small files whose structure, not their size, would crash or exhaust an
 // importer: node chains and nestings far deeper than any real model, glTF
-// node graphs whose shared children multiply into billions of instance paths.
+// node graphs (glTF children, COLLADA instance_node) whose shared children
+// multiply into billions of instance paths.
 #pragma once
 
 #include <cstdint>
@@ -49,22 +50,47 @@ inline std::string glb_of(std::string json) {
          json;
 }
 
-// COLLADA 1.4 with one triangle placed by a visual-scene node nested `depth` deep.
-inline std::string collada_nested_nodes(int depth) {
-  std::string s =
-      R"(<?xml version="1.0"?><COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">)"
-      R"(<asset><up_axis>Y_UP</up_axis></asset><library_geometries><geometry id="g"><mesh>)"
-      R"(<source id="p"><float_array id="pa" count="9">0 0 0 1 0 0 0 1 0</float_array><technique_common>)"
-      R"(<accessor source="#pa" count="3" stride="3"><param name="X" type="float"/><param name="Y" type="float"/>)"
-      R"(<param name="Z" type="float"/></accessor></technique_common></source><vertices id="v">)"
-      R"(<input semantic="POSITION" source="#p"/></vertices><triangles count="1">)"
-      R"(<input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2</p></triangles></mesh></geometry>)"
-      R"(</library_geometries><library_visual_scenes><visual_scene id="s">)";
-  for (int i = 0; i < depth; ++i) s += "<node>";
-  s += R"(<instance_geometry url="#g"/>)";
-  for (int i = 0; i < depth; ++i) s += "</node>";
-  return s +
+// COLLADA 1.4 with one triangle (geometry "g"), the nodes `library_nodes`
+// (the text inside <library_nodes>, none when empty) and the visual scene
+// holding `scene_nodes`.
+inline std::string collada_document(const std::string& library_nodes, const std::string& scene_nodes) {
+  return std::string(
+             R"(<?xml version="1.0"?><COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">)"
+             R"(<asset><up_axis>Y_UP</up_axis></asset><library_geometries><geometry id="g"><mesh>)"
+             R"(<source id="p"><float_array id="pa" count="9">0 0 0 1 0 0 0 1 0</float_array><technique_common>)"
+             R"(<accessor source="#pa" count="3" stride="3"><param name="X" type="float"/><param name="Y" type="float"/>)"
+             R"(<param name="Z" type="float"/></accessor></technique_common></source><vertices id="v">)"
+             R"(<input semantic="POSITION" source="#p"/></vertices><triangles count="1">)"
+             R"(<input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2</p></triangles></mesh></geometry>)"
+             R"(</library_geometries>)") +
+         (library_nodes.empty() ? "" : "<library_nodes>" + library_nodes + "</library_nodes>") +
+         R"(<library_visual_scenes><visual_scene id="s">)" + scene_nodes +
          R"(</visual_scene></library_visual_scenes><scene><instance_visual_scene url="#s"/></scene></COLLADA>)";
+}
+
+// COLLADA with one triangle placed by a visual-scene node nested `depth` deep.
+inline std::string collada_nested_nodes(int depth) {
+  std::string nodes;
+  for (int i = 0; i < depth; ++i) nodes += "<node>";
+  nodes += R"(<instance_geometry url="#g"/>)";
+  for (int i = 0; i < depth; ++i) nodes += "</node>";
+  return collada_document("", nodes);
+}
+
+// COLLADA whose library nodes n0 .. n(levels-1) each instance node i+1
+// `copies` times (<instance_node url="#n1"/>); the last places the triangle,
+// and the visual scene instances n0: copies^levels instance paths, a chain
+// `levels` long when 1. With `cycle`, the last node instances n0 too.
+inline std::string collada_instance_nodes(int levels, int copies = 1, bool cycle = false) {
+  std::string nodes;
+  for (int i = 0; i < levels; ++i) {
+    nodes += "<node id=\"n" + std::to_string(i) + "\">";
+    for (int c = 0; c < copies; ++c) nodes += "<instance_node url=\"#n" + std::to_string(i + 1) + "\"/>";
+    nodes += "</node>";
+  }
+  nodes += "<node id=\"n" + std::to_string(levels) + R"("><instance_geometry url="#g"/>)" +
+           (cycle ? R"(<instance_node url="#n0"/>)" : "") + "</node>";
+  return collada_document(nodes, R"(<node id="root"><instance_node url="#n0"/></node>)");
 }
 
 // X3D with one triangle inside `depth` nested Transforms.
@@ -75,6 +101,16 @@ inline std::string x3d_nested_transforms(int depth) {
       R"(<Shape><IndexedFaceSet coordIndex="0 1 2 -1"><Coordinate point="0 0 0 1 0 0 0 1 0"/></IndexedFaceSet></Shape>)";
   for (int i = 0; i < depth; ++i) s += "</Transform>";
   return s + "</Scene></X3D>";
+}
+
+// A DirectX .x text file with one triangle inside `depth` nested Frames
+// (assimp's .x parser recurses per Frame: 100,000 overflow its stack).
+inline std::string directx_nested_frames(int depth) {
+  std::string s = "xof 0303txt 0032\n";
+  for (int i = 0; i < depth; ++i) s += "Frame F" + std::to_string(i) + " {\n";
+  s += "Mesh { 3; 0.0;0.0;0.0;, 1.0;0.0;0.0;, 0.0;1.0;0.0;; 1; 3;0,1,2;; }\n";
+  for (int i = 0; i < depth; ++i) s += "}\n";
+  return s;
 }
 
 }  // namespace cellbake::test

@@ -13,6 +13,7 @@
 
 #include "pipeline/cell_database_check.h"
 #include "runner/merge_shards.h"
+#include "stages/encode.h"
 #include "stages/encode_triangle_list.h"
 #include "storage/cell_check.h"
 #include "storage/cell_content_hash.h"
@@ -274,9 +275,33 @@ TEST_F(CellSemantics, VerifyLodCutMeasuresEveryViewAgainstTheStoresLevels) {
     }
   EXPECT_GE(views, 8u);
   EXPECT_GT(j.at("summary").at("psnr_gain_over_cut").at("count").get<int>(), 0);
+
+TEST_F(CellSemantics, AValidImageOfAnotherFormatInAFacesPlaceIsFound) {
+  // A PNG of zeros, the face's size, for an AVIF face (the baked format): it
+  // decodes, so only its format tells it from the image baked there.
+  const std::vector<Rgba8> zeros(32 * 32, Rgba8{0, 0, 0, 0});
+  ImageEncodeParams png;
+  png.format = "png";
+  std::string hex;
+  for (std::uint8_t b : encode_image(zeros, 32, 32, png)) {
+    char buf[3];
+    std::snprintf(buf, sizeof buf, "%02x", b);
+    hex += buf;
+  }
+  bake("tdm.db");
+  SqliteDb d(path("tdm.db"), SqliteDb::Mode::read_only);
+  SqliteStatement s(d, "SELECT face FROM faces WHERE cell_id = 1 AND sample_index = 0 AND image_format = 'avif' "
+                       "ORDER BY face LIMIT 1");
+  ASSERT_TRUE(s.step());
+  const std::string face = std::to_string(s.column_int(0));
+  expect_found(damaged("tdm.db", "zeros.db", 1,
+                       {"UPDATE faces SET image = x'" + hex + "' WHERE cell_id = 1 AND sample_index = 0 AND face = " +
+                        face}),
+               1, "face " + face + " image: a png image, but the face's row says avif", Command::status);
 }
 
 TEST_F(CellSemantics, VerifyFallsBackPerCellOnDamagedFarGeometry) {
+
   bake("far.db");
   std::vector<std::int64_t> cells;
   {

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "pipeline/input_error.h"
+#include "pipeline/readers/collada_node_graph.h"
 #include "pipeline/readers/gltf_node_graph.h"
 #include "pipeline/readers/markup_nesting.h"
 #include "pipeline/readers/model_reader.h"
@@ -136,6 +137,115 @@ TEST(HostileModels, ColladaAndX3dNestedWithinTheLimitsRead) {
     std::uint64_t triangles = 0;
     EXPECT_EQ(read_error(dir / name, &triangles), "") << name;
     EXPECT_EQ(triangles, 1u) << name;
+  }
+}
+
+TEST(HostileModels, ColladaSharedInstanceNodes30LevelsAreCountedAndRefusedBeforeImport) {
+  TempDir dir;
+  write_text(dir / "shared.dae", test::collada_instance_nodes(30, 2));
+  expect_named_error_quickly("ingest " + (dir / "shared.dae").string() + " --store " + (dir / "s.db").string(),
+                             "shared.dae",
+                             "node graph places 2147483649 node instances (a node placed by several "
+                             "instance_node references is copied per path), more than 1000000");
+  EXPECT_FALSE(std::filesystem::exists(dir / "s.db"));
+}
+
+TEST(HostileModels, ColladaInstanceNodeChainsAndCyclesAreRefused) {
+  TempDir dir;
+  // A flat file (no XML nesting to speak of) whose references chain 100,000 nodes deep.
+  write_text(dir / "chain.dae", test::collada_instance_nodes(100000));
+  write_gz(dir / "chain.dae.gz", test::collada_instance_nodes(100000));
+  write_text(dir / "cycle.dae", test::collada_instance_nodes(3, 1, true));
+  // "#" names what has no name: the visual scene itself (found by fuzz_collada_reader: assimp recursed until the stack ran out).
+  write_text(dir / "empty_url.dae", test::collada_document("", R"(<node id="r"><instance_node url="#"/></node>)"));
+  EXPECT_NE(read_error(dir / "chain.dae").find("chain.dae: node hierarchy 100003 levels deep (instance_node "
+                                               "included), more than 1024"),
+            std::string::npos)
+      << read_error(dir / "chain.dae");
+  EXPECT_NE(read_error(dir / "chain.dae.gz").find("chain.dae.gz: node hierarchy 100003 levels deep"),
+            std::string::npos);
+  EXPECT_NE(read_error(dir / "cycle.dae").find("cycle.dae:node 'n0': is its own ancestor"), std::string::npos)
+      << read_error(dir / "cycle.dae");
+  EXPECT_NE(read_error(dir / "empty_url.dae").find("empty_url.dae:node 's': is its own ancestor"), std::string::npos)
+      << read_error(dir / "empty_url.dae");
+}
+
+TEST(HostileModels, ColladaSharedInstanceNodesWithinTheLimitArePlacedOncePerPath) {
+  TempDir dir;
+  write_text(dir / "shared.dae", test::collada_instance_nodes(4, 2));
+  write_text(dir / "chain.dae", test::collada_instance_nodes(1000));
+  std::uint64_t triangles = 0;
+  EXPECT_EQ(read_error(dir / "shared.dae", &triangles), "");
+  EXPECT_EQ(triangles, 16u);  // 2^4 paths, as counted
+  EXPECT_EQ(read_error(dir / "chain.dae", &triangles), "");
+  EXPECT_EQ(triangles, 1u);
+}
+
+TEST(HostileModels, ColladaIndexListsAndCountsAssimpWouldLoopOrReserveOnAreRefused) {
+  TempDir dir;
+  const std::string good = test::collada_nested_nodes(1);
+  const auto with = [&](const std::string& from, const std::string& to) {
+    std::string s = good;
+    s.replace(s.find(from), from.size(), to);
+    return s;
+  };
+  // "<p># 1 2</p>": assimp's index loop never passes the '#' and grew its list to GBs (found by fuzz_collada_reader).
+  write_text(dir / "hash.dae", with("<p>0 1 2</p>", "<p># 1 2</p>"));
+  write_text(dir / "float.dae", with("<p>0 1 2</p>", "<p>0 1.5 2</p>"));
+  write_text(dir / "floats.dae", with(R"(count="9")", R"(count="1000000000")"));
+  write_text(dir / "triangles.dae", with(R"(<triangles count="1">)", R"(<triangles count="99999999999">)"));
+  write_text(dir / "vcount.dae",
+             with(R"(<triangles count="1"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2</p></triangles>)",
+                  R"(<polylist count="1"><input semantic="VERTEX" source="#v" offset="0"/>)"
+                  R"(<vcount>3000000000</vcount><p>0 1 2</p></polylist>)"));
+  EXPECT_NE(read_error(dir / "hash.dae").find("hash.dae:byte "), std::string::npos) << read_error(dir / "hash.dae");
+  EXPECT_NE(read_error(dir / "hash.dae").find("<p> holds '#', not an index"), std::string::npos);
+  EXPECT_NE(read_error(dir / "float.dae").find("<p> holds '.', not an index"), std::string::npos);
+  EXPECT_NE(read_error(dir / "floats.dae").find("<float_array count=\"1000000000\">: more than the file's"),
+            std::string::npos)
+      << read_error(dir / "floats.dae");
+  EXPECT_NE(read_error(dir / "triangles.dae").find("<triangles count=\"99999999999\">: more than the file's"),
+            std::string::npos);
+  EXPECT_NE(read_error(dir / "vcount.dae").find("a <vcount> sums to 3000000000 corners"), std::string::npos)
+      << read_error(dir / "vcount.dae");
+  // Blanks of every kind between the numbers: the file reads.
+  std::uint64_t triangles = 0;
+  write_text(dir / "blank.dae", with("<p>0 1 2</p>", "<p>\n 0\t1\r\n2 </p>"));
+  EXPECT_EQ(read_error(dir / "blank.dae", &triangles), "");
+  EXPECT_EQ(triangles, 1u);
+}
+
+TEST(ColladaNodeGraph, CountsDepthAndInstancesThroughNestingAndReferences) {
+  const auto measure = [](const std::string& text, std::size_t piece) {
+    ColladaNodeScan scan;
+    for (std::size_t at = 0; at < text.size(); at += piece)
+      scan.feed(text.data() + at, std::min(piece, text.size() - at));
+    return scan.measure("m.dae");
+  };
+  for (const std::size_t piece : {std::size_t{1}, std::size_t{7}, std::size_t{1} << 20}) {
+    SCOPED_TRACE(piece);
+    // The visual scene -> root -> n0 -> 2 x n1 -> 2 x n2 (places the mesh): 1 + 1 + 1 + 2 + 4 nodes, 5 deep.
+    const ColladaNodeGraph shared = measure(test::collada_instance_nodes(2, 2), piece);
+    EXPECT_EQ(shared.depth, 5);
+    EXPECT_EQ(shared.node_instances, 9u);
+    const ColladaNodeGraph nested = measure(test::collada_nested_nodes(5), piece);
+    EXPECT_EQ(nested.depth, 6);
+    EXPECT_EQ(nested.node_instances, 6u);
+    // References and ids inside comments, CDATA and attribute values are not nodes.
+    const ColladaNodeGraph hidden = measure(
+        test::collada_document(R"(<node id="a"><!-- <node id="x"> --><![CDATA[<node>]]></node>)",
+                               R"(<node note="<node>"><instance_node url="#a"/><instance_node url="#a"/>)"
+                               R"(<instance_node url="#missing"/></node>)"),
+        piece);
+    EXPECT_EQ(hidden.depth, 3);
+    EXPECT_EQ(hidden.node_instances, 4u);
+    // Scene nodes resolve by name too; a library node by id only, as assimp looks them up.
+    const ColladaNodeGraph named = measure(
+        test::collada_document(R"(<node name="lib"/>)", R"(<node name="b"/><node><instance_node url="#b"/>)"
+                                                        R"(<instance_node url="#lib"/></node>)"),
+        piece);
+    EXPECT_EQ(named.depth, 3);
+    EXPECT_EQ(named.node_instances, 4u);
   }
 }
 

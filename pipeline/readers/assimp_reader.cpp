@@ -35,6 +35,7 @@
 #include "pipeline/input_error.h"
 #include "pipeline/readers/assimp_messages.h"
 #include "pipeline/readers/buffered_input.h"
+#include "pipeline/readers/collada_node_graph.h"
 #include "pipeline/readers/colour_math.h"
 #include "pipeline/readers/contained_paths.h"
 #include "pipeline/readers/format_readers.h"
@@ -99,7 +100,7 @@ bool xml_format(const std::string& extension) {
 
 // The checks before import over the whole file's bytes `data` (a decompressed
 // ".gz", or a glTF read whole): JSON or XML nesting (markup_nesting.h) and a
-// glTF's node graph (gltf_node_graph.h). Throws InputError naming `name`.
+// glTF or COLLADA node graph (gltf_node_graph.h, collada_node_graph.h). Throws InputError naming `name`.
 void check_before_import(const std::string& name, const std::string& extension, const char* data,
                          std::size_t size) {
   if (extension == "gltf") {
@@ -111,6 +112,7 @@ void check_before_import(const std::string& name, const std::string& extension, 
     check_gltf_node_graph(name, data + at, length);
   } else if (xml_format(extension)) {
     check_markup_nesting(name, data, size);
+    if (extension == "dae") check_collada_node_graph(name, data, size);
   }
 }
 
@@ -118,7 +120,11 @@ void check_before_import(const std::string& name, const std::string& extension, 
 // JSON (a .gltf file, a GLB's JSON chunk) is read whole for its node graph.
 void check_file_before_import(const std::string& name, const std::string& extension,
                               const std::filesystem::path& file) {
-  if (xml_format(extension)) return check_markup_nesting_of_file(name, file);
+  if (xml_format(extension)) {
+    check_markup_nesting_of_file(name, file);
+    if (extension == "dae") check_collada_node_graph_of_file(name, file);
+    return;
+  }
   if (extension != "gltf" && extension != "glb") return;
   std::ifstream in(file, std::ios::binary);
   std::vector<char> bytes;

@@ -5,6 +5,7 @@
 
 #include "pipeline/input_error.h"
 #include "pipeline/readers/format_readers.h"
+#include "pipeline/readers/isolated_read.h"
 
 namespace cellbake {
 namespace {
@@ -27,7 +28,15 @@ ModelInfo read_model(const std::filesystem::path& file, const TriangleCallback& 
   if (format == "ply") return read_ply(file, emit);
   if (format == "off") return read_off(file, emit);
   if (format == "stl") return read_stl(file, emit);
-  if (!format.empty() && assimp_supports(format)) return read_with_assimp(file, format, gzipped, emit, options);
+  if (!format.empty() && assimp_supports(format)) {
+    if (!options.import_in_child_process) return read_with_assimp(file, format, gzipped, emit, options);
+    return read_in_child_process(
+        file, "assimp",
+        [&](const TriangleCallback& emit_in_child) {
+          return read_with_assimp(file, format, gzipped, emit_in_child, options);
+        },
+        emit, IsolationLimits{options.import_memory_bytes, options.import_seconds});
+  }
   throw InputError(file.string(), "", "unknown model format '" + ext + "'");
 }
 

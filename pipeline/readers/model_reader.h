@@ -66,6 +66,13 @@ struct ReadOptions {
   // Files the model names (mtllib, glTF buffers, ...) are read only inside its
   // folder and subfolders unless this is set (pipeline/readers/contained_paths.h).
   bool allow_outside_paths = false;
+  // Formats read through assimp are imported in a child process with these
+  // limits (pipeline/readers/isolated_read.h): a crash, a runaway allocation
+  // or an endless import inside assimp becomes an InputError naming the file.
+  // `cellbake ingest` sets it (IngestParams); off, assimp runs in this process.
+  bool import_in_child_process = false;
+  std::uint64_t import_memory_bytes = 0;  // beyond what the child inherits; 0 = no limit
+  double import_seconds = 0;              // 0 = no limit
 };
 
 // Reads `file` and calls `emit` for every triangle, in file order. Material
@@ -80,7 +87,9 @@ struct ReadOptions {
 // Throws InputError (naming file, line or byte offset, and the problem) for:
 // unknown/unsupported format, unreadable/truncated/malformed file, NaN or Inf
 // coordinates, out-of-range vertex indices, and (assimp formats) a model that
-// cannot load without a file `options` refuses to read. Other refused references
+// cannot load without a file `options` refuses to read, and (assimp formats
+// with `options.import_in_child_process`) an import that crashes or exceeds
+// the memory or time limit. Other refused references
 // are ModelInfo::warnings. Material textures are not opened here: their paths
 // are checked where they are read (ingest). Degenerate triangles are emitted
 // as they are (ingest counts and skips them). An empty model is not an error here.

@@ -1,6 +1,7 @@
 // The replay driver: a main() for the fuzz targets of tests/fuzz without
 // libFuzzer, so any compiler builds them as regression tests (ctest
-// `fuzz_replay.*`; scripts/fuzz.sh replay runs them under ASan + UBSan).
+// `fuzz_replay.*`; the asan job of scripts/sanitize.sh and scripts/fuzz.sh
+// replay run them under ASan + UBSan).
 //
 //   fuzz_X [--runs N] [--seed S] [--max-len BYTES] INPUT...
 //
@@ -314,7 +315,17 @@ int main(int argc, char** argv) {
   // ASan reports SIGSEGV, SIGBUS and SIGFPE itself (then the death callback names the input).
   for (int sig : {SIGILL, SIGABRT, SIGALRM}) ::signal(sig, on_signal);
 #else
-  for (int sig : {SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT, SIGALRM}) ::signal(sig, on_signal);
+  // On a stack of their own, so that a stack overflow (an importer recursing
+  // without bound) is reported with its input too.
+  static std::vector<char> alternate_stack(std::size_t{1} << 16);
+  const stack_t alternate{alternate_stack.data(), 0, alternate_stack.size()};
+  ::sigaltstack(&alternate, nullptr);
+  for (int sig : {SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT, SIGALRM}) {
+    struct sigaction action {};
+    action.sa_handler = on_signal;
+    action.sa_flags = SA_ONSTACK;
+    ::sigaction(sig, &action, nullptr);
+  }
 #endif
   if (__sanitizer_set_death_callback) __sanitizer_set_death_callback(on_sanitizer_death);
 

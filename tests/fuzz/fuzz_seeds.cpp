@@ -183,7 +183,8 @@ int main(int argc, char** argv) {
 
   // The node-tree walkers: small scenes (a chain, a shared child, nesting)
   // and ones past the limits checked before import (deep nesting, a chain
-  // too deep, a cycle; the 2^30-path DAG is left to HostileModels: its
+  // too deep, a cycle; glTF children and COLLADA instance_node references;
+  // the 2^30-path DAGs are left to HostileModels: their
   // mutants are valid DAGs of up to a million nodes, seconds each).
   write(root / "fuzz_gltf_reader", "chain.gltf", test::gltf_node_chain(3));
   write(root / "fuzz_gltf_reader", "shared.gltf", test::gltf_node_chain(4, 2));
@@ -192,6 +193,11 @@ int main(int argc, char** argv) {
         test::gltf_with_nodes(R"({"children":[1]},{"children":[0],"mesh":0})"));
   write(root / "fuzz_x3d_reader", "nested.x3d", test::x3d_nested_transforms(3));
   write(root / "fuzz_x3d_reader", "deep.x3d", test::x3d_nested_transforms(2100));
+  write(root / "fuzz_collada_reader", "nested.dae", test::collada_nested_nodes(3));
+  write(root / "fuzz_collada_reader", "deep.dae", test::collada_nested_nodes(2100));
+  write(root / "fuzz_collada_reader", "shared.dae", test::collada_instance_nodes(3, 2));
+  write(root / "fuzz_collada_reader", "deep_chain.dae", test::collada_instance_nodes(1100));
+  write(root / "fuzz_collada_reader", "cycle.dae", test::collada_instance_nodes(2, 1, true));
 
   write(root / "fuzz_bake_config", "minimal.toml",
         "[input]\nstore = \"model.db\"\n[cells]\nsize = 2.0\nregions = [[0, 0, 0, 4, 4, 2]]\n");
