@@ -275,6 +275,7 @@ TEST_F(CellSemantics, VerifyLodCutMeasuresEveryViewAgainstTheStoresLevels) {
     }
   EXPECT_GE(views, 8u);
   EXPECT_GT(j.at("summary").at("psnr_gain_over_cut").at("count").get<int>(), 0);
+}
 
 TEST_F(CellSemantics, AValidImageOfAnotherFormatInAFacesPlaceIsFound) {
   // A PNG of zeros, the face's size, for an AVIF face (the baked format): it
