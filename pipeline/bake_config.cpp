@@ -1,5 +1,7 @@
 #include "pipeline/bake_config.h"
 
+#include "pipeline/bake_parameters.h"
+
 #include <algorithm>
 #include <cmath>
 #include <toml++/toml.h>
@@ -11,8 +13,6 @@
 
 namespace cellbake {
 namespace {
-
-using Setter = std::function<void(BakeConfig&, const toml::node&, const std::string& where)>;
 
 std::string where_of(const std::string& file, const toml::node& n) {
   const auto& src = n.source();
@@ -89,164 +89,41 @@ std::filesystem::path resolve(const BakeConfig& c, const std::string& p, const s
   return path;
 }
 
-const std::map<std::string, Setter>& setters() {
-  static const std::map<std::string, Setter> table = {
-      {"model.store", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.store = resolve(c, text(n, w, "model.store"), w);
-       }},
-      {"model.up", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.up = text(n, w, "model.up", {"z", "y"});
-         c.up_given = true;
-       }},
-      {"cells.size", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.cell_size = number(n, w, "cells.size", 1e-6, 1e9);
-       }},
-      {"cells.floors", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         if (const toml::array* a = n.as_array()) {
-           std::string list;
-           for (const auto& item : *a) {
-             const std::int64_t f = integer(item, w, "cells.floors", 0, 1 << 20);
-             list += (list.empty() ? "" : ",") + std::to_string(f);
-           }
-           if (list.empty()) fail(w, "'cells.floors' = [] names no floor (\"all\", or indices like [0, 2])");
-           c.floors = parse_floor_selection(list, w + ": 'cells.floors'");
-           return;
-         }
-         std::optional<std::string> v = n.value<std::string>();
-         if (!v) fail(w, "'cells.floors' must be \"all\" or an array of floor indices like [0, 2]");
-         c.floors = parse_floor_selection(*v, w + ": 'cells.floors'");
-       }},
-      {"cells.eye_height", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.eye_height = number(n, w, "cells.eye_height", 0, 1e9);  // 0: 1.7 m in the model's units
-       }},
-      {"near.budget", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.near_budget = static_cast<std::uint64_t>(integer(n, w, "near.budget", 0, std::int64_t(1) << 40));
-       }},
-      {"near.budget_fraction", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.near_budget_fraction = number(n, w, "near.budget_fraction", 0, 1);
-       }},
-      {"far.choice", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.far_choice = text(n, w, "far.choice", {"cheapest", "tdm", "geometry"});
-       }},
-      {"far.geometry_below", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.far_geometry_below = static_cast<std::uint64_t>(integer(n, w, "far.geometry_below", 0, std::int64_t(1) << 40));
-       }},
-      {"far.geometry_factor", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.far_geometry_factor = number(n, w, "far.geometry_factor", 0, 1e6);
-       }},
-      {"far.lod_error_px", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.far_lod_error_px = number(n, w, "far.lod_error_px", 0, 64);
-       }},
-      {"far.lod_replaces_exact", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.far_lod_replaces_exact = text(n, w, "far.lod_replaces_exact", {"on", "off", "auto"});
-       }},
-      {"far.seen_rings", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.far_seen_rings = int(integer(n, w, "far.seen_rings", 0, 8));
-       }},
-      {"sample.face_size", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.face_size = int(integer(n, w, "sample.face_size", 8, 4096));
-       }},
-      {"sample.supersample", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.supersample = int(integer(n, w, "sample.supersample", 1, 4));
-       }},
-      {"sample.near_plane", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.near_plane = number(n, w, "sample.near_plane", 1e-6, 1e3);
-       }},
-      {"sample.seam_shell_px", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.seam_shell_px = number(n, w, "sample.seam_shell_px", 0, 64);
-       }},
-      {"sample.backend", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.sample_backend = text(n, w, "sample.backend", {"osmesa", "egl", "embree", "auto"});
-       }},
-      {"sample.embree_cache_mb", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.embree_cache_mb = static_cast<std::uint64_t>(integer(n, w, "sample.embree_cache_mb", 64, std::int64_t(1) << 24));
-       }},
-      {"sample.texture_cache_mb", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.texture_cache_mb = static_cast<std::uint64_t>(integer(n, w, "sample.texture_cache_mb", 16, std::int64_t(1) << 24));
-       }},
-      {"shading.mode", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.shading.mode = parse_shading_mode(text(n, w, "shading.mode", {"lit", "unlit"}));
-       }},
-      {"shading.key_direction", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.shading.key_direction = direction(n, w, "shading.key_direction");
-       }},
-      {"shading.key_strength", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.shading.key_strength = number(n, w, "shading.key_strength", 0, 2);
-       }},
-      {"shading.fill_direction", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.shading.fill_direction = direction(n, w, "shading.fill_direction");
-       }},
-      {"shading.fill_strength", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.shading.fill_strength = number(n, w, "shading.fill_strength", 0, 2);
-       }},
-      {"shading.ambient", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.shading.ambient = number(n, w, "shading.ambient", 0, 2);
-       }},
-      {"samples.initial", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.samples_initial = text(n, w, "samples.initial", {"centre", "corners", "corners+centre"});
-       }},
-      {"samples.void_threshold", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.samples_void_threshold = number(n, w, "samples.void_threshold", 0, 1);
-       }},
-      {"samples.max", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.samples_max = int(integer(n, w, "samples.max", 1, 64));
-       }},
-      {"samples.void_resolution", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.samples_void_resolution = int(integer(n, w, "samples.void_resolution", 4, 256));
-       }},
-      {"samples.keep_margin_px", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.samples_keep_margin_px = int(integer(n, w, "samples.keep_margin_px", 0, 16));
-       }},
-      {"samples.min_island_px", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.samples_min_island_px = int(integer(n, w, "samples.min_island_px", 0, 1 << 20));
-       }},
-      {"simplify.delta_boundary_error_px", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.delta_boundary_error_px = number(n, w, "simplify.delta_boundary_error_px", 0, 8);
-       }},
-      {"samples.redundancy_tolerance", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.samples_redundancy_tolerance = number(n, w, "samples.redundancy_tolerance", 0, 0.1);
-       }},
-      {"view.far_budget", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.far_budget = static_cast<std::uint64_t>(integer(n, w, "view.far_budget", 0, std::int64_t(1) << 40));
-       }},
-      {"depth_mesh.skin_angle_deg", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.skin_angle_deg = number(n, w, "depth_mesh.skin_angle_deg", 0, 45);
-       }},
-      {"depth_mesh.depth_jump", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.depth_jump = number(n, w, "depth_mesh.depth_jump", 1e-4, 10);
-       }},
-      {"depth_mesh.multi_source_skins", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.multi_source_skins = text(n, w, "depth_mesh.multi_source_skins", {"on", "off"});
-       }},
-      {"simplify.depth_error_relative", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.depth_error_relative = number(n, w, "simplify.depth_error_relative", 0, 1);
-       }},
-      {"simplify.boundary_error_px", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.boundary_error_px = number(n, w, "simplify.boundary_error_px", 0, 8);
-       }},
-      {"simplify.max_triangles", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.max_face_triangles = int(integer(n, w, "simplify.max_triangles", 2, 1 << 24));
-       }},
-      {"encode.image_format", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.image_format = text(n, w, "encode.image_format", {"jpeg", "webp", "png", "avif", "jxl"});
-       }},
-      {"encode.quality", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.image_quality = int(integer(n, w, "encode.quality", 1, 100));
-       }},
-      {"encode.mesh_codec", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.mesh_codec = text(n, w, "encode.mesh_codec", {"grid", "quantized"});
-       }},
-      {"encode.mesh_depth_error", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.mesh_depth_error = number(n, w, "encode.mesh_depth_error", 1e-6, 0.1);
-       }},
-      {"encode.position_bits", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.position_bits = int(integer(n, w, "encode.position_bits", 8, 24));
-       }},
-      {"output.database", [](BakeConfig& c, const toml::node& n, const std::string& w) {
-         c.database = resolve(c, text(n, w, "output.database"), w);
-       }},
-  };
-  return table;
+// Reads `n` as parameter `p` (type and range from the table) into `c`.
+void set_parameter(BakeConfig& c, const BakeParameter& p, const toml::node& n, const std::string& w) {
+  switch (p.type) {
+    case ParameterType::integer:
+      p.put(c, integer(n, w, p.key, std::int64_t(p.lo), std::int64_t(p.hi)));
+      return;
+    case ParameterType::number:
+      p.put(c, number(n, w, p.key, p.lo, p.hi));
+      return;
+    case ParameterType::text:
+      p.put(c, text(n, w, p.key, p.allowed));
+      return;
+    case ParameterType::direction:
+      p.put(c, direction(n, w, p.key));
+      return;
+    case ParameterType::path:
+      p.put(c, resolve(c, text(n, w, p.key), w).string());
+      return;
+    case ParameterType::floors: {
+      if (const toml::array* a = n.as_array()) {
+        std::string list;
+        for (const auto& item : *a) {
+          const std::int64_t f = integer(item, w, p.key, std::int64_t(p.lo), std::int64_t(p.hi));
+          list += (list.empty() ? "" : ",") + std::to_string(f);
+        }
+        if (list.empty()) fail(w, "'" + p.key + "' = [] names no floor (\"all\", or indices like [0, 2])");
+        p.put(c, floor_selection_text(parse_floor_selection(list, w + ": '" + p.key + "'")));
+        return;
+      }
+      std::optional<std::string> v = n.value<std::string>();
+      if (!v) fail(w, "'" + p.key + "' must be \"all\" or an array of floor indices like [0, 2]");
+      p.put(c, floor_selection_text(parse_floor_selection(*v, w + ": '" + p.key + "'")));
+      return;
+    }
+  }
 }
 
 Box3d parse_region(const toml::table& t, const std::string& file) {
@@ -291,9 +168,9 @@ void apply_table(BakeConfig& c, const toml::table& root, const std::string& file
     if (!t) fail(w, "unknown top-level key '" + section_name + "'");
     for (const auto& [k, v] : *t) {
       const std::string full = section_name + "." + std::string(k.str());
-      auto it = setters().find(full);
-      if (it == setters().end()) fail(where_of(file, v), "unknown key '" + full + "'");
-      it->second(c, v, where_of(file, v));
+      const BakeParameter* p = find_bake_parameter(full);
+      if (!p) fail(where_of(file, v), "unknown key '" + full + "'");
+      set_parameter(c, *p, v, where_of(file, v));
     }
   }
 }
@@ -336,15 +213,15 @@ void apply_override(BakeConfig& c, const std::string& assignment) {
   if (eq == std::string::npos) throw std::runtime_error("--set '" + assignment + "': expected section.key=value");
   const std::string key = assignment.substr(0, eq);
   std::string value = assignment.substr(eq + 1);
-  auto it = setters().find(key);
-  if (it == setters().end()) throw std::runtime_error("--set '" + assignment + "': unknown key '" + key + "'");
+  const BakeParameter* p = find_bake_parameter(key);
+  if (!p) throw std::runtime_error("--set '" + assignment + "': unknown key '" + key + "'");
   toml::table t;
   try {
     t = toml::parse("v = " + value);
   } catch (const toml::parse_error&) {
     t = toml::table{{"v", value}};  // a bare word: take it as a string
   }
-  it->second(c, *t.get("v"), "--set " + key);
+  set_parameter(c, *p, *t.get("v"), "--set " + key);
 }
 
 std::uint64_t effective_near_budget(const BakeConfig& c, std::uint64_t model_triangles) {
@@ -412,30 +289,8 @@ std::string resolve_up_axis(BakeConfig& c, const std::string& store_up, const st
 std::string describe_bake_config(const BakeConfig& c) {
   std::ostringstream o;
   o.precision(17);
-  o << "up=" << c.up << "\ncells.size=" << c.cell_size << "\nnear.budget=" << c.near_budget
-    << "\nnear.budget_fraction=" << c.near_budget_fraction << "\nfar.choice=" << c.far_choice
-    << "\nfar.geometry_below=" << c.far_geometry_below << "\nfar.seen_rings=" << c.far_seen_rings
-    << "\nfar.lod_error_px=" << c.far_lod_error_px << "\nfar.lod_replaces_exact=" << c.far_lod_replaces_exact
-    << "\nfar.geometry_factor=" << c.far_geometry_factor
-    << "\nsample.face_size=" << c.face_size << "\nsample.supersample=" << c.supersample
-    << "\nsample.near_plane=" << c.near_plane << "\nsample.seam_shell_px=" << c.seam_shell_px
-    << "\nsample.backend=" << c.sample_backend << "\nsample.embree_cache_mb=" << c.embree_cache_mb
-    << "\nsample.texture_cache_mb=" << c.texture_cache_mb
-    << "\nshading.mode=" << shading_mode_name(c.shading.mode) << "\nshading.key_direction=" << c.shading.key_direction.x
-    << "," << c.shading.key_direction.y << "," << c.shading.key_direction.z
-    << "\nshading.key_strength=" << c.shading.key_strength << "\nshading.fill_direction=" << c.shading.fill_direction.x
-    << "," << c.shading.fill_direction.y << "," << c.shading.fill_direction.z
-    << "\nshading.fill_strength=" << c.shading.fill_strength << "\nshading.ambient=" << c.shading.ambient
-    << "\nsamples.initial=" << c.samples_initial
-    << "\nsamples.void_threshold=" << c.samples_void_threshold << "\nsamples.max=" << c.samples_max << "\nsamples.void_resolution=" << c.samples_void_resolution << "\nsamples.keep_margin_px=" << c.samples_keep_margin_px << "\nsamples.min_island_px=" << c.samples_min_island_px
-    << "\nsimplify.delta_boundary_error_px=" << c.delta_boundary_error_px
-    << "\nsamples.redundancy_tolerance=" << c.samples_redundancy_tolerance << "\nview.far_budget=" << c.far_budget
-    << "\ndepth_mesh.skin_angle_deg=" << c.skin_angle_deg
-    << "\ndepth_mesh.depth_jump=" << c.depth_jump << "\ndepth_mesh.multi_source_skins=" << c.multi_source_skins
-    << "\nsimplify.depth_error_relative=" << c.depth_error_relative
-    << "\nsimplify.boundary_error_px=" << c.boundary_error_px << "\nsimplify.max_triangles=" << c.max_face_triangles << "\nencode.image_format=" << c.image_format
-    << "\nencode.quality=" << c.image_quality << "\nencode.mesh_codec=" << c.mesh_codec
-    << "\nencode.mesh_depth_error=" << c.mesh_depth_error << "\nencode.position_bits=" << c.position_bits << "\n";
+  for (const BakeParameter& p : bake_parameters())
+    if (!p.described.empty()) o << p.described << "=" << parameter_value_text(p.get(c)) << "\n";
   for (const auto& r : c.regions)
     o << "region=" << r.lo.x << "," << r.lo.y << "," << r.lo.z << "," << r.hi.x << "," << r.hi.y << "," << r.hi.z
       << "\n";

@@ -102,6 +102,8 @@ CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::str
   hash_vec(in, c.shading.key_direction);
   hash_vec(in, c.shading.fill_direction);
   in.f64(c.shading.key_strength).f64(c.shading.fill_strength).f64(c.shading.ambient);
+  // Lit samples take the lights in the up-axis frame (z keeps the hash it had).
+  if (c.up != "z" && c.shading.mode != ShadingMode::unlit) in.text("up").text(c.up);
   in.text("samples").text(c.samples_initial).f64(c.samples_void_threshold).u64(c.samples_max);
   in.u64(c.samples_void_resolution);
   in.f64(c.samples_redundancy_tolerance).u64(c.samples_keep_margin_px).f64(c.delta_boundary_error_px);

@@ -8,6 +8,7 @@
 
 #include "pipeline/bake_config.h"
 #include "pipeline/bake_estimate.h"
+#include "pipeline/bake_parameters.h"
 #include "runner/bake_command_options.h"
 #include "runner/bake_dry_run.h"
 #include "runner/bake_runner.h"
@@ -64,7 +65,15 @@ void add_bake_command(CLI::App& app) {
       ->check(CLI::Range(1, 1000000))
       ->needs(measure)
       ->capture_default_str();
-  cmd->callback([opt, dry_run, request] {
+  auto list_parameters = std::make_shared<bool>(false);
+  cmd->add_flag("--list-parameters", *list_parameters,
+                "Print every config key (type, range, default, the hash it enters, meaning) as Markdown "
+                "(docs/configuration.md) and exit");
+  cmd->callback([opt, dry_run, request, list_parameters] {
+    if (*list_parameters) {
+      std::fputs(bake_parameters_markdown().c_str(), stdout);
+      return;
+    }
     const BakeConfig config = bake_config_from_options(*opt);
     if (request->measure > 0 && !*dry_run) throw std::runtime_error("--measure goes with --dry-run");
     request->json = opt->json;
