@@ -14,16 +14,14 @@
 namespace cellbake {
 namespace {
 
+using test::count_of;
+using test::read_text;
+
 const std::filesystem::path kSource = std::filesystem::path(CELLBAKE_SOURCE_DIR);
 
 test::CommandResult shell(const std::string& command) { return test::run_shell(command); }
 
 std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
-
-std::string read_text(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 TEST(Install, PrefixGetsCellbakeItsViewerConfigsAndDocs) {
   test::TempDir dir;

@@ -29,18 +29,8 @@
 namespace cellbake {
 namespace {
 
-std::string read_text(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::size_t count_of(const std::string& text, const std::string& what) {
-  std::size_t n = 0;
-  for (auto p = text.find(what); p != std::string::npos; p = text.find(what, p + 1)) ++n;
-  return n;
-}
+using test::count_of;
+using test::read_text;
 
 // The font sizes of the map's id labels.
 std::vector<double> label_fonts(const std::string& svg) {

@@ -15,6 +15,21 @@
 
 namespace cellbake::test {
 
+// The whole of `file` as bytes ("" when it cannot be read).
+inline std::string read_text(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// How many times `what` occurs in `text`, overlapping occurrences included.
+inline std::size_t count_of(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto p = text.find(what); p != std::string::npos; p = text.find(what, p + 1)) ++n;
+  return n;
+}
+
 class TempDir {
  public:
   TempDir() {

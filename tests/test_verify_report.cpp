@@ -25,20 +25,10 @@
 namespace cellbake {
 namespace {
 
+using test::count_of;
+using test::read_text;
+
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-std::size_t count_of(const std::string& text, const std::string& what) {
-  std::size_t n = 0;
-  for (auto p = text.find(what); p != std::string::npos; p = text.find(what, p + 1)) ++n;
-  return n;
-}
-
-std::string read_text(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 VerifyViewResult view(VerifyViewKind kind, double psnr, double holes) {
   VerifyViewResult v;

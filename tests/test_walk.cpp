@@ -25,20 +25,10 @@
 namespace cellbake {
 namespace {
 
+using test::count_of;
+using test::read_text;
+
 constexpr double kPi = 3.14159265358979323846;
-
-std::string read_text(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::size_t count_of(const std::string& text, const std::string& what) {
-  std::size_t n = 0;
-  for (auto p = text.find(what); p != std::string::npos; p = text.find(what, p + 1)) ++n;
-  return n;
-}
 
 // A z-up grid of cols x rows cells of `size` (ids row by row from 1), navigable at z = 1.7.
 std::vector<WalkCell> grid_cells(int cols, int rows, double size) {

@@ -293,9 +293,14 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
             const float limit = out.depth[p];
             RTCIntersectContext single;
             rtcInitIntersectContext(&single);
+            // The dropped triangle; Embree may return it again from just past
+            // it (an instance's transform rounds the ray's tnear), so each
+            // such return moves the start on by a growing relative step.
+            unsigned dropped_inst = r.hit.instID[0], dropped_geom = r.hit.geomID, dropped_prim = r.hit.primID;
+            float step = 0;
             for (int behind = 0; behind < kMaxAlphaLayers && texel.dropped; ++behind) {
               RTCRayHit next;
-              const float from = std::nextafter(t, std::numeric_limits<float>::infinity());
+              const float from = std::max(std::nextafter(t, std::numeric_limits<float>::infinity()), t + step);
               bool found = false;
               if (from < seg.t1) {
                 init_ray(next, scene.ray_origin(), Vec3d{dir.x, dir.y, dir.z}, std::max(from, seg.t0),
@@ -311,6 +316,13 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
               }
               ++stats_.alpha_retraces;
               if (!found) break;
+              if (next.hit.instID[0] == dropped_inst && next.hit.geomID == dropped_geom &&
+                  next.hit.primID == dropped_prim) {
+                step = step > 0 ? 2 * step : std::max(t, 1.0f) * 1e-6f;
+                continue;
+              }
+              step = 0;
+              dropped_inst = next.hit.instID[0], dropped_geom = next.hit.geomID, dropped_prim = next.hit.primID;
               hit = surface_hit(scene, next);
               t = next.ray.tfar;
               texel = texturer.texel(hit, dir, t, step_x, step_y);
