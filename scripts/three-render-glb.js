@@ -18,15 +18,12 @@ const fs = require('fs');
 const http = require('http');
 const path = require('path');
 
-// The folder of npm package `name`: in CELLBAKE_NODE_TOOLS/node_modules or a NODE_PATH folder.
+const { package_root: find_package } = require('./node-packages.js');
+
+// The folder of npm package `name`; throws naming it when absent.
 function package_root(name) {
-  const dirs = [];
-  if (process.env.CELLBAKE_NODE_TOOLS) dirs.push(path.join(process.env.CELLBAKE_NODE_TOOLS, 'node_modules'));
-  dirs.push(...(process.env.NODE_PATH || '').split(path.delimiter).filter(Boolean));
-  for (const d of dirs) {
-    const p = path.join(d, name);
-    if (fs.existsSync(path.join(p, 'package.json'))) return p;
-  }
+  const root = find_package(name);
+  if (root) return root;
   throw new Error(`npm package ${name} not found (scripts/install-node-tools.sh installs it; set CELLBAKE_NODE_TOOLS)`);
 }
 

@@ -12,16 +12,7 @@
 const fs = require('fs');
 const path = require('path');
 
-function package_root(name) {
-  const dirs = [];
-  if (process.env.CELLBAKE_NODE_TOOLS) dirs.push(path.join(process.env.CELLBAKE_NODE_TOOLS, 'node_modules'));
-  dirs.push(...(process.env.NODE_PATH || '').split(path.delimiter).filter(Boolean));
-  for (const d of dirs) {
-    const p = path.join(d, name);
-    if (fs.existsSync(path.join(p, 'package.json'))) return p;
-  }
-  return null;
-}
+const { package_root } = require('./node-packages.js');
 
 const file = process.argv[2];
 if (!file || process.argv.length !== 3) {
