@@ -54,6 +54,11 @@ void add_verify_command(CLI::App& app) {
   cmd->add_flag("--lod-cut", opt->verify.lod_cut,
                 "Also draw each view as a cut through the store's chunk levels with the cell's triangles, and "
                 "at 1 px of error (the far field's yardstick: psnr_db_cut, psnr_gain_over_cut)");
+  cmd->add_option("--supersample", opt->verify.supersample,
+                  "Draw every frame at this many times the size on each axis and box-filter it down before "
+                  "comparing (sub-pixel geometry measured by coverage, not by the pixel centres it happens to hit)")
+      ->check(CLI::Range(1, 4))
+      ->capture_default_str();
   cmd->add_option("--threads", opt->verify.threads, "Worker threads (0 = all cores)")
       ->check(CLI::Range(0, 1024));
   cmd->add_option("--worst", opt->verify.worst_views, "Worst views shown as triptychs")

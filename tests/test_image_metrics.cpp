@@ -189,6 +189,27 @@ TEST(ImageMetrics, BlankFramesAreOneColourOrEmpty) {
   EXPECT_THROW(is_blank(bad), std::invalid_argument);
 }
 
+TEST(ImageMetrics, BoxDownsampleAveragesColourAndKeepsTheNearestDepth) {
+  ViewFrame f = flat(4, 2, {0, 0, 0, 0}, kSky);
+  // Left 2x2 block: one covered pixel of 200 at depth 5, one of 100 at depth 3.
+  f.color[0] = {200, 200, 200, 255}, f.depth[0] = 5.0f;
+  f.color[5] = {100, 0, 0, 255}, f.depth[5] = 3.0f;
+  const ViewFrame d = box_downsample(f, 2);
+  ASSERT_EQ(d.width, 2);
+  ASSERT_EQ(d.height, 1);
+  EXPECT_EQ(d.color[0].r, 75);  // (200 + 100 + 0 + 0) / 4
+  EXPECT_EQ(d.color[0].g, 50);
+  EXPECT_FLOAT_EQ(d.depth[0], 3.0f);
+  EXPECT_FALSE(d.covered(1));  // nothing covered in the right block
+  // A sub-pixel stripe is measured by its coverage: the same stripe one
+  // pixel over differs pixel for pixel, but not once filtered.
+  const ViewFrame a = stripes(8, 8, 0), b = stripes(8, 8, 1);
+  EXPECT_LT(compare_frames(a, b).psnr_db, compare_frames(box_downsample(a, 2), box_downsample(b, 2)).psnr_db);
+  EXPECT_EQ(box_downsample(f, 1).color.size(), f.color.size());
+  EXPECT_THROW(box_downsample(f, 0), std::invalid_argument);
+  EXPECT_THROW(box_downsample(f, 3), std::invalid_argument);  // taller than the frame
+}
+
 TEST(ImageMetrics, MismatchedFramesAreRejected) {
   const ViewFrame a = flat(4, 4, {}, 1.0f), b = flat(4, 5, {}, 1.0f);
   EXPECT_THROW(compare_frames(a, b), std::invalid_argument);

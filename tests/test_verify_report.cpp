@@ -405,6 +405,14 @@ TEST(VerifyRun, ViewsDrawnAsExactGeometryAreCountedAsIdentical) {
   EXPECT_EQ(s.truth_blank_views, 0u);
   EXPECT_EQ(s.identical_views, 2u);
   EXPECT_TRUE(std::isinf(s.psnr_median_db));
+  // Supersampled (drawn at 128x96, filtered to 64x48): exact geometry still
+  // draws the truth pixel for pixel.
+  VerifyOptions ss = two_small_views(1);
+  ss.supersample = 2;
+  const VerifySummary s2 = run_verify(c.database, dir / "report-ss", ss);
+  EXPECT_EQ(s2.identical_views, 2u);
+  ss.supersample = 5;
+  EXPECT_THROW(run_verify(c.database, dir / "report-bad", ss), std::invalid_argument);
 
   const auto cli = test::run_cellbake(
       "verify --walk-seconds 0 " + c.database.string() + " --report " + (dir / "cli").string() +

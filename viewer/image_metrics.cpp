@@ -119,6 +119,37 @@ Rgba8 ramp(double e) {
 
 bool ViewFrame::covered(std::size_t i) const { return std::isfinite(depth[i]); }
 
+ViewFrame box_downsample(const ViewFrame& frame, int factor) {
+  validate(frame, "supersampled");
+  if (factor < 1 || frame.width < factor || frame.height < factor)
+    throw std::invalid_argument("image_metrics: cannot box-filter a " + std::to_string(frame.width) + "x" +
+                                std::to_string(frame.height) + " frame down by " + std::to_string(factor));
+  if (factor == 1) return frame;
+  ViewFrame out;
+  out.width = frame.width / factor;
+  out.height = frame.height / factor;
+  out.color.resize(std::size_t(out.width) * std::size_t(out.height));
+  out.depth.resize(out.color.size());
+  const unsigned n = unsigned(factor * factor);
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x) {
+      unsigned sum[4] = {0, 0, 0, 0};
+      float nearest = std::numeric_limits<float>::infinity();
+      for (int dy = 0; dy < factor; ++dy)
+        for (int dx = 0; dx < factor; ++dx) {
+          const std::size_t i = std::size_t(y * factor + dy) * std::size_t(frame.width) + std::size_t(x * factor + dx);
+          const Rgba8 c = frame.color[i];
+          sum[0] += c.r, sum[1] += c.g, sum[2] += c.b, sum[3] += c.a;
+          if (frame.covered(i)) nearest = std::min(nearest, frame.depth[i]);
+        }
+      const std::size_t o = std::size_t(y) * std::size_t(out.width) + std::size_t(x);
+      out.color[o] = Rgba8{std::uint8_t((sum[0] + n / 2) / n), std::uint8_t((sum[1] + n / 2) / n),
+                           std::uint8_t((sum[2] + n / 2) / n), std::uint8_t((sum[3] + n / 2) / n)};
+      out.depth[o] = nearest;
+    }
+  return out;
+}
+
 ImageMetrics compare_frames(const ViewFrame& impostor, const ViewFrame& truth, const ImageMetricsParams& params) {
   validate_pair(impostor, truth);
   const std::size_t n = truth.color.size();

@@ -77,6 +77,14 @@ double masked_ssim(const std::vector<Rgba8>& a, const std::vector<Rgba8>& b, int
 // compare_frames for a frame whose vectors do not hold width * height values.
 bool is_blank(const ViewFrame& frame);
 
+// `frame` box-filtered down by `factor` on each axis (a supersampled render
+// to the size it stands for): each pixel the mean colour of its factor^2
+// pixels (background included, rounded), and the nearest of their depths
+// (covered when any of them is). Sizes not divisible by `factor` lose the
+// last partial row and column. Throws std::invalid_argument when `factor` < 1
+// or the frame is smaller than `factor` on a side.
+ViewFrame box_downsample(const ViewFrame& frame, int factor);
+
 // A false-colour error image of the same size (row 0 at the top):
 //  * covered in neither frame: black;
 //  * hole (truth covered, impostor not): magenta (255, 0, 255);

@@ -133,6 +133,8 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
   if (options.views_per_cell < 1) throw std::invalid_argument("verify: --views-per-cell must be at least 1");
   if (options.width < 8 || options.height < 8)
     throw std::invalid_argument("verify: image size must be at least 8x8");
+  if (options.supersample < 1 || options.supersample > 4)
+    throw std::invalid_argument("verify: --supersample must be 1 to 4");
   const int threads =
       options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
   if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", threads > 1 ? "1" : "2", 1);
@@ -172,6 +174,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
                         {"far_budget_sweep", options.far_budget_sweep},
                         {"lighting", describe_lighting(shading)}};
   if (options.lod_cut) params["lod_cut"] = true;  // absent otherwise: earlier resume files stay valid
+  if (options.supersample > 1) params["supersample"] = options.supersample;
   const std::string params_key = params.dump();
 
   // Selected done cells, in id order.
@@ -264,40 +267,54 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
       SceneDrawOptions root_options = draw_options;
       root_options.samples.max_samples = 1;
       ViewFrame worst_truth, worst_impostor;
+      // Frames are drawn at W x H (the image size times --supersample) and
+      // box-filtered down to the image size.
+      const int ss = options.supersample;
+      const int W = options.width * ss, H = options.height * ss;
+      const auto to_image_size = [ss](ViewFrame& frame) {
+        if (ss > 1) frame = box_downsample(frame, ss);
+      };
       for (const auto& plan : plans) {
-        const RenderCamera camera = look_at_camera(plan.eye, plan.look, up, options.fov_y_deg, options.width,
-                                                   options.height, options.near_plane);
+        const RenderCamera camera =
+            look_at_camera(plan.eye, plan.look, up, options.fov_y_deg, W, H, options.near_plane);
         ViewFrame impostor, truth, root;
         VerifyViewResult v;
         try {
-          drawer->draw_impostor(camera, options.width, options.height, cell, draw_options,
+          drawer->draw_impostor(camera, W, H, cell, draw_options,
                                 impostor);  // uploads
           const SceneFrameStats is =
-              drawer->draw_impostor(camera, options.width, options.height, cell, draw_options, impostor);
-          if (cell.samples.size() > 1)
-            drawer->draw_impostor(camera, options.width, options.height, cell, root_options, root);
+              drawer->draw_impostor(camera, W, H, cell, draw_options, impostor);
+          if (cell.samples.size() > 1) {
+            drawer->draw_impostor(camera, W, H, cell, root_options, root);
+            to_image_size(root);
+          }
+          to_image_size(impostor);
           v.samples_drawn = is.samples_drawn;
-          drawer->draw_truth(camera, options.width, options.height, draw_options, truth);  // uploads
+          drawer->draw_truth(camera, W, H, draw_options, truth);  // uploads
           const SceneFrameStats ts =
-              drawer->draw_truth(camera, options.width, options.height, draw_options, truth);
+              drawer->draw_truth(camera, W, H, draw_options, truth);
+          to_image_size(truth);
           if (is_headline_view(plan.kind))  // speed against error: the same view under each swept budget
             for (const std::uint64_t budget : options.far_budget_sweep) {
               SceneDrawOptions swept = draw_options;
               swept.samples.far_budget = budget;
               ViewFrame frame;
               const SceneFrameStats st =
-                  drawer->draw_impostor(camera, options.width, options.height, cell, swept, frame);
+                  drawer->draw_impostor(camera, W, H, cell, swept, frame);
+              to_image_size(frame);
               v.far_budget_sweep.push_back(
                   {budget, st.chunk_triangles + st.far_triangles, compare_frames(frame, truth).psnr_db});
             }
           if (options.lod_cut) {  // the yardstick: the model's chunk levels with the impostor's triangles, and at 1 px
             ViewFrame frame;
             LodCut cut;
-            drawer->draw_lod_cut(camera, options.width, options.height, draw_options,
+            drawer->draw_lod_cut(camera, W, H, draw_options,
                                  std::max<std::uint64_t>(1, is.chunk_triangles + is.far_triangles), 0, frame, &cut);
+            to_image_size(frame);
             v.psnr_db_cut = compare_frames(frame, truth).psnr_db;
-            v.cut_error_px = cut.error_px;
-            drawer->draw_lod_cut(camera, options.width, options.height, draw_options, 0, 1.0, frame, &cut);
+            v.cut_error_px = cut.error_px / ss;  // in image pixels
+            drawer->draw_lod_cut(camera, W, H, draw_options, 0, 1.0 * ss, frame, &cut);  // 1 image pixel
+            to_image_size(frame);
             v.psnr_db_cut_1px = compare_frames(frame, truth).psnr_db;
             v.triangles_cut_1px = double(cut.triangles);
           }

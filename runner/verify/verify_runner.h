@@ -43,6 +43,11 @@ struct VerifyOptions {
   // (stages/lod_cut.h) with the impostor's triangles and at 1 pixel of
   // error: the yardstick of the far field (VerifyViewResult::psnr_db_cut).
   bool lod_cut = false;
+  // Every frame (truth, cells, cut) is drawn at this many times the image
+  // size on each axis and box-filtered down before it is compared: sub-pixel
+  // geometry (thin pipes) is measured by its coverage, not by which pixel
+  // centres happen to hit it. 1: one ray per pixel, as the viewer draws.
+  int supersample = 1;
   // A walk through the selected cells this many seconds long (runner/walk/walk_runner.h) into
   // DIR/walk/, shown in the report; 0: none (the CLI and the demo default to 8).
   double walk_seconds = 0;
