@@ -68,6 +68,17 @@ struct BakeConfig {
   // A far field of at most this many triangles is drawn as geometry without
   // taking samples (a depth mesh rarely costs fewer, and sampling costs time).
   std::uint64_t far_geometry_below = 256;
+  // A far field whose seen geometry (what the samples saw, grown by
+  // far.seen_rings, at levels where far.lod_* allow) is at most
+  // far_seen_geometry_below triangles and at most far_seen_geometry_per_hit
+  // triangles per pixel the samples hit is drawn as that geometry in every
+  // tile, without building a depth mesh; others take the per-tile choice.
+  // 0 (either): always the per-tile choice. (12.7 M plant: 0.6-1.2 M
+  // triangles a cell, 0.07-0.09 per hit, which the choice drew all as
+  // geometry anyway; building the meshes it weighed cost a third of the
+  // bake. A field of sub-pixel triangles, where depth meshes win: ~0.9.)
+  std::uint64_t far_seen_geometry_below = 2'000'000;
+  double far_seen_geometry_per_hit = 0.25;
   // What the samples' rays hit is grown by this many rings of triangles
   // sharing a vertex before it stands in for depth meshes (stages/far_choice.h
   // grow_seen_triangles): slivers next to a hit, seen from elsewhere in the

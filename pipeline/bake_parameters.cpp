@@ -75,6 +75,13 @@ std::vector<BakeParameter> make_table() {
   t.push_back(field("far.geometry_below", "far.geometry_below", T::integer, 0, kInt40, {}, H::far_choice,
                     "A far field of at most this many triangles is drawn as geometry without taking samples",
                     &BakeConfig::far_geometry_below));
+  t.push_back(field("far.seen_geometry_below", "far.seen_geometry_below", T::integer, 0, kInt40, {}, H::far_choice,
+                    "A far field whose seen geometry (levels included) is at most this many triangles is drawn as that "
+                    "geometry without building depth meshes (0: always the per-tile choice)",
+                    &BakeConfig::far_seen_geometry_below));
+  t.push_back(field("far.seen_geometry_per_hit", "far.seen_geometry_per_hit", T::number, 0, 1e6, {}, H::far_choice,
+                    "... and at most this many triangles per pixel the samples hit (0: always the per-tile choice)",
+                    &BakeConfig::far_seen_geometry_per_hit));
   t.push_back(field("far.seen_rings", "far.seen_rings", T::integer, 0, 8, {}, H::far_choice,
                     "Rings of vertex-sharing triangles grown around the samples' hits before they stand in for "
                     "depth meshes", &BakeConfig::far_seen_rings));

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
+#include <stdexcept>
 #include <map>
 #include <tuple>
 #include <unordered_map>
@@ -121,6 +123,8 @@ CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::str
   if (c.far_seen_rings != 0) in.text("seen_rings").u64(std::uint64_t(c.far_seen_rings));
   in.text("geometry_factor").f64(c.far_geometry_factor);
   if (c.far_lod_error_px != 0) in.text("lod_error_px").f64(c.far_lod_error_px);
+  if (c.far_seen_geometry_below != 0 && c.far_seen_geometry_per_hit > 0)
+    in.text("seen_geometry_below").u64(c.far_seen_geometry_below).f64(c.far_seen_geometry_per_hit);
   if (c.far_lod_error_px != 0 && c.far_lod_replaces_exact == "on") in.text("lod_replaces_exact");
   if (c.far_lod_error_px != 0 && c.far_lod_replaces_exact == "auto")
     in.text("lod_replaces_exact").text(c.far_lod_replaces_exact).f64(kThinTrianglePixels);
@@ -250,9 +254,20 @@ void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& sou
 
 void run_depth_mesh(CellWork& work, const BakeConfig& config) {
   StageTimer timer(work, "depth_mesh");
+  (void)config;
   std::vector<Vec3d> eyes;
   for (const SampleWork& s : work.samples) eyes.push_back(s.cube.eye);
   const std::vector<int> parent = sample_dependency_tree(eyes);
+  for (std::size_t i = 0; i < work.samples.size(); ++i) work.samples[i].parent = parent[i];
+  work.redundancy_removed = false;
+}
+
+void remove_redundancy(CellWork& work, const BakeConfig& config) {
+  if (work.redundancy_removed) return;
+  work.redundancy_removed = true;
+  StageTimer timer(work, "redundancy");
+  std::vector<int> parent(work.samples.size());
+  for (std::size_t i = 0; i < work.samples.size(); ++i) parent[i] = work.samples[i].parent;
   // Delta scans lose what their ancestors hold. Ancestors are read unmodified,
   // so samples are reduced deepest first (all of a sample's descendants are
   // deeper than it).
@@ -261,7 +276,6 @@ void run_depth_mesh(CellWork& work, const BakeConfig& config) {
   for (std::size_t i = 0; i < order.size(); ++i) {
     order[i] = i;
     depth[i] = sample_ancestors(parent, int(i)).size();
-    work.samples[i].parent = parent[i];
   }
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return depth[a] > depth[b]; });
   RedundancyParams rp;
@@ -272,17 +286,14 @@ void run_depth_mesh(CellWork& work, const BakeConfig& config) {
   if (config.multi_source_skins != "off" && work.samples.size() > 1)
     for (SampleWork& s : work.samples)
       for (int f = 0; f < kCubeFaces; ++f) s.taken_depth[std::size_t(f)] = s.cube.faces[std::size_t(f)].depth;
-  {
-    StageTimer redundancy(work, "redundancy");
-    for (std::size_t i : order) {
-      const auto t0 = Clock::now();
-      std::vector<const CubeSample*> ancestors;
-      for (int a : sample_ancestors(parent, int(i))) ancestors.push_back(&work.samples[std::size_t(a)].cube);
-      const RedundancyStats st = remove_redundant_pixels(work.samples[i].cube, ancestors, rp);
-      work.samples[i].covered = st.covered;
-      work.samples[i].removed = st.removed;
-      work.samples[i].seconds += std::chrono::duration<double>(Clock::now() - t0).count();
-    }
+  for (std::size_t i : order) {
+    const auto t0 = Clock::now();
+    std::vector<const CubeSample*> ancestors;
+    for (int a : sample_ancestors(parent, int(i))) ancestors.push_back(&work.samples[std::size_t(a)].cube);
+    const RedundancyStats st = remove_redundant_pixels(work.samples[i].cube, ancestors, rp);
+    work.samples[i].covered = st.covered;
+    work.samples[i].removed = st.removed;
+    work.samples[i].seconds += std::chrono::duration<double>(Clock::now() - t0).count();
   }
 }
 
@@ -296,6 +307,7 @@ std::string face_where(std::size_t sample, int face) {
 // depth_mesh and simplify stages).
 std::unique_ptr<FaceSimplification> start_face_simplification(CellWork& work, const BakeConfig& config,
                                                               std::size_t sample, int face) {
+  remove_redundancy(work, config);
   SampleWork& s = work.samples.at(sample);
   const std::string where = face_where(sample, face);
   FaceMesh dense;
@@ -424,16 +436,23 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
   // This stage's own time: what it spends meshing faces on demand counts as
   // depth_mesh and simplify.
   const auto t0 = Clock::now();
-  const double nested0 = work.seconds["depth_mesh"] + work.seconds["simplify"];
+  const auto nested_seconds = [&work] {  // without adding stages that never ran
+    double sum = 0;
+    for (const char* stage : {"depth_mesh", "simplify", "redundancy"})
+      if (const auto it = work.seconds.find(stage); it != work.seconds.end()) sum += it->second;
+    return sum;
+  };
+  const double nested0 = nested_seconds();
   struct OwnTime {
     CellWork& work;
     Clock::time_point t0;
     double nested0;
+    std::function<double()> nested_seconds;
     ~OwnTime() {
-      const double nested = work.seconds["depth_mesh"] + work.seconds["simplify"] - nested0;
+      const double nested = nested_seconds() - nested0;
       work.seconds["far_choice"] += std::chrono::duration<double>(Clock::now() - t0).count() - nested;
     }
-  } own_time{work, t0, nested0};
+  } own_time{work, t0, nested0, nested_seconds};
   // Every eye the viewer may draw the cell from: the cell, and the samples in it.
   Box3d eyes = work.cell.bounds;
   // What the samples saw, grown by far.seen_rings rings of neighbouring
@@ -454,18 +473,7 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
           grow_seen_triangles(seen, *it->second.first, it->second.second, config.far_seen_rings, scratch);
         }
   }
-  const DepthMeshParams mesh_params = depth_mesh_params(config);
-  std::vector<FarChoiceSample> samples;
-  for (const SampleWork& s : work.samples) {
-    eyes.expand(s.cube.eye);
-    FarChoiceSample c;
-    for (int f = 0; f < kCubeFaces; ++f) {
-      c.meshes[std::size_t(f)] = s.meshed[std::size_t(f)] ? &s.simplified[std::size_t(f)] : nullptr;
-      c.seen[std::size_t(f)] = &s.cube.faces[std::size_t(f)].seen;
-      if (!c.meshes[std::size_t(f)]) c.mesh_guess[std::size_t(f)] = outline_edge_guess(s.cube.faces[std::size_t(f)], mesh_params);
-    }
-    samples.push_back(c);
-  }
+  for (const SampleWork& s : work.samples) eyes.expand(s.cube.eye);
   // Each far chunk's coarsest stored level within far.lod_error_px, seen
   // from the nearest eye the viewer may draw the cell from, and whether it
   // may replace the chunk's exact seen triangles (far.lod_replaces_exact;
@@ -493,10 +501,52 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
                                             kThinTrianglePixels, config.face_size);
     }
   }
-  work.far = choose_far_field(
-      eyes, work.far_chunks, samples, parse_far_choice_mode(config.far_choice), config.far_geometry_factor,
-      [&](std::size_t sample, int face) -> const FaceMesh& { return face_mesh(work, config, sample, face); },
-      [&](std::size_t sample, int face) { return face_mesh_bound(work, config, sample, face); }, lods);
+  const FarChoiceMode mode = parse_far_choice_mode(config.far_choice);
+  // What the samples saw, drawn as geometry in every tile, when it is at most
+  // far.seen_geometry_below triangles and far.seen_geometry_per_hit per
+  // pixel the samples hit: no depth mesh is built (nor the delta scans
+  // reduced). Triangles that each cover several pixels are what the per-tile
+  // choice takes anyway (12.7 M plant: 0.07-0.09 per hit, all geometry at
+  // factor 4); a field of sub-pixel triangles (about 1 per hit) is where
+  // depth meshes win, and there the per-tile choice decides.
+  if (mode == FarChoiceMode::cheapest && config.far_seen_geometry_below > 0 && config.far_seen_geometry_per_hit > 0 &&
+      !work.samples.empty()) {
+    std::vector<FarChoiceSample> seen_only(work.samples.size());
+    for (std::size_t i = 0; i < work.samples.size(); ++i)
+      for (int f = 0; f < kCubeFaces; ++f) seen_only[i].seen[std::size_t(f)] = &work.samples[i].cube.faces[std::size_t(f)].seen;
+    const auto no_mesh = [](std::size_t, int) -> const FaceMesh& {
+      throw std::logic_error("far choice: a face mesh was asked for an all-geometry far field");
+    };
+    FarChoice all = choose_far_field(eyes, work.far_chunks, seen_only, FarChoiceMode::geometry,
+                                     config.far_geometry_factor, no_mesh, FarChoiceBoundSource{}, lods);
+    std::uint64_t hits = 0;  // pixels of the samples that saw a far surface
+    for (const SampleWork& sw : work.samples)
+      for (const CubeFace& cf : sw.cube.faces)
+        for (const float d : cf.depth) hits += d < kBackgroundDepth;
+    if (all.geometry_triangles <= config.far_seen_geometry_below &&
+        double(all.geometry_triangles) <= config.far_seen_geometry_per_hit * double(hits))
+      work.far = std::move(all);
+  }
+  if (!work.far) {
+    remove_redundancy(work, config);
+    const DepthMeshParams mesh_params = depth_mesh_params(config);
+    std::vector<FarChoiceSample> samples;
+    for (const SampleWork& s : work.samples) {
+      FarChoiceSample c;
+      for (int f = 0; f < kCubeFaces; ++f) {
+        c.meshes[std::size_t(f)] = s.meshed[std::size_t(f)] ? &s.simplified[std::size_t(f)] : nullptr;
+        c.seen[std::size_t(f)] = &s.cube.faces[std::size_t(f)].seen;
+        if (!c.meshes[std::size_t(f)])
+          c.mesh_guess[std::size_t(f)] = outline_edge_guess(s.cube.faces[std::size_t(f)], mesh_params);
+      }
+      samples.push_back(c);
+    }
+    work.far = choose_far_field(
+        eyes, work.far_chunks, samples, mode, config.far_geometry_factor,
+        [&](std::size_t sample, int face) -> const FaceMesh& { return face_mesh(work, config, sample, face); },
+        [&](std::size_t sample, int face) { return face_mesh_bound(work, config, sample, face); }, lods);
+  }
+  for (const char* stage : {"redundancy", "simplify"}) work.seconds.try_emplace(stage, 0.0);  // 0 when skipped
   for (SampleWork& s : work.samples)  // bounded faces the choice never meshed: drawn wholly as geometry
     for (auto& p : s.pending) p.reset();
   drop_replaced_and_measure_kept(work, config);

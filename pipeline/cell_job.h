@@ -86,6 +86,7 @@ struct CellWork {
   std::vector<SampleWork> samples;    // set by run_sample, in the order taken (none when the far field is
                                       // drawn as geometry whole: empty or under far.geometry_below triangles)
   std::optional<FarChoice> far;       // set by run_far_choice
+  bool redundancy_removed = false;    // remove_redundancy ran
   DepthMeshScratch depth_mesh_scratch;  // run_far_choice's memory for meshing faces one by one (freed after it)
   std::map<std::string, double> seconds;
   std::string failed_stage, error;  // set when a stage threw
@@ -97,10 +98,14 @@ struct CellWork {
 void run_cull_box(CellWork& work, const BakeConfig& config, const ChunkSource& source);
 // Takes the cell's samples with `sampler` (whichever backend it is).
 void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& source, CubeSampler& sampler);
-// Links the samples into their dependency tree and reduces each delta scan to
-// what its ancestors do not hold. The faces' depth meshes are built later, on
-// demand (face_mesh).
+// Links the samples into their dependency tree. Delta scans are reduced to
+// what their ancestors do not hold (remove_redundancy) and the faces' depth
+// meshes built later, on demand (face_mesh), only when the far choice needs
+// depth meshes.
 void run_depth_mesh(CellWork& work, const BakeConfig& config);
+// Reduces each delta scan to what its ancestors do not hold (timed as
+// "redundancy"); once per cell, before any face is meshed.
+void remove_redundancy(CellWork& work, const BakeConfig& config);
 // Face `face` of sample `sample`: its dense depth mesh built and simplified
 // on first use (timed as the depth_mesh and simplify stages; a failure
 // throws StageError naming the stage), then kept in SampleWork::simplified.

@@ -1270,6 +1270,39 @@ TEST(FarChoiceBake, ADenseFieldOfTinyDistantTrianglesKeepsItsDepthMeshes) {
   EXPECT_LT(row.far_geometry_triangles, 1000u);  // of 100,352
 }
 
+// A far field of big triangles (a wall: 2 triangles over hundreds of pixel
+// hits) is drawn as what the samples saw without meshing a face: the same
+// far geometry the per-tile choice draws, no depth mesh stored, no delta
+// scan reduced. The field of sub-pixel triangles above keeps the choice.
+TEST(FarChoiceBake, ASparselySeenFarFieldIsDrawnAsGeometryWithoutMeshing) {
+  test::TempDir dir;
+  const auto store = write_store(dir, "s.db", {near_box(), wall()});
+  BakeConfig shortcut = cell_config(dir, store, "embree"), choice = shortcut;
+  shortcut.database = dir / "shortcut.db";
+  choice.database = dir / "choice.db";
+  choice.far_seen_geometry_per_hit = 0;
+  ASSERT_EQ(test::bake_quietly(shortcut).cells_baked, 1u);
+  ASSERT_EQ(test::bake_quietly(choice).cells_baked, 1u);
+  const CellRow a = baked_cell(shortcut.database), b = baked_cell(choice.database);
+  ASSERT_FALSE(a.samples.empty());
+  EXPECT_EQ(a.far_triangles, 0u);
+  EXPECT_EQ(tdm_triangles(a), 0u);
+  EXPECT_EQ(a.stage_seconds.at("redundancy"), 0.0);  // never reduced
+  EXPECT_GT(b.stage_seconds.at("redundancy"), 0.0);
+  ASSERT_EQ(a.far_geometry.size(), b.far_geometry.size());
+  for (std::size_t i = 0; i < a.far_geometry.size(); ++i) {
+    EXPECT_EQ(a.far_geometry[i].chunk_id, b.far_geometry[i].chunk_id);
+    EXPECT_EQ(a.far_geometry[i].triangles, b.far_geometry[i].triangles);
+  }
+  EXPECT_EQ(a.far_geometry_triangles, 2u);
+  // Over the budget (here: any triangle at all), the per-tile choice decides.
+  BakeConfig capped = shortcut;
+  capped.database = dir / "capped.db";
+  capped.far_seen_geometry_below = 1;
+  ASSERT_EQ(test::bake_quietly(capped).cells_baked, 1u);
+  EXPECT_GT(baked_cell(capped.database).stage_seconds.at("redundancy"), 0.0);
+}
+
 TEST(FarChoiceBake, TheChoiceIsDeterministicAndPartOfTheInputHash) {
   test::TempDir dir;
   std::vector<Chunk> chunks = {near_box(), wall()};
