@@ -252,9 +252,8 @@ void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& sou
   }
 }
 
-void run_depth_mesh(CellWork& work, const BakeConfig& config) {
+void run_depth_mesh(CellWork& work, const BakeConfig& /*config: the meshing keys are read on demand*/) {
   StageTimer timer(work, "depth_mesh");
-  (void)config;
   std::vector<Vec3d> eyes;
   for (const SampleWork& s : work.samples) eyes.push_back(s.cube.eye);
   const std::vector<int> parent = sample_dependency_tree(eyes);
