@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <functional>
 #include <stdexcept>
 #include <map>
 #include <tuple>
@@ -429,29 +428,60 @@ void drop_replaced_and_measure_kept(CellWork& work, const BakeConfig& config) {
   }
 }
 
+// The time stages run inside the far choice have taken so far (meshing on
+// demand, the delta scans' reduction), without adding stages that never ran.
+double nested_stage_seconds(const CellWork& work) {
+  double sum = 0;
+  for (const char* stage : {"depth_mesh", "simplify", "redundancy"})
+    if (const auto it = work.seconds.find(stage); it != work.seconds.end()) sum += it->second;
+  return sum;
+}
+
+// What the samples saw, drawn as geometry in every tile, when it is at most
+// far.seen_geometry_below triangles and far.seen_geometry_per_hit per pixel
+// the samples hit (else nullopt): no depth mesh is built, nor the delta scans
+// reduced. Triangles that each cover several pixels are what the per-tile
+// choice takes anyway (12.7 M plant: 0.07-0.09 per hit, all geometry at
+// factor 4); a field of sub-pixel triangles (about 1 per hit) is where depth
+// meshes win, and there the per-tile choice decides.
+std::optional<FarChoice> sparse_seen_far_field(const CellWork& work, const BakeConfig& config, const Box3d& eyes,
+                                               std::span<const FarLodChoice> lods) {
+  if (config.far_seen_geometry_below == 0 || config.far_seen_geometry_per_hit <= 0 || work.samples.empty())
+    return std::nullopt;
+  std::vector<FarChoiceSample> seen_only(work.samples.size());
+  for (std::size_t i = 0; i < work.samples.size(); ++i)
+    for (int f = 0; f < kCubeFaces; ++f)
+      seen_only[i].seen[std::size_t(f)] = &work.samples[i].cube.faces[std::size_t(f)].seen;
+  const auto no_mesh = [](std::size_t, int) -> const FaceMesh& {
+    throw std::logic_error("far choice: a face mesh was asked for an all-geometry far field");
+  };
+  FarChoice all = choose_far_field(eyes, work.far_chunks, seen_only, FarChoiceMode::geometry,
+                                   config.far_geometry_factor, no_mesh, FarChoiceBoundSource{}, lods);
+  if (all.geometry_triangles > config.far_seen_geometry_below) return std::nullopt;
+  std::uint64_t hits = 0;  // pixels of the samples that saw a far surface
+  for (const SampleWork& s : work.samples)
+    for (const CubeFace& face : s.cube.faces)
+      for (const float d : face.depth) hits += d < kBackgroundDepth;
+  if (double(all.geometry_triangles) > config.far_seen_geometry_per_hit * double(hits)) return std::nullopt;
+  return all;
+}
+
 }  // namespace
 
 void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource& source) {
   // This stage's own time: what it spends meshing faces on demand counts as
   // depth_mesh and simplify.
   const auto t0 = Clock::now();
-  const auto nested_seconds = [&work] {  // without adding stages that never ran
-    double sum = 0;
-    for (const char* stage : {"depth_mesh", "simplify", "redundancy"})
-      if (const auto it = work.seconds.find(stage); it != work.seconds.end()) sum += it->second;
-    return sum;
-  };
-  const double nested0 = nested_seconds();
+  const double nested0 = nested_stage_seconds(work);
   struct OwnTime {
     CellWork& work;
     Clock::time_point t0;
     double nested0;
-    std::function<double()> nested_seconds;
     ~OwnTime() {
-      const double nested = nested_seconds() - nested0;
+      const double nested = nested_stage_seconds(work) - nested0;
       work.seconds["far_choice"] += std::chrono::duration<double>(Clock::now() - t0).count() - nested;
     }
-  } own_time{work, t0, nested0, nested_seconds};
+  } own_time{work, t0, nested0};
   // Every eye the viewer may draw the cell from: the cell, and the samples in it.
   Box3d eyes = work.cell.bounds;
   // What the samples saw, grown by far.seen_rings rings of neighbouring
@@ -501,31 +531,7 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
     }
   }
   const FarChoiceMode mode = parse_far_choice_mode(config.far_choice);
-  // What the samples saw, drawn as geometry in every tile, when it is at most
-  // far.seen_geometry_below triangles and far.seen_geometry_per_hit per
-  // pixel the samples hit: no depth mesh is built (nor the delta scans
-  // reduced). Triangles that each cover several pixels are what the per-tile
-  // choice takes anyway (12.7 M plant: 0.07-0.09 per hit, all geometry at
-  // factor 4); a field of sub-pixel triangles (about 1 per hit) is where
-  // depth meshes win, and there the per-tile choice decides.
-  if (mode == FarChoiceMode::cheapest && config.far_seen_geometry_below > 0 && config.far_seen_geometry_per_hit > 0 &&
-      !work.samples.empty()) {
-    std::vector<FarChoiceSample> seen_only(work.samples.size());
-    for (std::size_t i = 0; i < work.samples.size(); ++i)
-      for (int f = 0; f < kCubeFaces; ++f) seen_only[i].seen[std::size_t(f)] = &work.samples[i].cube.faces[std::size_t(f)].seen;
-    const auto no_mesh = [](std::size_t, int) -> const FaceMesh& {
-      throw std::logic_error("far choice: a face mesh was asked for an all-geometry far field");
-    };
-    FarChoice all = choose_far_field(eyes, work.far_chunks, seen_only, FarChoiceMode::geometry,
-                                     config.far_geometry_factor, no_mesh, FarChoiceBoundSource{}, lods);
-    std::uint64_t hits = 0;  // pixels of the samples that saw a far surface
-    for (const SampleWork& sw : work.samples)
-      for (const CubeFace& cf : sw.cube.faces)
-        for (const float d : cf.depth) hits += d < kBackgroundDepth;
-    if (all.geometry_triangles <= config.far_seen_geometry_below &&
-        double(all.geometry_triangles) <= config.far_seen_geometry_per_hit * double(hits))
-      work.far = std::move(all);
-  }
+  if (mode == FarChoiceMode::cheapest) work.far = sparse_seen_far_field(work, config, eyes, lods);
   if (!work.far) {
     remove_redundancy(work, config);
     const DepthMeshParams mesh_params = depth_mesh_params(config);
