@@ -1,9 +1,12 @@
 #include "pipeline/cell_database_check.h"
 
 #include <cmath>
+#include <mutex>
 
 #include "pipeline/bake_config.h"
 #include "pipeline/cell_grid.h"
+#include "pipeline/cell_job.h"
+#include "pipeline/sample_backend.h"
 #include "storage/meta_values.h"
 
 namespace cellbake {
@@ -17,6 +20,39 @@ bool is_store_hash(const std::string& s) {
   for (char c : s)
     if (c <= ' ' || c > '~') return false;
   return true;
+}
+
+// The model as cells baked with `config` from `store` sampled it, for
+// check_face_images_against_model: the bake's discard box, shading and near
+// plane, one ray per pixel, on a backend of this machine (Embree unless a GPU
+// draws). The sampler starts on first use; calls are serialised.
+FarFieldResampler far_field_resampler(const BakeConfig& config, const ChunkSource& store) {
+  struct State {
+    BakeConfig config;
+    const ChunkSource* store = nullptr;
+    std::mutex mutex;
+    std::unique_ptr<CubeSamplerFactory> factory;
+    std::unique_ptr<CubeSampler> sampler;
+  };
+  auto state = std::make_shared<State>();
+  state->config = config;
+  state->store = &store;
+  return [state](const CellRow& row, const Vec3d& eye, int face_size) {
+    const std::lock_guard<std::mutex> lock(state->mutex);
+    const BakeConfig& c = state->config;
+    if (!state->sampler) {
+      state->factory = std::make_unique<CubeSamplerFactory>(SampleBackend::automatic, std::size_t(c.embree_cache_mb) << 20,
+                                                            std::size_t(c.texture_cache_mb) << 20);
+      state->sampler = state->factory->make();
+      state->sampler->set_shading(cell_shading_lights(c));
+    }
+    SampleParams p = cell_sample_params(c);
+    p.face_size = face_size;
+    p.supersample = 1;
+    CubeSample cube = state->sampler->sample(eye, far_field_discard_box(row.bounds, row.cull_half_size, c), p, *state->store);
+    state->sampler->end_work();
+    return cube;
+  };
 }
 
 }  // namespace
@@ -61,8 +97,10 @@ std::vector<MetaProblem> check_database_meta(const CellDb& db) {
 
 CellCheckSetup cell_check_setup(const CellDb& db, const std::filesystem::path& store_path) {
   CellCheckSetup setup;
+  std::optional<BakeConfig> baked_with;
   if (const auto text = db.meta("config")) {
     DescribedConfig config = config_from_description(*text);
+    if (config.problems.empty()) baked_with = config.config;
     if (config.problems.empty() && !config.config.regions.empty()) {
       const std::vector<Box3d> regions = config.config.regions;
       const double cell_size = config.config.cell_size;
@@ -94,6 +132,7 @@ CellCheckSetup cell_check_setup(const CellDb& db, const std::filesystem::path& s
     }
     setup.store = std::move(opened);
     setup.context.store = setup.store.get();
+    if (baked_with) setup.context.resample = far_field_resampler(*baked_with, *setup.store);
   } catch (const std::exception& e) {
     setup.note = std::string(e.what()) + ": near lists and far geometry not compared with the store";
   }

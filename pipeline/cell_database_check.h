@@ -35,7 +35,9 @@ std::vector<MetaProblem> check_database_meta(const CellDb& db);
 // (unset when it names no regions or does not parse), `store` the geometry
 // store at `store_path` (default: the database's meta `store`) when it exists
 // and its content hash is meta `store_hash`; otherwise none, and `note` says
-// why the store-aware checks are skipped.
+// why the store-aware checks are skipped. With the store and a config that
+// parses, `resample` samples the model as the cells' bake did, so face images
+// are compared with it.
 struct CellCheckSetup {
   std::unique_ptr<GeometryStore> store;
   CellCheckContext context;

@@ -176,19 +176,30 @@ std::vector<Vec3d> next_view_candidates(const Box3d& nav, const std::vector<Samp
 
 }  // namespace
 
-void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& source, CubeSampler& sampler) {
-  StageTimer timer(work, "sample");
-  sampler.set_shading(shading_lights(config.shading, config.up == "y" ? Vec3d{0, 1, 0} : Vec3d{0, 0, 1}));
+Box3d far_field_discard_box(const Box3d& cell_bounds, double cull_half_size, const BakeConfig& config) {
+  const double footprint = 2.0 * cull_half_size / config.face_size;
+  const double cell_half_size = 0.5 * (cell_bounds.hi.x - cell_bounds.lo.x);
+  const double shell = std::clamp(config.seam_shell_px * footprint, 0.0, std::max(0.0, cull_half_size - cell_half_size));
+  return Box3d::cube(cell_bounds.center(), cull_half_size - shell);
+}
+
+SampleParams cell_sample_params(const BakeConfig& config) {
   SampleParams p;
   p.face_size = config.face_size;
   p.supersample = config.supersample;
   p.near_plane = config.near_plane;
-  // The far field keeps a shell seam_shell_px pixel footprints deep inside the
-  // box (never reaching into the cell): it overlaps the near field there.
-  const double footprint = 2.0 * work.cull->half_size / config.face_size;
-  const double shell = std::clamp(config.seam_shell_px * footprint, 0.0,
-                                  std::max(0.0, work.cull->half_size - work.cell.half_size()));
-  const Box3d discard_box = Box3d::cube(work.cell.center(), work.cull->half_size - shell);
+  return p;
+}
+
+ShadingLights cell_shading_lights(const BakeConfig& config) {
+  return shading_lights(config.shading, config.up == "y" ? Vec3d{0, 1, 0} : Vec3d{0, 0, 1});
+}
+
+void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& source, CubeSampler& sampler) {
+  StageTimer timer(work, "sample");
+  sampler.set_shading(cell_shading_lights(config));
+  const SampleParams p = cell_sample_params(config);
+  const Box3d discard_box = far_field_discard_box(work.cell.bounds, work.cull->half_size, config);
   Box3d nav = work.cell.bounds;
   if (work.cell.region >= 0 && std::size_t(work.cell.region) < config.regions.size())
     nav = navigable_part(work.cell.bounds, config.regions[std::size_t(work.cell.region)]);

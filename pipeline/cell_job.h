@@ -23,6 +23,8 @@
 #include "stages/cull_box.h"
 #include "stages/depth_mesh.h"
 #include "stages/far_choice.h"
+#include "stages/render/shading.h"
+#include "stages/sample.h"
 #include "stages/simplify.h"
 #include "storage/cell_db.h"
 
@@ -96,6 +98,14 @@ struct CellWork {
 // Stage steps. Each fills its part of `work` and records its own seconds;
 // each throws on failure (the runner catches via run_stage below).
 void run_cull_box(CellWork& work, const BakeConfig& config, const ChunkSource& source);
+// What a cell's samples leave to its near field: the cull box (half size
+// `cull_half_size` around the cell's centre) less a shell config.seam_shell_px
+// pixel footprints deep (never reaching into the cell), where the far field
+// overlaps the near field.
+Box3d far_field_discard_box(const Box3d& cell_bounds, double cull_half_size, const BakeConfig& config);
+// The SampleParams and lights of every sample a cell takes with `config`.
+SampleParams cell_sample_params(const BakeConfig& config);
+ShadingLights cell_shading_lights(const BakeConfig& config);
 // Takes the cell's samples with `sampler` (whichever backend it is).
 void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& source, CubeSampler& sampler);
 // Links the samples into their dependency tree. Delta scans are reduced to

@@ -265,6 +265,9 @@ std::string check_cell(const CellDb& db, std::int64_t id, const CellCheckContext
           !problem.empty())
         return problem;
     }
+    if (context.resample)
+      if (std::string problem = check_face_images_against_model(*row, context.resample); !problem.empty())
+        return problem;
   } catch (const std::exception& e) {
     return e.what();
   }

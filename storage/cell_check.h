@@ -17,6 +17,7 @@
 
 #include "stages/chunk_source.h"
 #include "storage/cell_db.h"
+#include "storage/face_image_check.h"
 
 namespace cellbake {
 
@@ -44,6 +45,10 @@ struct CellCheckContext {
   // is then not recomputed and far geometry is not compared with the chunks
   // and levels it names.
   const ChunkSource* store = nullptr;
+  // The model resampled as the cell's far field shows it (pipeline/
+  // cell_database_check.h builds one from the config and the store), or
+  // empty: face images are decoded and sized, not compared with the model.
+  FarFieldResampler resample;
 };
 
 // Checks cell `id` of `db`: empty when it is sound (or failed: failed cells
@@ -62,7 +67,8 @@ struct CellCheckContext {
 // far geometry naming chunks the store holds, triangle numbers within them and
 // bounds and origin equal to those of the triangles they name, a level >= 1
 // one the store lists for the chunk (ChunkSource::lods) with the row's
-// triangle count and the chunk's bounds. Never throws
+// triangle count and the chunk's bounds. With a resampler: every face image
+// against the model (check_face_images_against_model). Never throws
 // for a damaged row; SQLite errors (an unreadable file) still throw.
 std::string check_cell(const CellDb& db, std::int64_t id, const CellCheckContext& context = {});
 

@@ -301,6 +301,33 @@ TEST_F(CellSemantics, AValidImageOfAnotherFormatInAFacesPlaceIsFound) {
                1, "face " + face + " image: a png image, but the face's row says avif", Command::status);
 }
 
+TEST_F(CellSemantics, AnImageOfTheRightFormatAndSizeThatIsNotTheModelIsFound) {
+  // An AVIF of zeros, the face's size, for the AVIF face of cell 1's first
+  // sample with the most triangles: it decodes as the row says, so only the
+  // model resampled at the sample's eye tells it from the image baked there.
+  bake("tdm.db");
+  std::string face;
+  {
+    SqliteDb d(path("tdm.db"), SqliteDb::Mode::read_only);
+    SqliteStatement s(d, "SELECT face FROM faces WHERE cell_id = 1 AND sample_index = 0 AND image_format = 'avif' "
+                         "ORDER BY triangles DESC, face LIMIT 1");
+    ASSERT_TRUE(s.step());
+    face = std::to_string(s.column_int(0));
+  }
+  ImageEncodeParams avif;
+  avif.format = "avif";
+  std::string hex;
+  for (std::uint8_t b : encode_image(std::vector<Rgba8>(32 * 32, Rgba8{0, 0, 0, 255}), 32, 32, avif)) {
+    char buf[3];
+    std::snprintf(buf, sizeof buf, "%02x", b);
+    hex += buf;
+  }
+  expect_found(damaged("tdm.db", "black.db", 1,
+                       {"UPDATE faces SET image = x'" + hex + "' WHERE cell_id = 1 AND sample_index = 0 AND face = " +
+                        face}),
+               1, "sample 0 face " + face + " image: mean colour (0, 0, 0) at ", Command::status);
+}
+
 TEST_F(CellSemantics, VerifyFallsBackPerCellOnDamagedFarGeometry) {
 
   bake("far.db");
