@@ -532,6 +532,41 @@ TEST(ChunkBvhCache, ByteCapEvictsLeastRecentlyUsedChunksAndResultsStayTheSame) {
   EXPECT_EQ(roomy->stats().cached_groups, chunks);
 }
 
+TEST(ChunkBvhCache, BeyondTheCapTheGroupsFarthestFromTheFocusGoFirst) {
+  // Cube maps traced in batches visit their groups nearest first: the cache
+  // keeps the groups nearest the latest eye, which the next cube map needs first.
+  const auto owned = room({0, 0, 0}, 9);
+  const InMemoryChunkSource& source = *owned;
+  const std::vector<ChunkRef> refs = source.query(source.model_bounds());
+  std::size_t all_bytes = 0;
+  {
+    ChunkBvhCache roomy(one_chunk_per_group());
+    roomy.acquire(refs, source, true);
+    all_bytes = roomy.stats().device_bytes + roomy.stats().chunk_bytes;
+  }
+  ChunkBvhCache cache(one_chunk_per_group(all_bytes / 2));
+  const std::vector<ChunkGroupRefs> groups = cache.groups_of(refs, source);
+  ASSERT_GE(groups.size(), 4u);
+  const Vec3d focus = source.model_bounds().hi;
+  cache.set_focus(focus);
+  cache.acquire(refs, source, true);  // held while acquired, released here
+  cache.trim();
+  const std::size_t kept = cache.stats().cached_groups;
+  ASSERT_GT(kept, 0u);
+  ASSERT_LT(kept, groups.size());
+  const auto distance = [&](const ChunkGroupRefs& g) {
+    const Vec3d nearest{std::clamp(focus.x, g.bounds.lo.x, g.bounds.hi.x), std::clamp(focus.y, g.bounds.lo.y, g.bounds.hi.y),
+                        std::clamp(focus.z, g.bounds.lo.z, g.bounds.hi.z)};
+    return length(nearest - focus);
+  };
+  double nearest_dropped = std::numeric_limits<double>::infinity(), farthest_kept = 0;
+  for (const ChunkGroupRefs& g : groups) {
+    if (cache.holds(g.group, true)) farthest_kept = std::max(farthest_kept, distance(g));
+    else nearest_dropped = std::min(nearest_dropped, distance(g));
+  }
+  EXPECT_LE(farthest_kept, nearest_dropped);
+}
+
 TEST(ChunkBvhCache, MalformedChunkIsReportedByIdAndNotCached) {
   InMemoryChunkSource source;
   Chunk bad = chunk_from_triangles(42, {flat_triangle({5, 0, 0}, {5, 1, 0}, {5, 0, 1}, {})});

@@ -321,19 +321,50 @@ void ChunkBvhCache::trim() {
   evict_beyond_cap();
 }
 
+bool ChunkBvhCache::holds(std::size_t group, bool batched) const {
+  std::lock_guard lock(mutex_);
+  const auto slot = slots_.find(slot_key(group, batched));
+  return slot != slots_.end() && slot->second.built;
+}
+
+void ChunkBvhCache::set_focus(const Vec3d& eye) {
+  std::lock_guard lock(mutex_);
+  focus_ = eye;
+}
+
 void ChunkBvhCache::evict_beyond_cap() {
   const auto held = [this] {
     return std::size_t(std::max<std::int64_t>(0, device_bytes_.load(std::memory_order_relaxed))) + chunk_bytes_;
   };
-  for (auto it = lru_.end(); it != lru_.begin() && held() > params_.cache_bytes;) {
-    --it;
+  if (held() <= params_.cache_bytes) return;
+  // Candidates in the order they go: least recently used first, or farthest
+  // from the focus first (ties: least recently used first).
+  std::vector<std::list<std::size_t>::iterator> order;
+  for (auto it = lru_.end(); it != lru_.begin();) order.push_back(--it);
+  if (focus_) {
+    std::vector<double> distance(order.size());
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      const Box3d& g = group_bounds_[*order[i] / 2];
+      const Vec3d nearest{std::clamp(focus_->x, g.lo.x, g.hi.x), std::clamp(focus_->y, g.lo.y, g.hi.y),
+                          std::clamp(focus_->z, g.lo.z, g.hi.z)};
+      distance[i] = length(nearest - *focus_);
+    }
+    std::vector<std::size_t> rank(order.size());
+    for (std::size_t i = 0; i < rank.size(); ++i) rank[i] = i;
+    std::stable_sort(rank.begin(), rank.end(), [&](std::size_t a, std::size_t b) { return distance[a] > distance[b]; });
+    std::vector<std::list<std::size_t>::iterator> by_distance;
+    for (std::size_t i : rank) by_distance.push_back(order[i]);
+    order = std::move(by_distance);
+  }
+  for (auto it : order) {
+    if (held() <= params_.cache_bytes) break;
     auto slot = slots_.find(*it);
     // Only BVHs no cube map holds free memory when dropped (the slot's future
     // holds one reference).
     if (!slot->second.built || slot->second.result.get().use_count() > 1) continue;
     chunk_bytes_ -= slot->second.chunk_bytes;
     slots_.erase(slot);
-    it = lru_.erase(it);
+    lru_.erase(it);
     ++stats_.evictions;
   }
 }

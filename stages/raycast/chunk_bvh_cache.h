@@ -34,6 +34,7 @@
 #include <list>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <span>
 #include <unordered_map>
 #include <vector>
@@ -62,7 +63,7 @@ struct ChunkBvhCacheParams {
   // (BVHs, vertex and index buffers, and the top-level scenes of cube maps in
   // flight) plus the chunks' own attribute arrays. Beyond it the least
   // recently used BVHs that no cube map holds are dropped. A cube map whose
-  // groups would take more than half the cap (batch_bytes()) is traced in
+  // groups would take more than half the cap (one_batch_bytes()) is traced in
   // batches of groups (stages/raycast/embree_cube_sampler.h), so two threads'
   // cube maps fit in it whatever the model size; groups dropped are rebuilt
   // when needed again.
@@ -179,12 +180,24 @@ class ChunkBvhCache {
   std::vector<ChunkGroupRefs> all_groups(const ChunkSource& source);
   // What one cube map may hold at once: half the cap, so two threads' cube
   // maps fit in it. A cube map whose groups exceed it acquires them in batches.
-  std::size_t batch_bytes() const { return params_.cache_bytes / 2; }
+  std::size_t one_batch_bytes() const { return params_.cache_bytes / 2; }
+  // What one batch of such a cube map holds at most: a quarter of the cap, so
+  // that two threads' batches in flight leave half of it for the groups
+  // nearest the eyes, which every cube map around them traces first.
+  std::size_t batch_bytes() const { return params_.cache_bytes / 4; }
+  // Where cube maps are being traced now (the latest eye that traces in
+  // batches): beyond the cap, unheld BVHs are dropped farthest from it first
+  // rather than least recently used. A cube map's batches run nearest first,
+  // so LRU would drop exactly the groups the next cube map needs first.
+  void set_focus(const Vec3d& eye);
 
   // Drops least recently used BVHs that nobody else holds until the cache is
   // under its cap (acquire() does this first too). Call when a cube map has
   // released its BVHs.
   void trim();
+
+  // Whether group `group`'s BVH (built for batches or not) is cached now.
+  bool holds(std::size_t group, bool batched) const;
 
   // Throws std::runtime_error with Embree's last error on this device, if any.
   void check_device(const char* what) const;
@@ -207,7 +220,7 @@ class ChunkBvhCache {
   static std::size_t slot_key(std::size_t group, bool batched) { return group * 2 + (batched ? 1 : 0); }
   std::shared_ptr<const ChunkGroupBvh> build(std::size_t group, RTCBuildQuality quality, const ChunkSource& source,
                                              std::size_t& chunk_bytes);
-  void evict_beyond_cap();  // caller holds mutex_
+  void evict_beyond_cap();  // caller holds mutex_: farthest from focus_ first when set, else LRU
   static bool monitor(void* self, ssize_t bytes, bool post);
 
   ChunkBvhCacheParams params_;
@@ -222,6 +235,7 @@ class ChunkBvhCache {
   std::vector<Box3d> group_bounds_;                         // group -> bounds of its chunks
   std::unordered_map<std::size_t, Slot> slots_;             // by slot_key
   std::list<std::size_t> lru_;                              // slot keys
+  std::optional<Vec3d> focus_;                              // set_focus
   std::size_t chunk_bytes_ = 0;
   ChunkBvhCacheStats stats_;  // counters; sizes filled in by stats()
 };

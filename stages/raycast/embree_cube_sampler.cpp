@@ -152,8 +152,9 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
     groups = cache_->groups_of(cube_chunks(eye, cull_box, params.near_plane, source), source);
   std::size_t estimated_bytes = 0;
   for (const ChunkGroupRefs& g : groups) estimated_bytes += g.estimated_bytes;
-  const bool one_batch = estimated_bytes <= cache_->batch_bytes();
+  const bool one_batch = estimated_bytes <= cache_->one_batch_bytes();
   if (!one_batch) {
+    cache_->set_focus(eye);
     // Nearest groups first, so later batches are mostly hidden behind what
     // earlier ones hit and are skipped without being built.
     std::vector<std::pair<double, std::size_t>> order;
