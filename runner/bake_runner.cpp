@@ -18,7 +18,8 @@
 #include "pipeline/sample_backend.h"
 #include "runner/progress.h"
 #include "runner/shards.h"
-#include "stages/raycast/embree_cube_sampler.h"
+#include "stages/cube_sampler.h"
+#include "stages/raycast/chunk_bvh_cache.h"
 #include "stages/tsan_handoff.h"
 #include "storage/cell_db.h"
 #include "storage/cell_db_lock.h"
@@ -30,7 +31,7 @@ namespace {
 
 // One line on the Embree backend's work in a bake (bake -v): BVH builds, the
 // cache's peak, and how cube maps beyond half the cap were split.
-std::string describe_embree_work(const ChunkBvhCacheStats& cache, const EmbreeSamplerStats& s) {
+std::string describe_embree_work(const ChunkBvhCacheStats& cache, const CubeSamplerWork& s) {
   char line[512];
   std::snprintf(line, sizeof line,
                 "embree: %llu cube maps in %llu batches (%llu groups skipped, hidden); %llu BVH builds of %zu groups, "
@@ -284,13 +285,9 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
         break;
       }
     if (options.verbose && samplers.bvh_cache()) {
-      EmbreeSamplerStats total;
+      CubeSamplerWork total;
       for (const auto& sampler : thread_samplers)
-        if (const auto* e = dynamic_cast<const EmbreeCubeSampler*>(sampler.get())) {
-          total.cube_maps += e->stats().cube_maps;
-          total.batches += e->stats().batches;
-          total.groups_hidden += e->stats().groups_hidden;
-        }
+        if (sampler) total += sampler->work();
       if (total.cube_maps > 0) progress.line(describe_embree_work(samplers.bvh_cache()->stats(), total));
     }
 #ifdef CELLBAKE_TSAN

@@ -9,6 +9,7 @@
 // tests/test_sample_backends.cpp.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 #include "stages/chunk_source.h"
@@ -18,6 +19,19 @@
 #include "stages/sample.h"
 
 namespace cellbake {
+
+// What a sampler did, summed over a bake's samplers for `bake -v`: cube maps,
+// and for a backend that splits them (Embree beyond half its BVH cap) the
+// batches traced and the groups skipped as hidden.
+struct CubeSamplerWork {
+  std::uint64_t cube_maps = 0;
+  std::uint64_t batches = 0;
+  std::uint64_t groups_hidden = 0;
+  CubeSamplerWork& operator+=(const CubeSamplerWork& o) {
+    cube_maps += o.cube_maps, batches += o.batches, groups_hidden += o.groups_hidden;
+    return *this;
+  }
+};
 
 class CubeSampler {
  public:
@@ -36,6 +50,8 @@ class CubeSampler {
   // later be used or destroyed from another thread (a GL context is released
   // from the calling thread; backends without thread affinity do nothing).
   virtual void end_work() {}
+  // This sampler's work so far (backends that count none: zeros).
+  virtual CubeSamplerWork work() const { return {}; }
   // The backend's name: "osmesa", "egl" or "embree".
   virtual std::string backend_name() const = 0;
   // What does the work, for reports: the GL renderer string of a GL backend

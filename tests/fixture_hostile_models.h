@@ -113,4 +113,21 @@ inline std::string directx_nested_frames(int depth) {
   return s;
 }
 
+// The same Frames nested `depth` deep in the binary .x format (no mesh): its
+// token stream is not scanned before import (pipeline/readers/
+// directx_nesting.h), so 100,000 still overflow assimp's stack.
+inline std::string directx_binary_nested_frames(int depth) {
+  std::string s = "xof 0303bin 0032";
+  const auto word = [&](std::uint16_t w) { s.push_back(char(w & 0xff)), s.push_back(char(w >> 8)); };
+  const auto dword = [&](std::uint32_t d) {
+    for (int i = 0; i < 4; ++i) s.push_back(char((d >> (8 * i)) & 0xff));
+  };
+  for (int i = 0; i < depth; ++i) {
+    word(1), dword(5), s += "Frame";  // TOKEN_NAME "Frame"
+    word(10);                          // TOKEN_OBRACE
+  }
+  for (int i = 0; i < depth; ++i) word(11);  // TOKEN_CBRACE
+  return s;
+}
+
 }  // namespace cellbake::test

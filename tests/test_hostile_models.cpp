@@ -9,6 +9,7 @@
 
 #include "pipeline/input_error.h"
 #include "pipeline/readers/collada_node_graph.h"
+#include "pipeline/readers/directx_nesting.h"
 #include "pipeline/readers/gltf_node_graph.h"
 #include "pipeline/readers/markup_nesting.h"
 #include "pipeline/readers/model_reader.h"
@@ -127,6 +128,42 @@ TEST(HostileModels, X3dTransformsNested100000DeepAreRefused) {
   EXPECT_NE(read_error(dir / "deep.x3d").find("deep.x3d:byte "), std::string::npos);
   EXPECT_NE(read_error(dir / "deep.x3d").find("XML nested deeper than 2048 levels"), std::string::npos);
   EXPECT_NE(read_error(dir / "deep.x3d.gz").find("deep.x3d.gz:byte "), std::string::npos);
+}
+
+TEST(HostileModels, DirectXTextFramesNested100000DeepAreRefusedEvenInProcess) {
+  TempDir dir;
+  write_text(dir / "deep.x", test::directx_nested_frames(100000));
+  write_gz(dir / "deep.x.gz", test::directx_nested_frames(100000));
+  EXPECT_NE(read_error(dir / "deep.x").find("deep.x:byte "), std::string::npos);
+  EXPECT_NE(read_error(dir / "deep.x").find("DirectX .x nested deeper than 2048 levels"), std::string::npos);
+  EXPECT_NE(read_error(dir / "deep.x.gz").find("deep.x.gz:byte "), std::string::npos);
+  // Refused before import, so assimp never runs, not even in cellbake's own process.
+  expect_named_error_quickly("ingest " + (dir / "deep.x").string() + " --import-in-process --store " +
+                                 (dir / "s.db").string(),
+                             "deep.x:byte ", "DirectX .x nested deeper than 2048 levels");
+  EXPECT_FALSE(std::filesystem::exists(dir / "s.db"));
+  // 1,000 deep reads.
+  write_text(dir / "ok.x", test::directx_nested_frames(1000));
+  std::uint64_t triangles = 0;
+  EXPECT_EQ(read_error(dir / "ok.x", &triangles), "");
+  EXPECT_EQ(triangles, 1u);
+}
+
+TEST(DirectXNesting, CountsTextBracesOutsideStringsAndCommentsAndLeavesBinaryAlone) {
+  const auto depth = [](const std::string& bytes, std::size_t piece) {
+    DirectXNestingScan scan;
+    for (std::size_t at = 0; at < bytes.size(); at += piece)
+      scan.feed(bytes.data() + at, std::min(piece, bytes.size() - at));
+    return scan.max_depth();
+  };
+  const std::string text = "xof 0303txt 0032\n// {{{{ comment\n# {{{{ also\nFrame a { \"{{{{\" Frame b { } }\n";
+  for (std::size_t piece : {std::size_t{1}, std::size_t{5}, text.size()}) EXPECT_EQ(depth(text, piece), 2) << piece;
+  EXPECT_EQ(depth("xof 0303bin 0032{{{{{{", 3), 0);  // binary tokens: not scanned
+  EXPECT_EQ(depth("not a .x file {{{{", 4), 0);
+  const std::string deep = test::directx_nested_frames(3000);
+  EXPECT_THROW(check_directx_nesting("deep.x", deep.data(), deep.size()), InputError);
+  const std::string ok = test::directx_nested_frames(2047);  // and the Mesh inside: 2048 levels
+  EXPECT_NO_THROW(check_directx_nesting("ok.x", ok.data(), ok.size()));
 }
 
 TEST(HostileModels, ColladaAndX3dNestedWithinTheLimitsRead) {

@@ -173,9 +173,10 @@ TEST(IsolatedRead, ACrashInTheImporterIsAnErrorNamingTheFileAndSignal) {
 
 TEST(IsolatedRead, AssimpCrashingOnAFileIsAnIngestErrorNamingTheFile) {
   TempDir dir;
-  // Frames nested 100,000 deep: assimp's .x parser overflows its stack (no check
-  // before import covers .x); in the child that is an error, not cellbake's death.
-  write_text(dir / "deep.x", test::directx_nested_frames(100000));
+  // Frames nested 100,000 deep in the binary .x format: assimp's .x parser
+  // overflows its stack (the check before import scans only text .x files);
+  // in the child that is an error, not cellbake's death.
+  write_text(dir / "deep.x", test::directx_binary_nested_frames(100000));
   const test::CommandResult r =
       test::run_cellbake("ingest " + (dir / "deep.x").string() + " --store " + (dir / "s.db").string());
   EXPECT_EQ(r.exit_code, 1) << r.output;

@@ -40,6 +40,7 @@
 #include "pipeline/readers/contained_paths.h"
 #include "pipeline/readers/format_readers.h"
 #include "pipeline/readers/gltf_node_graph.h"
+#include "pipeline/readers/directx_nesting.h"
 #include "pipeline/readers/markup_nesting.h"
 
 namespace cellbake {
@@ -99,7 +100,8 @@ bool xml_format(const std::string& extension) {
 }
 
 // The checks before import over the whole file's bytes `data` (a decompressed
-// ".gz", or a glTF read whole): JSON or XML nesting (markup_nesting.h) and a
+// ".gz", or a glTF read whole): JSON, XML or DirectX text nesting
+// (markup_nesting.h, directx_nesting.h) and a
 // glTF or COLLADA node graph (gltf_node_graph.h, collada_node_graph.h). Throws InputError naming `name`.
 void check_before_import(const std::string& name, const std::string& extension, const char* data,
                          std::size_t size) {
@@ -113,6 +115,8 @@ void check_before_import(const std::string& name, const std::string& extension, 
   } else if (xml_format(extension)) {
     check_markup_nesting(name, data, size);
     if (extension == "dae") check_collada_node_graph(name, data, size);
+  } else if (extension == "x") {
+    check_directx_nesting(name, data, size);
   }
 }
 
@@ -123,6 +127,10 @@ void check_file_before_import(const std::string& name, const std::string& extens
   if (xml_format(extension)) {
     check_markup_nesting_of_file(name, file);
     if (extension == "dae") check_collada_node_graph_of_file(name, file);
+    return;
+  }
+  if (extension == "x") {
+    check_directx_nesting_of_file(name, file);
     return;
   }
   if (extension != "gltf" && extension != "glb") return;

@@ -7,7 +7,8 @@
 // becomes one Embree scene with one triangle geometry per chunk (float
 // positions relative to the group's double origin), built the first time some
 // cube map needs one of its chunks and kept under a byte cap with
-// least-recently-used eviction. Cube maps instance these scenes with
+// least-recently-used eviction (farthest from the latest eye first while cube
+// maps are traced in batches: set_focus). Cube maps instance these scenes with
 // eye-relative translations (stages/raycast/instance_scene.h), so float
 // precision is that of positions relative to the group's centre,
 // wherever the model lies (a 10 km group: 0.3 mm). Groups rather than single
@@ -191,7 +192,7 @@ class ChunkBvhCache {
   // so LRU would drop exactly the groups the next cube map needs first.
   void set_focus(const Vec3d& eye);
 
-  // Drops least recently used BVHs that nobody else holds until the cache is
+  // Drops BVHs that nobody else holds (in evict_beyond_cap's order) until the cache is
   // under its cap (acquire() does this first too). Call when a cube map has
   // released its BVHs.
   void trim();

@@ -72,6 +72,7 @@ class EmbreeCubeSampler final : public CubeSampler {
   std::string device() const override { return "CPU"; }
 
   const EmbreeSamplerStats& stats() const { return stats_; }
+  CubeSamplerWork work() const override { return {stats_.cube_maps, stats_.batches, stats_.groups_hidden}; }
   const ChunkBvhCache& cache() const { return *cache_; }
 
  private:
