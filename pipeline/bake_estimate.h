@@ -6,7 +6,7 @@
 // cell (fresh-clone scripts/demo.sh, December 2026); ~150 KB stored per cell.
 // Other models cost less or more per cell, roughly with a power of their
 // triangle count T (16 cells each of info's suggested bake, one thread, user +
-// system CPU relative to the demo's cells at the same time; docs/benchmarks.md
+// system CPU relative to the demo's cells at the same time; docs/benchmark-history.md
 // "The bake estimate"): duck.dae 4 k triangles 0.26, the IFC house 36 k 0.29,
 // a generated house 100 k 0.52, plant 100 k 0.67, plant 500 k 0.75, the
 // 12.7 M plant 2.6 (its BVH build included); bytes per cell 0.06, 0.05, 0.08,

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs the npm packages the glTF export's checks use (tests/test_export.cpp,
-# docs/benchmarks.md): the Khronos glTF Validator (`gltf-validator`), `three`
+# docs/benchmark-history.md): the Khronos glTF Validator (`gltf-validator`), `three`
 # and `playwright-core` (scripts/validate-gltf.js, scripts/three-render-glb.js)
 # into DIR/node_modules (default: $CELLBAKE_NODE_TOOLS, else node-tools/ in the
 # source tree, which git ignores). Needs Node.js with npm and the network;

@@ -68,7 +68,7 @@ struct MeshEncodeParams {
   double depth_error_relative = 0.001;
   // zstd level of the grid coding's streams (1..22; the decoder accepts any).
   // 15 is the knee of size against time on real faces: level 19 makes them
-  // 0.9 % smaller in three times the time (docs/benchmarks.md, issue #12).
+  // 0.9 % smaller in three times the time (docs/benchmark-history.md, issue #12).
   int zstd_level = 15;
   // Version 1: bits per position axis (1..16), quantised over the mesh's own
   // bounds; see face_mesh_position_error_bound for the resulting error.

@@ -70,7 +70,7 @@ std::vector<std::uint8_t> encode_avif(const std::vector<Rgba8>& pixels, int widt
   const int q = std::clamp(int(std::lround((100 - quality) * 63.0 / 99.0)), 0, 63);
   encoder->minQuantizer = encoder->maxQuantizer = q;
   // Speed 8: 5-8x faster than the default 6 for ~15 % more bytes at equal
-  // PSNR on the demo's faces (docs/benchmarks.md, issue #16).
+  // PSNR on the demo's faces (docs/benchmark-history.md, issue #16).
   encoder->speed = 8;
   encoder->maxThreads = 1;
   avifRWData out = AVIF_DATA_EMPTY;

@@ -18,7 +18,7 @@ namespace cellbake {
 
 // Code units per unit: 12 bits a component, far below what the light model
 // can show; the small integers compress better in the vertex codec than full
-// 16-bit codes (measured in docs/benchmarks.md).
+// 16-bit codes (measured in docs/benchmark-history.md).
 inline constexpr float kOctScale = 2047.f;
 
 // The octahedral code of `n` (any non-zero finite vector; it is normalised by

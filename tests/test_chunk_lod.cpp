@@ -8,7 +8,9 @@
 #include <set>
 #include <tuple>
 
+#include "pipeline/level_chunk_source.h"
 #include "stages/chunk_lod.h"
+#include "tests/fixture_memory_chunk_source.h"
 
 namespace cellbake {
 namespace {
@@ -123,6 +125,34 @@ TEST(ChunkLod, TheLevelIsTheCoarsestWithinThePixelBudget) {
   EXPECT_EQ(choose_lod_level(levels, allowed_lod_error(0.1, 1, 512)), 0);
   EXPECT_EQ(choose_lod_level(levels, allowed_lod_error(0, 1, 512)), 0);  // a view may stand at the chunk
   EXPECT_EQ(choose_lod_level({}, 1.0), 0);
+}
+
+TEST(LevelChunkSource, EachChunkIsItsCoarsestLevelWithinAPixelFromTheCell) {
+  // Chunk 1 touches the cell, chunk 2 lies 100 m away; both have levels of
+  // 1 mm and 0.5 m error. At 1 px of a 64-pixel face, the cell allows chunk 2
+  // 100 * 2 / 64 = 3.1 m (level 2) and chunk 1 nothing (the chunk itself).
+  test::MemoryChunkSource base;
+  for (std::int64_t id : {1, 2}) {
+    Chunk c = bumpy_patch(32, false);
+    c.id = id;
+    c.origin = id == 1 ? Vec3d{0, 0, 0} : Vec3d{100, 0, 0};
+    test::compute_memory_chunk_bounds(c);
+    const Chunk full = c;
+    base.add(std::move(c));
+    const std::vector<ChunkLod> levels = build_chunk_lods(full);
+    ASSERT_GE(levels.size(), 2u);
+    base.add_lod(id, 1, levels[0].chunk, 0.001);
+    base.add_lod(id, 2, levels[1].chunk, 0.5);
+  }
+  const LevelChunkSource source(base, Box3d{{-1, -1, -1}, {0, 0, 0}}, 1.0, 64);
+  const std::vector<ChunkRef> refs = source.query(source.model_bounds());
+  ASSERT_EQ(refs.size(), 2u);
+  EXPECT_EQ(refs[0].triangle_count, base.load(1)->triangle_count());
+  EXPECT_EQ(refs[1].triangle_count, base.load_lod(2, 2)->triangle_count());
+  EXPECT_LT(refs[1].triangle_count, base.load(2)->triangle_count());
+  EXPECT_EQ(source.load(1), base.load(1));
+  EXPECT_EQ(source.load(2), base.load_lod(2, 2));
+  EXPECT_TRUE(source.lods(2).empty());
 }
 
 TEST(ChunkLod, TheMedianWidthIsTheHeightAcrossTheLongestEdge) {

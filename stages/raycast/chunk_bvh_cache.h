@@ -16,7 +16,7 @@
 // BVH descent, and chunk bounds overlap: on the 2 M plant (512 chunks, 512^2
 // x 6 rays) one instance per chunk traced in 209 ms, groups of <= 256 k
 // triangles in 164 ms, <= 1 M in 121 ms, one flat BVH in 91 ms; on the 12.7 M
-// plant 16 groups 163 ms, one 94 ms (bench_raycast_raw, docs/benchmarks.md
+// plant 16 groups 163 ms, one 94 ms (bench_raycast_raw, docs/benchmark-history.md
 // "Sampling backends (issue #12)").
 //
 // Embree 3: Wald et al. 2014, "Embree: a kernel framework for efficient CPU ray
@@ -79,7 +79,7 @@ struct ChunkBvhCacheParams {
   // because the model does not fit the cap, so their groups are dropped and
   // rebuilt for nearly every cube map: the build, not the trace, is the cost.
   // Embree's Morton builder (low) built 2 M triangles 2.8x faster than
-  // medium's binned SAH and traced 1.5x slower (docs/benchmarks.md). Cached
+  // medium's binned SAH and traced 1.5x slower (docs/benchmark-history.md). Cached
   // apart from build_quality's BVHs of the same group, so which cube maps ran
   // first never changes what a cube map traces.
   RTCBuildQuality batch_build_quality = RTC_BUILD_QUALITY_LOW;
@@ -94,7 +94,7 @@ struct ChunkBvhCacheParams {
 // (23 B on the 2 M plant), rounded up. Set when Embree held its own copy of
 // the index arrays (84 B per triangle at medium quality, 116 B at low, peak);
 // with the chunks' arrays shared, 72 B and 104 B, so these now overestimate by
-// 12 B, and cube maps go to batches a little early (docs/benchmarks.md
+// 12 B, and cube maps go to batches a little early (docs/benchmark-history.md
 // "Sampling backends (issue #12)").
 constexpr std::size_t kEstimatedBvhBytesPerTriangle = 112;
 constexpr std::size_t kEstimatedLowQualityBvhBytesPerTriangle = 140;
@@ -109,7 +109,7 @@ constexpr std::size_t estimated_bvh_bytes_per_triangle(RTCBuildQuality quality) 
 // when its BVH fits one batch (half the cap at kEstimatedBvhBytesPerTriangle:
 // up to 19 M triangles for the default 4 GiB), so every cube map traces one
 // instance; else 1 M triangles, so batches of nearest groups can skip groups
-// hidden behind earlier hits (docs/benchmarks.md, "82 M triangles").
+// hidden behind earlier hits (docs/benchmark-history.md, "82 M triangles").
 constexpr std::size_t default_group_triangles(std::uint64_t model_triangles, std::size_t cache_bytes) {
   constexpr std::size_t kBatchedGroupTriangles = std::size_t{1} << 20;
   const bool one_batch = model_triangles * kEstimatedBvhBytesPerTriangle <= cache_bytes / 2;
