@@ -232,6 +232,30 @@ TEST_F(CellSemantics, FarGeometryIsCheckedAgainstItsChunks) {
                "(rows deleted or added)");
 }
 
+TEST_F(CellSemantics, GeometryTilesThatDrawNoFarTrianglesNeedNoRows) {
+  // What a cell of the 82 M plant baked: tiles drawn as geometry whose seen
+  // triangles all belong to near chunks (in the seam shell), so its far
+  // choice rows record 0 geometry triangles and it has no far geometry rows.
+  const std::int64_t cell = far_cell();
+  ASSERT_NE(cell, 0);
+  const std::string where = " WHERE cell_id = " + std::to_string(cell);
+  const std::string db = damaged("far.db", "no-far-triangles.db", cell,
+                                 {"DELETE FROM far_geometry" + where, "UPDATE far_choice SET geometry_triangles = 0" + where,
+                                  "UPDATE cells SET far_geometry_triangles = 0 WHERE id = " + std::to_string(cell)});
+  {
+    SqliteDb d(db, SqliteDb::Mode::read_only);
+    SqliteStatement s(d, "SELECT count(*) FROM far_choice WHERE geometry_tiles != 0 AND cell_id = " + std::to_string(cell));
+    ASSERT_TRUE(s.step());
+    ASSERT_GT(s.column_int(0), 0);
+  }
+  EXPECT_EQ(problem(db, cell), "");
+  // With a face's geometry triangles recorded, the missing rows are damage.
+  expect_found(damaged("far.db", "no-rows.db", cell,
+                       {"DELETE FROM far_geometry" + where,
+                        "UPDATE cells SET far_geometry_triangles = 0 WHERE id = " + std::to_string(cell)}),
+               cell, "far choice draws far triangles in geometry tiles but the cell has no far geometry rows");
+}
+
 TEST_F(CellSemantics, FaceMeshesAreCheckedAgainstTheirFaceAndTheFarChoice) {
   // Swapped between faces 0 and 2 (triangle counts too): each is coded for the other face.
   const std::string swap =
