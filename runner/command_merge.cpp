@@ -16,6 +16,7 @@ void add_merge_command(CLI::App& app) {
     std::string out;
     std::vector<std::string> shards;
     bool json = false;
+    bool check_images = false;
   };
   auto opt = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand(
@@ -23,10 +24,14 @@ void add_merge_command(CLI::App& app) {
   cmd->add_option("out", opt->out, "Merged cell database (created, or added to)")->required();
   cmd->add_option("shards", opt->shards, "Shard cell databases")->required();
   cmd->add_flag("--json", opt->json, "Print the summary as JSON");
+  cmd->add_flag("--check-images", opt->check_images,
+                "Also compare every face image with the model resampled at its sample's eye, as `status --check` "
+                "does (a low-resolution resample per sample: on the 82 M plant more than the merge itself)");
   cmd->callback([opt] {
     std::vector<std::filesystem::path> shards(opt->shards.begin(), opt->shards.end());
     const MergeSummary s =
-        merge_shards(opt->out, shards, [](const std::string& w) { std::fprintf(stderr, "warning: %s\n", w.c_str()); });
+        merge_shards(opt->out, shards, [](const std::string& w) { std::fprintf(stderr, "warning: %s\n", w.c_str()); },
+                     opt->check_images);
     if (opt->json) {
       nlohmann::json missing = nlohmann::json::array();
       for (const auto& m : s.missing_shards) missing.push_back(m);

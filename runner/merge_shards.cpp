@@ -102,7 +102,7 @@ std::string format_cell_selection(const std::vector<std::int64_t>& ids) {
 }
 
 MergeSummary merge_shards(const std::filesystem::path& out, const std::vector<std::filesystem::path>& shards,
-                          const std::function<void(const std::string&)>& warn) {
+                          const std::function<void(const std::string&)>& warn, bool check_images) {
   MergeSummary summary;
   const auto out_key = std::filesystem::weakly_canonical(out);
   std::vector<ShardInput> inputs;
@@ -168,8 +168,9 @@ MergeSummary merge_shards(const std::filesystem::path& out, const std::vector<st
   }
   for (auto& s : inputs) {
     // Each shard's cells checked against their grid places and the store they were baked from.
-    const CellCheckSetup setup = cell_check_setup(*s.db);
+    CellCheckSetup setup = cell_check_setup(*s.db);
     if (!setup.note.empty()) warn(s.path.string() + ": " + setup.note);
+    if (!check_images) setup.context.resample = {};
     const CellCopyCounts c = copy_cells(merged, *s.db, setup.context);
     summary.cells_copied += c.copied;
     summary.cells_unchanged += c.unchanged;

@@ -32,8 +32,12 @@ struct MergeSummary {
 // regions in the config meta); when the config names no regions, the sum of
 // the cells_selected of every shard ever merged into `out` (each shard
 // counted once, by absolute path). Takes the output's bake lock (CellDbLock).
+// Every cell is checked as `status --check` checks it (check_cell), but its
+// face images are compared with the model only when `check_images` (it costs
+// a low-resolution resample of the model per sample: on the 82 M plant more
+// than the merge itself).
 MergeSummary merge_shards(const std::filesystem::path& out, const std::vector<std::filesystem::path>& shards,
-                          const std::function<void(const std::string&)>& warn);
+                          const std::function<void(const std::string&)>& warn, bool check_images = false);
 
 // Formats sorted ids as a cell selection ("1-3,7,9-10"), the syntax --cells takes.
 std::string format_cell_selection(const std::vector<std::int64_t>& ids);
