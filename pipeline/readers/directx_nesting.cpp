@@ -1,10 +1,8 @@
 #include "pipeline/readers/directx_nesting.h"
 
-#include <algorithm>
-
 #include "pipeline/input_error.h"
-#include "pipeline/readers/buffered_input.h"
 #include "pipeline/readers/markup_nesting.h"
+#include "pipeline/readers/piecewise_scan.h"
 
 namespace cellbake {
 
@@ -49,28 +47,20 @@ void refuse_if_too_deep(const std::string& name, const DirectXNestingScan& scan)
                        " levels (the most a model file may nest)");
 }
 
+bool not_text(const DirectXNestingScan& scan) { return scan.decided() && !scan.text(); }
+
 }  // namespace
 
 void check_directx_nesting(const std::string& name, const char* data, std::size_t size) {
   DirectXNestingScan scan;
-  constexpr std::size_t kPiece = std::size_t{1} << 20;
-  for (std::size_t at = 0; at < size; at += kPiece) {
-    scan.feed(data + at, std::min(kPiece, size - at));
-    refuse_if_too_deep(name, scan);
-    if (scan.decided() && !scan.text()) return;
-  }
+  scan_in_pieces(
+      scan, data, size, [&](const DirectXNestingScan& s) { refuse_if_too_deep(name, s); }, not_text);
 }
 
 void check_directx_nesting_of_file(const std::string& name, const std::filesystem::path& file) {
   DirectXNestingScan scan;
-  BufferedInput in(file);
-  while (in.fetch(1)) {
-    const std::size_t n = in.buffered();
-    scan.feed(in.fetch(n), n);
-    in.consume(n);
-    refuse_if_too_deep(name, scan);
-    if (scan.decided() && !scan.text()) return;
-  }
+  scan_file_in_pieces(
+      scan, file, [&](const DirectXNestingScan& s) { refuse_if_too_deep(name, s); }, not_text);
 }
 
 }  // namespace cellbake

@@ -1,9 +1,8 @@
 #include "pipeline/readers/markup_nesting.h"
 
-#include <algorithm>
 
 #include "pipeline/input_error.h"
-#include "pipeline/readers/buffered_input.h"
+#include "pipeline/readers/piecewise_scan.h"
 
 namespace cellbake {
 
@@ -135,28 +134,22 @@ void refuse_if_too_deep(const std::string& name, const MarkupNestingScan& scan) 
                        " levels (the most a model file may nest)");
 }
 
+bool neither_json_nor_xml(const MarkupNestingScan& scan) {
+  return scan.decided() && scan.syntax() == MarkupSyntax::unknown;
+}
+
 }  // namespace
 
 void check_markup_nesting(const std::string& name, const char* data, std::size_t size) {
   MarkupNestingScan scan;
-  constexpr std::size_t kPiece = std::size_t{1} << 20;
-  for (std::size_t at = 0; at < size; at += kPiece) {
-    scan.feed(data + at, std::min(kPiece, size - at));
-    refuse_if_too_deep(name, scan);
-    if (scan.decided() && scan.syntax() == MarkupSyntax::unknown) return;
-  }
+  scan_in_pieces(
+      scan, data, size, [&](const MarkupNestingScan& s) { refuse_if_too_deep(name, s); }, neither_json_nor_xml);
 }
 
 void check_markup_nesting_of_file(const std::string& name, const std::filesystem::path& file) {
   MarkupNestingScan scan;
-  BufferedInput in(file);
-  while (in.fetch(1)) {
-    const std::size_t n = in.buffered();
-    scan.feed(in.fetch(n), n);
-    in.consume(n);
-    refuse_if_too_deep(name, scan);
-    if (scan.decided() && scan.syntax() == MarkupSyntax::unknown) return;
-  }
+  scan_file_in_pieces(
+      scan, file, [&](const MarkupNestingScan& s) { refuse_if_too_deep(name, s); }, neither_json_nor_xml);
 }
 
 }  // namespace cellbake
