@@ -1,6 +1,5 @@
 #include "pipeline/readers/markup_nesting.h"
 
-
 #include "pipeline/input_error.h"
 #include "pipeline/readers/piecewise_scan.h"
 
