@@ -26,8 +26,9 @@ bool is_store_hash(const std::string& s) {
 
 // The model as cells baked with `config` from `store` sampled it, for
 // check_face_images_against_model: the bake's discard box, shading and near
-// plane, one ray per pixel, on a backend of this machine (Embree unless a GPU
-// draws). A model whose BVH fits one batch of the bake's Embree cap is traced
+// plane, one ray per pixel, with Embree (a few thousand rays a face: no GPU
+// context is worth probing for, and probing EGL under the state's lock upset
+// TSan). A model whose BVH fits one batch of the bake's Embree cap is traced
 // whole by one sampler for every cell; a larger one, per cell, as its stored
 // levels within a pixel of the resampled face (LevelChunkSource), so the
 // check costs about as much at 82 M triangles as at 12.7 M. The sampler
@@ -63,7 +64,7 @@ FarFieldResampler far_field_resampler(const BakeConfig& config, const ChunkSourc
       state->cell = row.id;
     }
     if (!state->sampler) {
-      state->factory = std::make_unique<CubeSamplerFactory>(SampleBackend::automatic, cap,
+      state->factory = std::make_unique<CubeSamplerFactory>(SampleBackend::embree, cap,
                                                             std::size_t(c.texture_cache_mb) << 20);
       state->sampler = state->factory->make();
       state->sampler->set_shading(cell_shading_lights(c));
