@@ -67,6 +67,12 @@ struct Box3d {
     return !(b.hi.x < lo.x || b.lo.x > hi.x || b.hi.y < lo.y || b.lo.y > hi.y || b.hi.z < lo.z || b.lo.z > hi.z);
   }
   static Box3d cube(Vec3d c, double half) { return {{c.x - half, c.y - half, c.z - half}, {c.x + half, c.y + half, c.z + half}}; }
+  // The distance from `p` to the box's nearest point (0 inside it).
+  double distance_to(const Vec3d& p) const {
+    const Vec3d nearest{std::clamp(p.x, lo.x, hi.x), std::clamp(p.y, lo.y, hi.y), std::clamp(p.z, lo.z, hi.z)};
+    const Vec3d d{nearest.x - p.x, nearest.y - p.y, nearest.z - p.z};
+    return std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+  }
   friend bool operator==(const Box3d&, const Box3d&) = default;
 };
 

@@ -554,15 +554,10 @@ TEST(ChunkBvhCache, BeyondTheCapTheGroupsFarthestFromTheFocusGoFirst) {
   const std::size_t kept = cache.stats().cached_groups;
   ASSERT_GT(kept, 0u);
   ASSERT_LT(kept, groups.size());
-  const auto distance = [&](const ChunkGroupRefs& g) {
-    const Vec3d nearest{std::clamp(focus.x, g.bounds.lo.x, g.bounds.hi.x), std::clamp(focus.y, g.bounds.lo.y, g.bounds.hi.y),
-                        std::clamp(focus.z, g.bounds.lo.z, g.bounds.hi.z)};
-    return length(nearest - focus);
-  };
   double nearest_dropped = std::numeric_limits<double>::infinity(), farthest_kept = 0;
   for (const ChunkGroupRefs& g : groups) {
-    if (cache.holds(g.group, true)) farthest_kept = std::max(farthest_kept, distance(g));
-    else nearest_dropped = std::min(nearest_dropped, distance(g));
+    if (cache.holds(g.group, true)) farthest_kept = std::max(farthest_kept, g.bounds.distance_to(focus));
+    else nearest_dropped = std::min(nearest_dropped, g.bounds.distance_to(focus));
   }
   EXPECT_LE(farthest_kept, nearest_dropped);
 }

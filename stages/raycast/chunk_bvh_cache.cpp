@@ -337,26 +337,15 @@ void ChunkBvhCache::evict_beyond_cap() {
     return std::size_t(std::max<std::int64_t>(0, device_bytes_.load(std::memory_order_relaxed))) + chunk_bytes_;
   };
   if (held() <= params_.cache_bytes) return;
-  // Candidates in the order they go: least recently used first, or farthest
-  // from the focus first (ties: least recently used first).
-  std::vector<std::list<std::size_t>::iterator> order;
-  for (auto it = lru_.end(); it != lru_.begin();) order.push_back(--it);
-  if (focus_) {
-    std::vector<double> distance(order.size());
-    for (std::size_t i = 0; i < order.size(); ++i) {
-      const Box3d& g = group_bounds_[*order[i] / 2];
-      const Vec3d nearest{std::clamp(focus_->x, g.lo.x, g.hi.x), std::clamp(focus_->y, g.lo.y, g.hi.y),
-                          std::clamp(focus_->z, g.lo.z, g.hi.z)};
-      distance[i] = length(nearest - *focus_);
-    }
-    std::vector<std::size_t> rank(order.size());
-    for (std::size_t i = 0; i < rank.size(); ++i) rank[i] = i;
-    std::stable_sort(rank.begin(), rank.end(), [&](std::size_t a, std::size_t b) { return distance[a] > distance[b]; });
-    std::vector<std::list<std::size_t>::iterator> by_distance;
-    for (std::size_t i : rank) by_distance.push_back(order[i]);
-    order = std::move(by_distance);
+  // Candidates in the order they go: farthest from the focus first (without
+  // one, all at distance 0), least recently used first among equals.
+  std::vector<std::pair<double, std::list<std::size_t>::iterator>> order;
+  for (auto it = lru_.end(); it != lru_.begin();) {
+    --it;
+    order.emplace_back(focus_ ? group_bounds_[*it / 2].distance_to(*focus_) : 0.0, it);
   }
-  for (auto it : order) {
+  std::stable_sort(order.begin(), order.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  for (const auto& [distance, it] : order) {
     if (held() <= params_.cache_bytes) break;
     auto slot = slots_.find(*it);
     // Only BVHs no cube map holds free memory when dropped (the slot's future

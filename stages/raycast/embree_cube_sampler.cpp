@@ -158,12 +158,7 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
     // Nearest groups first, so later batches are mostly hidden behind what
     // earlier ones hit and are skipped without being built.
     std::vector<std::pair<double, std::size_t>> order;
-    for (std::size_t i = 0; i < groups.size(); ++i) {
-      const Box3d& g = groups[i].bounds;
-      const Vec3d nearest{std::clamp(eye.x, g.lo.x, g.hi.x), std::clamp(eye.y, g.lo.y, g.hi.y),
-                          std::clamp(eye.z, g.lo.z, g.hi.z)};
-      order.emplace_back(length(nearest - eye), i);
-    }
+    for (std::size_t i = 0; i < groups.size(); ++i) order.emplace_back(groups[i].bounds.distance_to(eye), i);
     std::sort(order.begin(), order.end());
     std::vector<ChunkGroupRefs> sorted;
     for (const auto& [distance, i] : order) sorted.push_back(std::move(groups[i]));
