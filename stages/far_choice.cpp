@@ -506,12 +506,17 @@ void grow_seen_triangles(SeenChunk& seen, const Chunk& chunk, const VertexTriang
                          std::vector<std::uint16_t>& scratch) {
   if (seen.whole() || rings <= 0) return;
   const std::size_t n = chunk.triangle_count();
-  scratch.assign(n, 0);
-  std::vector<std::uint32_t> frontier;
+  // scratch is zero on entry and on return; only the triangles touched here
+  // are set and cleared, so a small seen set in a large chunk costs its own
+  // size, not the chunk's.
+  if (scratch.size() < n) scratch.resize(n, 0);
+  std::vector<std::uint32_t> touched, frontier;
   for (std::size_t k = 0; k < seen.triangles.size(); ++k)
-    if (seen.triangles[k] < n) {
-      scratch[seen.triangles[k]] |= seen.triangle_tiles[k];
-      frontier.push_back(seen.triangles[k]);
+    if (const std::uint32_t t = seen.triangles[k]; t < n) {
+      const std::uint16_t before = scratch[t];
+      scratch[t] |= seen.triangle_tiles[k];
+      if (before == 0 && scratch[t] != 0) touched.push_back(t);
+      frontier.push_back(t);
     }
   for (int ring = 0; ring < rings && !frontier.empty(); ++ring) {
     std::vector<std::uint32_t> added;
@@ -523,22 +528,23 @@ void grow_seen_triangles(SeenChunk& seen, const Chunk& chunk, const VertexTriang
         for (std::uint32_t k = adjacency.offsets[v]; k < adjacency.offsets[v + 1]; ++k) {
           const std::uint32_t u = adjacency.triangles[k];
           if ((scratch[u] | tiles) == scratch[u]) continue;
-          if (scratch[u] == 0) added.push_back(u);
+          if (scratch[u] == 0) added.push_back(u), touched.push_back(u);
           scratch[u] |= tiles;
         }
       }
     }
     frontier = std::move(added);
   }
+  std::sort(touched.begin(), touched.end());
   seen.triangles.clear();
   seen.triangle_tiles.clear();
   seen.tiles = 0;
-  for (std::size_t t = 0; t < n; ++t)
-    if (scratch[t]) {
-      seen.triangles.push_back(std::uint32_t(t));
-      seen.triangle_tiles.push_back(scratch[t]);
-      seen.tiles |= scratch[t];
-    }
+  for (const std::uint32_t t : touched) {
+    seen.triangles.push_back(t);
+    seen.triangle_tiles.push_back(scratch[t]);
+    seen.tiles |= scratch[t];
+    scratch[t] = 0;
+  }
 }
 
 std::size_t drop_geometry_tiles(FaceMesh& mesh, std::uint32_t geometry_tiles) {

@@ -177,7 +177,8 @@ VertexTriangles vertex_triangles(const Chunk& chunk);
 // added triangle taking the tiles of the seen triangles it touches. Rays
 // through pixel centres miss thin slivers next to what they hit (the far
 // side of a pipe, a rail's edge) that an eye elsewhere in the cell sees.
-// `scratch` is reused between calls.
+// `scratch` is reused between calls: all zero on entry (an empty vector is)
+// and left all zero; it grows to the chunk's triangle count.
 void grow_seen_triangles(SeenChunk& seen, const Chunk& chunk, const VertexTriangles& adjacency, int rings,
                          std::vector<std::uint16_t>& scratch);
 

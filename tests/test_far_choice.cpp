@@ -715,6 +715,38 @@ TEST(FarChoiceGrow, OneRingAddsTheTrianglesSharingAVertexWithTheirTiles) {
   EXPECT_EQ(none.triangles.size(), 1u);
 }
 
+TEST(FarChoiceGrow, AScratchReusedAcrossChunksIsLeftZeroAndGivesTheFreshResult) {
+  // A strip of 40 triangles and a second, shorter strip: growing in the long
+  // one must leave nothing behind that the short one (or a later call) reads.
+  const auto make_strip = [](std::int64_t id, std::uint32_t triangles) {
+    Chunk strip;
+    strip.id = id;
+    for (std::uint32_t i = 0; i < triangles + 2; ++i) {
+      strip.positions.push_back({float(i / 2), float(i % 2), 0});
+      strip.colors.push_back({200, 200, 200, 255});
+    }
+    for (std::uint32_t t = 0; t < triangles; ++t)
+      for (std::uint32_t v : {t, t + 1, t + 2}) strip.indices.push_back(v);
+    return strip;
+  };
+  const Chunk long_strip = make_strip(1, 40), short_strip = make_strip(2, 6);
+  const VertexTriangles long_adjacency = vertex_triangles(long_strip), short_adjacency = vertex_triangles(short_strip);
+  SeenChunk far_end = seen_triangles(1, 37, 1, 1u << 4);
+  far_end.triangles.push_back(39);
+  far_end.triangle_tiles.push_back(1u << 5);
+  std::vector<std::uint16_t> reused;
+  grow_seen_triangles(far_end, long_strip, long_adjacency, 2, reused);
+  EXPECT_EQ(far_end.triangles, (std::vector<std::uint32_t>{33, 34, 35, 36, 37, 38, 39}));
+  EXPECT_EQ(reused, std::vector<std::uint16_t>(40, 0));
+  SeenChunk with_reused = seen_triangles(2, 5, 1, 1u << 1), with_fresh = with_reused;
+  grow_seen_triangles(with_reused, short_strip, short_adjacency, 3, reused);
+  std::vector<std::uint16_t> fresh;
+  grow_seen_triangles(with_fresh, short_strip, short_adjacency, 3, fresh);
+  EXPECT_EQ(with_reused, with_fresh);
+  EXPECT_EQ(with_fresh.triangles, (std::vector<std::uint32_t>{0, 1, 2, 3, 4, 5}));
+  EXPECT_EQ(reused, std::vector<std::uint16_t>(40, 0));
+}
+
 TEST(FarChoiceChoose, ASampleThatSawAChunkWholeMakesItWhole) {
   const std::vector<ChunkRef> far = {ref(4, 2)};
   const SampleInput a = wall_sample(4);
