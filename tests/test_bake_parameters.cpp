@@ -112,14 +112,14 @@ TEST(BakeParameters, EveryKeyEntersExactlyTheHashesItsRowSays) {
 
 TEST(BakeParameters, TheDefaultConfigHashesAsBefore) {
   // Existing databases resume only while keys at their defaults hash as they
-  // did: the default configuration's hashes as of issue #35 (far.seen_rings 2,
-  // far.geometry_factor 4, far.seen_geometry_*: the input hash changed on
+  // did: the default configuration's hashes as of issue #36 (samples.max 8,
+  // far.seen_rings 4, samples.void_resolution 12: the input hash changed on
   // purpose; the cull hash did not).
   BakeConfig c;
   c.regions = {Box3d{{0, 0, 0}, {4, 4, 2}}};
   const CellHashes h = cell_hashes(enumerate_cells(c.regions, c.cell_size).front(), c, "store");
   EXPECT_EQ(h.cull, "05729ed4ba2b0461d9726fbd997f6b5f");
-  EXPECT_EQ(h.input, "5813b43b3540d284acced6a91f81a8b8");
+  EXPECT_EQ(h.input, "e66449d0166d202ce30f5bb0988067d9");
 }
 
 TEST(BakeParameters, CellGridKeysMoveTheCellsWhoseBoundsAreHashed) {
