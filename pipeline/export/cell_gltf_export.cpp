@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <stdexcept>
 
@@ -95,8 +96,18 @@ class SceneWriter {
     for (const Vec3f& p : refined.mesh.positions) e.positions.push_back(offset + Vec3d{p.x, p.y, p.z});
     e.uvs = refined.mesh.uvs;  // u right, v down: glTF's convention already
     e.indices = refined.mesh.indices;
+    const int subpixels = options_.uv_subpixels;
+    if (subpixels > 0 && std::int64_t(face.image.width) * subpixels <= 65535 &&
+        std::int64_t(face.image.height) * subpixels <= 65535) {
+      e.uv_grid_width = face.image.width * subpixels;
+      e.uv_grid_height = face.image.height * subpixels;
+    }
+    // The mesh's positions within a fraction of its nearest vertex's distance from the sample eye.
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const Vec3f& p : refined.mesh.positions) nearest = std::min(nearest, length(Vec3d{p.x, p.y, p.z}));
     std::vector<ExportMesh> primitives(1, std::move(e));
-    return add_mesh(name, primitives, {face_material(face, stored, name)});
+    const int material = face_material(face, stored, name, primitives[0].uv_grid_width, primitives[0].uv_grid_height);
+    return add_mesh(name, primitives, {material}, options_.depth_mesh_tolerance * nearest);
   }
 
  private:
@@ -141,12 +152,14 @@ class SceneWriter {
       primitives.push_back(std::move(e));
       material_of.push_back(material);
     }
-    return add_mesh(name, primitives, material_of);
+    return add_mesh(name, primitives, material_of, options_.position_tolerance);
   }
 
   static Vec3d to_double(const Vec3f& p) { return {p.x, p.y, p.z}; }
 
-  PlacedMesh add_mesh(const std::string& name, std::vector<ExportMesh>& primitives, const std::vector<int>& materials) {
+  // The primitives as one mesh, positions quantised to the fewest bits that keep them within `tolerance`.
+  PlacedMesh add_mesh(const std::string& name, std::vector<ExportMesh>& primitives, const std::vector<int>& materials,
+                      double tolerance) {
     Box3d bounds;
     for (ExportMesh& e : primitives) {
       weld_vertices(e);
@@ -155,7 +168,7 @@ class SceneWriter {
     }
     if (bounds.empty()) return {};
     PlacedMesh placed;
-    placed.q = position_quantization(bounds);
+    placed.q = position_quantization(bounds, position_bits_within(bounds, tolerance));
     json list = json::array();
     for (std::size_t k = 0; k < primitives.size(); ++k) {
       if (primitives[k].indices.empty()) continue;
@@ -248,7 +261,9 @@ class SceneWriter {
 
   // The face's image as stored when glTF (or, compressed, an extension) can
   // hold it, else re-encoded as JPEG; an unlit, clamped, linearly filtered material.
-  int face_material(const DecodedFace& face, const FaceRow* stored, const std::string& name) {
+  // With a uv grid (ExportMesh::uv_grid_width), KHR_texture_transform scales the grid's integers back.
+  int face_material(const DecodedFace& face, const FaceRow* stored, const std::string& name, int uv_grid_width,
+                    int uv_grid_height) {
     const int sampler = add_sampler(kLinear, kLinear, kClampToEdge, kClampToEdge);
     const std::string format = stored ? stored->image_format : "";
     int texture;
@@ -271,6 +286,11 @@ class SceneWriter {
              {"metallicFactor", 0},
              {"roughnessFactor", 1},
              {"baseColorTexture", {{"index", texture}}}};
+    if (uv_grid_width > 0) {
+      glb_.use_extension("KHR_texture_transform", true);
+      pbr["baseColorTexture"]["extensions"]["KHR_texture_transform"] = {
+          {"scale", {1.0 / uv_grid_width, 1.0 / uv_grid_height}}};
+    }
     return add_material({{"name", name}, {"pbrMetallicRoughness", std::move(pbr)}});
   }
 

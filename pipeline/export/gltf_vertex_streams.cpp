@@ -62,7 +62,7 @@ int add_stream(GlbBuilder& glb, std::span<const std::uint8_t> bytes, std::size_t
 }  // namespace
 
 namespace {
-int position_step(int bits) { return 1 << (16 - bits); }
+int position_levels(int bits) { return (1 << (bits - 1)) - 1; }
 }  // namespace
 
 PositionQuantization position_quantization(const Box3d& bounds, int bits) {
@@ -71,23 +71,28 @@ PositionQuantization position_quantization(const Box3d& bounds, int bits) {
   if (bits < 8 || bits > 16) throw std::invalid_argument("glTF export: position bits " + std::to_string(bits) + " outside 8..16");
   const Vec3d half = bounds.extent() * 0.5;
   const double largest = std::max({half.x, half.y, half.z, 1e-9});
-  const int step = position_step(bits), levels = 32767 / step;
-  // q = step * round(offset / largest * levels), so that q = +-levels * step at the extremes.
-  return {bounds.center(), largest * kInt16Max / (double(levels) * step), bits};
+  // q = round(offset / largest * levels), so that q = +-levels at the extremes.
+  return {bounds.center(), largest * kInt16Max / double(position_levels(bits)), bits};
+}
+
+int position_bits_within(const Box3d& bounds, double tolerance) {
+  if (!(tolerance > 0)) return 16;
+  int bits = 8;
+  while (bits < 16 && position_error_bound(position_quantization(bounds, bits)) > tolerance) ++bits;
+  return bits;
 }
 
 double position_error_bound(const PositionQuantization& q) {
   const double largest = std::max({std::abs(q.translation.x), std::abs(q.translation.y), std::abs(q.translation.z)}) + q.scale;
-  return q.scale * position_step(q.bits) / kInt16Max / 2 + 2 * largest * std::numeric_limits<float>::epsilon();
+  return q.scale / kInt16Max / 2 + 2 * largest * std::numeric_limits<float>::epsilon();
 }
 
 std::vector<std::int16_t> quantize_positions(std::span<const Vec3d> positions, const PositionQuantization& q) {
-  const int step = position_step(q.bits);
   std::vector<std::int16_t> out(positions.size() * 4, 0);
   for (std::size_t i = 0; i < positions.size(); ++i) {
-    const Vec3d r = (positions[i] - q.translation) * (kInt16Max / (q.scale * step));
+    const Vec3d r = (positions[i] - q.translation) * (kInt16Max / q.scale);
     for (int a = 0; a < 3; ++a) {
-      const double v = std::round(r[a]) * step;
+      const double v = std::round(r[a]);
       if (!(std::abs(v) <= kInt16Max))
         throw std::invalid_argument("glTF export: position " + std::to_string(i) + " lies outside its quantisation range");
       out[4 * i + a] = static_cast<std::int16_t>(v);
@@ -196,7 +201,15 @@ nlohmann::json add_primitive_streams(GlbBuilder& glb, const ExportMesh& m, const
             : glb.add_accessor(add_stream(glb, as_bytes_of(linear_colors(m.colors)), n, 8, compress),
                                gltf::kUnsignedShort, true, n, "VEC4");
   if (!m.uvs.empty()) {
-    if (uvs_in_unit_square(m.uvs)) {
+    if (m.uv_grid_width > 0 && m.uv_grid_height > 0) {
+      std::vector<std::uint16_t> grid(n * 2);
+      for (std::size_t i = 0; i < n; ++i) {
+        grid[2 * i] = static_cast<std::uint16_t>(std::lround(std::clamp(m.uvs[i].u, 0.0f, 1.0f) * m.uv_grid_width));
+        grid[2 * i + 1] = static_cast<std::uint16_t>(std::lround(std::clamp(m.uvs[i].v, 0.0f, 1.0f) * m.uv_grid_height));
+      }
+      attributes["TEXCOORD_0"] = glb.add_accessor(add_stream(glb, as_bytes_of(grid), n, 4, compress),
+                                                  gltf::kUnsignedShort, false, n, "VEC2");
+    } else if (uvs_in_unit_square(m.uvs)) {
       attributes["TEXCOORD_0"] = glb.add_accessor(add_stream(glb, as_bytes_of(quantize_uvs(m.uvs)), n, 4, compress),
                                                   gltf::kUnsignedShort, true, n, "VEC2");
     } else {
