@@ -201,6 +201,7 @@ WalkResult run_walk(const std::filesystem::path& database, const std::filesystem
     f.eye = views[i].eye;
     f.look = views[i].look;
     f.truth_ms = truth.stats.milliseconds;
+    f.truth_triangles = truth.stats.chunk_triangles;
     const CellEntry* entry = index.nearest(f.eye);
     f.cell = entry ? entry->id : 0;
     f.cell_switch = i > 0 && frames.back().cell != f.cell;
