@@ -41,6 +41,11 @@ class SceneWriter {
       : store_(store), context_(context), options_(options), origin_(origin), materials_(store.materials()) {}
 
   GlbBuilder& glb() { return glb_; }
+  // The file, its pooled streams written.
+  std::vector<std::uint8_t> finish() {
+    streams_.flush();
+    return glb_.finish();
+  }
   GltfExportStats& stats() { return stats_; }
 
   int add_node(json node) {
@@ -172,7 +177,7 @@ class SceneWriter {
     json list = json::array();
     for (std::size_t k = 0; k < primitives.size(); ++k) {
       if (primitives[k].indices.empty()) continue;
-      json primitive = add_primitive_streams(glb_, primitives[k], placed.q, options_.compress, options_.color_bits);
+      json primitive = add_primitive_streams(streams_, primitives[k], placed.q, options_.color_bits);
       primitive["material"] = materials[k];
       list.push_back(std::move(primitive));
     }
@@ -300,6 +305,7 @@ class SceneWriter {
   Vec3d origin_;
   std::vector<Material> materials_;
   GlbBuilder glb_;
+  StreamPool streams_{glb_, options_.compress};
   GltfExportStats stats_;
   std::map<std::int64_t, PlacedMesh> chunk_meshes_, level_meshes_;
   std::map<int, int> geometry_materials_;
@@ -404,7 +410,7 @@ std::vector<std::uint8_t> export_cells_glb(const std::vector<CellToExport>& cell
   }
   w.glb().json()["scenes"] = json::array({{{"name", "cellbake"}, {"nodes", {root_node}}}});
   w.glb().json()["scene"] = 0;
-  std::vector<std::uint8_t> bytes = w.glb().finish();
+  std::vector<std::uint8_t> bytes = w.finish();
   w.stats().bytes = bytes.size();
   if (stats_out) *stats_out = w.stats();
   return bytes;
