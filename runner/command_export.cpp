@@ -150,6 +150,21 @@ void add_export_command(CLI::App& app) {
                   "Largest texture error of depth-mesh edges drawn with plain texture coordinates, face pixels")
       ->check(CLI::Range(0.01, 100.0))
       ->capture_default_str();
+  cmd->add_option("--position-tolerance", opt->exporter.position_tolerance,
+                  "Largest position error of chunk geometry, model units: each mesh takes the fewest bits (8..16) "
+                  "within it (0: 16 bits)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--depth-mesh-tolerance", opt->exporter.depth_mesh_tolerance,
+                  "Largest position error of a depth mesh, as a fraction of its nearest vertex's distance from "
+                  "the sample eye (0: 16 bits)")
+      ->check(CLI::Range(0.0, 0.1))
+      ->capture_default_str();
+  cmd->add_option("--uv-subpixels", opt->exporter.uv_subpixels,
+                  "Depth-mesh texture coordinates on a grid of this many steps per face pixel "
+                  "(KHR_texture_transform); 0: normalised 16-bit")
+      ->check(CLI::Range(0, 64))
+      ->capture_default_str();
   cmd->add_option("--jpeg-quality", opt->exporter.jpeg_quality,
                   "Quality of images re-encoded as JPEG (faces stored as AVIF/WebP/JPEG XL, textures)")
       ->check(CLI::Range(1, 100))

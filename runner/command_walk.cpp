@@ -17,7 +17,7 @@ namespace cellbake {
 void add_walk_command(CLI::App& app) {
   struct Options {
     std::string database, out, size = "320x240";
-    bool auto_path = false, json = false, no_video = false, serial = false;
+    bool auto_path = false, json = false, no_video = false, serial = false, draw_hidden = false;
     WalkOptions walk;
   };
   auto opt = std::make_shared<Options>();
@@ -56,11 +56,15 @@ void add_walk_command(CLI::App& app) {
   cmd->add_flag("--no-video", opt->no_video, "Write PNG frames instead of an MP4 (also when ffmpeg is absent)");
   cmd->add_flag("--serial", opt->serial,
                 "Draw the truth on the same thread as the cells (default: the next frame's truth on a second thread)");
+  cmd->add_flag("--draw-hidden", opt->draw_hidden,
+                "Draw every truth chunk in view, also those hidden behind nearer ones (default: skip them; the "
+                "same frames except where surfaces tie exactly in depth)");
   cmd->add_flag("--json", opt->json, "Print the summary as JSON");
   cmd->callback([opt] {
     std::tie(opt->walk.width, opt->walk.height) = parse_image_size(opt->size);
     opt->walk.video = !opt->no_video;
     opt->walk.truth_ahead = !opt->serial;
+    opt->walk.skip_hidden_truth = !opt->draw_hidden;
     opt->walk.quiet = quiet_output();
     const WalkResult r = run_walk(opt->database, opt->out, opt->walk);
     if (opt->json) {

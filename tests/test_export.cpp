@@ -25,6 +25,7 @@
 #include "pipeline/export/gltf_vertex_streams.h"
 #include "stages/encode.h"
 #include "storage/cell_db.h"
+#include "storage/chunk_codec.h"
 #include "storage/geometry_store.h"
 #include "fixture_room_obj.h"
 #include "fixture_textured.h"
@@ -46,6 +47,13 @@ std::string q(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 std::span<const std::uint8_t> view_bytes(const ParsedGlb& glb, int view) {
   const json& v = glb.json["bufferViews"][view];
   return std::span<const std::uint8_t>(glb.bin).subspan(v.value("byteOffset", 0), v["byteLength"].get<std::size_t>());
+}
+
+// The bytes of an accessor's elements (uncompressed, `element` bytes apart):
+// its view from the accessor's offset on (views are shared by accessors).
+std::span<const std::uint8_t> accessor_bytes(const ParsedGlb& glb, const json& accessor, std::size_t element) {
+  return view_bytes(glb, accessor["bufferView"])
+      .subspan(accessor.value("byteOffset", std::size_t{0}), accessor["count"].get<std::size_t>() * element);
 }
 
 // ------------------------------------------------------------------ container
@@ -129,17 +137,35 @@ TEST(VertexStreams, QuantisedPositionsStayWithinTheBound) {
   EXPECT_LE(worst, bound);
   EXPECT_GT(worst, bound / 4);  // the bound is not loose by orders of magnitude
   EXPECT_THROW(quantize_positions(std::vector<Vec3d>{{18, 100, -995}}, pq), std::invalid_argument);
-  // At 12 bits the values are multiples of 16 and the bound 16 times looser.
+  // At 12 bits the values lie within +-2047 and the bound is 16 times looser.
   const PositionQuantization p12 = position_quantization(bounds, 12);
   const std::vector<std::int16_t> q12 = quantize_positions(points, p12);
   double worst12 = 0;
+  int largest = 0;
   for (std::size_t i = 0; i < points.size(); ++i)
     for (int a = 0; a < 3; ++a) {
-      EXPECT_EQ(q12[4 * i + a] % 16, 0);
+      largest = std::max(largest, std::abs(int(q12[4 * i + a])));
       worst12 = std::max(worst12, std::abs(p12.translation[a] + p12.scale * q12[4 * i + a] / 32767.0 - points[i][a]));
     }
+  EXPECT_EQ(largest, 2047);  // the widest axis reaches the end of the range
   EXPECT_LE(worst12, position_error_bound(p12));
   EXPECT_GT(worst12, bound * 4);
+}
+
+TEST(VertexStreams, PositionBitsAreTheFewestWithinTheTolerance) {
+  const Box3d box{{-10, 0, 0}, {10, 1, 1}};  // half extent 10
+  for (double tolerance : {1e-3, 4e-3, 0.05}) {
+    const int bits = position_bits_within(box, tolerance);
+    EXPECT_LE(position_error_bound(position_quantization(box, bits)), tolerance) << tolerance;
+    if (bits > 8) {
+      EXPECT_GT(position_error_bound(position_quantization(box, bits - 1)), tolerance) << tolerance;
+    }
+  }
+  // 10 / (2^(bits-1) - 1) / 2 <= 1e-3 first at 14 bits (8191 steps: 0.61 mm).
+  EXPECT_EQ(position_bits_within(box, 1e-3), 14);
+  EXPECT_EQ(position_bits_within(box, 1e-9), 16);  // none is within: all bits
+  EXPECT_EQ(position_bits_within(box, 0), 16);
+  EXPECT_EQ(position_bits_within(box, 100), 8);
 }
 
 TEST(VertexStreams, NormalsUvsAndColoursWithinHalfAStep) {
@@ -379,7 +405,7 @@ TEST(Export, CellGlbHoldsTheCellsTrianglesWithinTheirBounds) {
       EXPECT_EQ(colour["componentType"], gltf::kUnsignedByte);  // 8-bit linear, the default
       EXPECT_FALSE(p["attributes"].contains("NORMAL"));  // unlit: normals only when asked for
       // min / max are those of the data, and the data lies in the chunk's bounds.
-      const auto data = view_bytes(glb, pos["bufferView"]);
+      const auto data = accessor_bytes(glb, pos, 8);
       const std::size_t n = pos["count"];
       ASSERT_EQ(data.size(), n * 8);
       std::array<int, 3> lo{32767, 32767, 32767}, hi{-32767, -32767, -32767};
@@ -500,7 +526,51 @@ TEST(Export, CompressedStreamsDecodeToTheUncompressedOnes) {
     }
     ++compared;
   }
-  EXPECT_GT(compared, 10u);
+  EXPECT_GE(compared, 4u);  // positions and uvs (each one view for the whole file) and indices
+}
+
+// The size of a compressed depth-mesh cell (AVIF faces, the bake's default)
+// against what drawing it reads from the databases: its row's bytes plus the
+// store chunks of its near field, each as the store codes it. Positions at
+// the fewest bits within their tolerances and texture coordinates on the
+// quarter-pixel grid make its binary chunk at least 10 % smaller than 16-bit
+// positions and normalised uvs. Issue #38's 1.2x is measured on the demo (docs/benchmarks.md,
+// E1); this 64-pixel room is small enough that the file's JSON is half of it
+// (3.3x), so the bound here is that figure, which a larger file must not exceed.
+TEST(Export, CompressedDepthMeshCellStaysSmall) {
+  const Exported e = export_cell(baked().db("tdm_avif"), true);
+  ASSERT_TRUE(e.cell.far_pieces.empty() && e.cell.far_whole_ids.empty());
+  ASSERT_GT(e.stats.depth_mesh_triangles, 0u);
+  const GeometryStore store(baked().store);
+  std::uint64_t stored = e.row.bytes;
+  for (std::int64_t id : e.cell.near_ids) stored += encode_chunk_blob(*store.load(id)).size();
+  EXPECT_LE(double(e.bytes.size()) / double(stored), 3.4) << e.bytes.size() << " bytes against " << stored << " stored";
+
+  GltfExportOptions full;
+  full.compress = true;
+  full.position_tolerance = 0;
+  full.depth_mesh_tolerance = 0;
+  full.uv_subpixels = 0;
+  GltfSceneContext context;
+  context.lights = shading_lights(ShadingParams{}, context.up);
+  const std::vector<std::uint8_t> wide = export_cells_glb({{&e.row, &e.cell}}, store, context, full);
+  const ParsedGlb narrow_glb = parse_glb(e.bytes), wide_glb = parse_glb(wide);
+  // The binary chunk (streams and images; the JSON is nearly the same).
+  EXPECT_LE(double(narrow_glb.bin.size()), 0.9 * double(wide_glb.bin.size()))
+      << narrow_glb.bin.size() << " against " << wide_glb.bin.size();
+
+  const json& doc = narrow_glb.json;
+  const json& required = doc["extensionsRequired"];
+  EXPECT_NE(std::find(required.begin(), required.end(), "KHR_texture_transform"), required.end());
+  std::size_t transformed = 0;
+  for (const json& material : doc["materials"]) {
+    const json texture = material["pbrMetallicRoughness"].value("baseColorTexture", json::object());
+    if (!texture.contains("extensions")) continue;
+    const json& scale = texture["extensions"]["KHR_texture_transform"]["scale"];
+    EXPECT_NEAR(scale[0].get<double>(), 1.0 / (64 * 4), 1e-12);  // 64-pixel faces, 4 steps a pixel
+    ++transformed;
+  }
+  EXPECT_EQ(transformed, e.stats.images);  // every face
 }
 
 // A store chunk with a material texture: the texture embedded (rows top
@@ -550,7 +620,7 @@ TEST(Export, TexturedChunkCarriesItsTextureWithGltfsUvOrigin) {
   const json& placed = doc["nodes"][chunk_node];
   const json& pos = doc["accessors"][primitive["attributes"]["POSITION"].get<int>()];
   const json& uv = doc["accessors"][primitive["attributes"]["TEXCOORD_0"].get<int>()];
-  const auto p16 = view_bytes(glb, pos["bufferView"]), t16 = view_bytes(glb, uv["bufferView"]);
+  const auto p16 = accessor_bytes(glb, pos, 8), t16 = accessor_bytes(glb, uv, 4);
   bool found = false;
   for (std::size_t i = 0; i < pos["count"].get<std::size_t>(); ++i) {
     Vec3d world;

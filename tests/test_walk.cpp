@@ -234,6 +234,19 @@ TEST(WalkRun, TinyBakeAsPngFramesWithPlotAndSummary) {
   const WalkResult serial = run_walk(db, dir / "serial", wo);
   ASSERT_EQ(serial.frames.size(), r.frames.size());
   for (std::size_t i = 0; i < r.frames.size(); ++i) EXPECT_EQ(serial.frames[i].psnr_db, r.frames[i].psnr_db) << i;
+
+  // Truth chunks hidden behind nearer ones skipped (the default) or drawn:
+  // the same truth (this room has no surfaces tying in depth), so the same PSNR.
+  wo.truth_ahead = true;
+  wo.skip_hidden_truth = false;
+  const WalkResult everything = run_walk(db, dir / "everything", wo);
+  ASSERT_EQ(everything.frames.size(), r.frames.size());
+  for (std::size_t i = 0; i < r.frames.size(); ++i) {
+    EXPECT_EQ(everything.frames[i].psnr_db, r.frames[i].psnr_db) << i;
+    EXPECT_GT(everything.frames[i].truth_triangles, 0u) << i;
+    EXPECT_LE(r.frames[i].truth_triangles, everything.frames[i].truth_triangles) << i;
+  }
+  EXPECT_TRUE(nlohmann::json::parse(read_text(dir / "walk" / "walk.json"))["skip_hidden_truth"].get<bool>());
 }
 
 TEST(WalkRun, Mp4ThroughTheFfmpegProgram) {

@@ -180,11 +180,19 @@ SceneFrameStats SceneDrawer::draw_truth(const RenderCamera& camera, int width, i
                                         const SceneDrawOptions& options, ViewFrame& out) {
   const double start = now_ms();
   const ChunkRendererStats before = chunks_.stats();
-  const std::vector<std::int64_t> ids = chunks_in_view(camera, source_);
+  const ChunkLoader load = [this](std::int64_t id) { return source_.load(id); };
   chunks_.begin_frame(width, height);
   set_wireframe(options.wireframe);
   try {
-    chunks_.draw(camera, Box3d{}, ids, [this](std::int64_t id) { return source_.load(id); });
+    if (options.truth_occlusion_culling && !options.wireframe) {
+      std::vector<ChunkRef> refs = chunk_refs_in_view(camera, source_);  // sorted by id: ties keep id order
+      std::stable_sort(refs.begin(), refs.end(), [&camera](const ChunkRef& a, const ChunkRef& b) {
+        return a.bounds.distance_to(camera.eye) < b.bounds.distance_to(camera.eye);
+      });
+      chunks_.draw_unoccluded(camera, Box3d{}, refs, load);
+    } else {
+      chunks_.draw(camera, Box3d{}, chunks_in_view(camera, source_), load);
+    }
   } catch (...) {
     set_wireframe(false);
     throw;

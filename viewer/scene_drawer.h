@@ -39,6 +39,11 @@ struct SceneDrawOptions {
   // the nearest sample to the camera with its ancestors, then more while the
   // far-field triangle budget allows; max_samples = 1 draws the root alone.
   SampleSelectionParams samples;
+  // draw_truth: chunks drawn nearest first, skipping those provably hidden
+  // behind what is already drawn (ChunkRenderer::draw_unoccluded): the same
+  // image except where two surfaces tie exactly in depth, at a fraction of
+  // the drawing where walls hide most of the model. Ignored in wireframe.
+  bool truth_occlusion_culling = false;
 };
 
 struct SceneFrameStats {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <stdexcept>
 
@@ -40,6 +41,11 @@ class SceneWriter {
       : store_(store), context_(context), options_(options), origin_(origin), materials_(store.materials()) {}
 
   GlbBuilder& glb() { return glb_; }
+  // The file, its pooled streams written.
+  std::vector<std::uint8_t> finish() {
+    streams_.flush();
+    return glb_.finish();
+  }
   GltfExportStats& stats() { return stats_; }
 
   int add_node(json node) {
@@ -95,8 +101,18 @@ class SceneWriter {
     for (const Vec3f& p : refined.mesh.positions) e.positions.push_back(offset + Vec3d{p.x, p.y, p.z});
     e.uvs = refined.mesh.uvs;  // u right, v down: glTF's convention already
     e.indices = refined.mesh.indices;
+    const int subpixels = options_.uv_subpixels;
+    if (subpixels > 0 && std::int64_t(face.image.width) * subpixels <= 65535 &&
+        std::int64_t(face.image.height) * subpixels <= 65535) {
+      e.uv_grid_width = face.image.width * subpixels;
+      e.uv_grid_height = face.image.height * subpixels;
+    }
+    // The mesh's positions within a fraction of its nearest vertex's distance from the sample eye.
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const Vec3f& p : refined.mesh.positions) nearest = std::min(nearest, length(Vec3d{p.x, p.y, p.z}));
     std::vector<ExportMesh> primitives(1, std::move(e));
-    return add_mesh(name, primitives, {face_material(face, stored, name)});
+    const int material = face_material(face, stored, name, primitives[0].uv_grid_width, primitives[0].uv_grid_height);
+    return add_mesh(name, primitives, {material}, options_.depth_mesh_tolerance * nearest);
   }
 
  private:
@@ -141,12 +157,14 @@ class SceneWriter {
       primitives.push_back(std::move(e));
       material_of.push_back(material);
     }
-    return add_mesh(name, primitives, material_of);
+    return add_mesh(name, primitives, material_of, options_.position_tolerance);
   }
 
   static Vec3d to_double(const Vec3f& p) { return {p.x, p.y, p.z}; }
 
-  PlacedMesh add_mesh(const std::string& name, std::vector<ExportMesh>& primitives, const std::vector<int>& materials) {
+  // The primitives as one mesh, positions quantised to the fewest bits that keep them within `tolerance`.
+  PlacedMesh add_mesh(const std::string& name, std::vector<ExportMesh>& primitives, const std::vector<int>& materials,
+                      double tolerance) {
     Box3d bounds;
     for (ExportMesh& e : primitives) {
       weld_vertices(e);
@@ -155,11 +173,11 @@ class SceneWriter {
     }
     if (bounds.empty()) return {};
     PlacedMesh placed;
-    placed.q = position_quantization(bounds);
+    placed.q = position_quantization(bounds, position_bits_within(bounds, tolerance));
     json list = json::array();
     for (std::size_t k = 0; k < primitives.size(); ++k) {
       if (primitives[k].indices.empty()) continue;
-      json primitive = add_primitive_streams(glb_, primitives[k], placed.q, options_.compress, options_.color_bits);
+      json primitive = add_primitive_streams(streams_, primitives[k], placed.q, options_.color_bits);
       primitive["material"] = materials[k];
       list.push_back(std::move(primitive));
     }
@@ -248,7 +266,9 @@ class SceneWriter {
 
   // The face's image as stored when glTF (or, compressed, an extension) can
   // hold it, else re-encoded as JPEG; an unlit, clamped, linearly filtered material.
-  int face_material(const DecodedFace& face, const FaceRow* stored, const std::string& name) {
+  // With a uv grid (ExportMesh::uv_grid_width), KHR_texture_transform scales the grid's integers back.
+  int face_material(const DecodedFace& face, const FaceRow* stored, const std::string& name, int uv_grid_width,
+                    int uv_grid_height) {
     const int sampler = add_sampler(kLinear, kLinear, kClampToEdge, kClampToEdge);
     const std::string format = stored ? stored->image_format : "";
     int texture;
@@ -271,6 +291,11 @@ class SceneWriter {
              {"metallicFactor", 0},
              {"roughnessFactor", 1},
              {"baseColorTexture", {{"index", texture}}}};
+    if (uv_grid_width > 0) {
+      glb_.use_extension("KHR_texture_transform", true);
+      pbr["baseColorTexture"]["extensions"]["KHR_texture_transform"] = {
+          {"scale", {1.0 / uv_grid_width, 1.0 / uv_grid_height}}};
+    }
     return add_material({{"name", name}, {"pbrMetallicRoughness", std::move(pbr)}});
   }
 
@@ -280,6 +305,7 @@ class SceneWriter {
   Vec3d origin_;
   std::vector<Material> materials_;
   GlbBuilder glb_;
+  StreamPool streams_{glb_, options_.compress};
   GltfExportStats stats_;
   std::map<std::int64_t, PlacedMesh> chunk_meshes_, level_meshes_;
   std::map<int, int> geometry_materials_;
@@ -384,7 +410,7 @@ std::vector<std::uint8_t> export_cells_glb(const std::vector<CellToExport>& cell
   }
   w.glb().json()["scenes"] = json::array({{{"name", "cellbake"}, {"nodes", {root_node}}}});
   w.glb().json()["scene"] = 0;
-  std::vector<std::uint8_t> bytes = w.glb().finish();
+  std::vector<std::uint8_t> bytes = w.finish();
   w.stats().bytes = bytes.size();
   if (stats_out) *stats_out = w.stats();
   return bytes;

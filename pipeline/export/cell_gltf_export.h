@@ -45,6 +45,21 @@ struct GltfExportOptions {
   // them (and they split vertices), a user relighting the model elsewhere does.
   int color_bits = 8;
   bool normals = false;
+  // Largest position error of chunk geometry (near field, exact far
+  // geometry), model units: each mesh's positions take the fewest bits
+  // (8..16) that keep within it (1 mm: a third of a pixel at 1 m in a
+  // 512 x 384 view of 60 degrees; the demo's chunks take 11 to 16 bits).
+  double position_tolerance = 0.001;
+  // The same for a depth mesh, as a fraction of its nearest vertex's distance
+  // from the sample eye (the depth error the bake's grid coding allows,
+  // encode.mesh_depth_error, is 0.001 by default).
+  double depth_mesh_tolerance = 0.001;
+  // Depth-mesh texture coordinates on a grid of this many steps per face
+  // pixel, as integers that the material's KHR_texture_transform (required)
+  // scales back (rounding: at most 1 / (2 subpixels) face pixels); 0:
+  // uint16 normalised. Grid steps are small integers between neighbouring
+  // vertices, which the codec codes in fewer bits (the demo's tdm cell: 21 % smaller uvs at 4).
+  int uv_subpixels = 4;
   // JPEG quality of face images and material textures that are re-encoded
   // (stored as AVIF, WebP or JPEG XL; textures without alpha).
   int jpeg_quality = 90;

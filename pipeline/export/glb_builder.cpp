@@ -41,20 +41,38 @@ void GlbBuilder::use_extension(const std::string& name, bool required) {
   if (required) add(json_["extensionsRequired"]);
 }
 
+int GlbBuilder::reserve_buffer_view() {
+  nlohmann::json& views = json_["bufferViews"];
+  views.push_back(nlohmann::json::object());
+  return static_cast<int>(views.size()) - 1;
+}
+
 int GlbBuilder::add_buffer_view(std::span<const std::uint8_t> bytes, std::optional<int> byte_stride,
                                 std::optional<int> target) {
+  const int view = reserve_buffer_view();
+  fill_buffer_view(view, bytes, byte_stride, target);
+  return view;
+}
+
+void GlbBuilder::fill_buffer_view(int index, std::span<const std::uint8_t> bytes, std::optional<int> byte_stride,
+                                  std::optional<int> target) {
   align_bin();
   nlohmann::json view{{"buffer", 0}, {"byteOffset", bin_.size()}, {"byteLength", bytes.size()}};
   if (byte_stride) view["byteStride"] = *byte_stride;
   if (target) view["target"] = *target;
   bin_.insert(bin_.end(), bytes.begin(), bytes.end());
-  nlohmann::json& views = json_["bufferViews"];
-  views.push_back(std::move(view));
-  return static_cast<int>(views.size()) - 1;
+  json_["bufferViews"][std::size_t(index)] = std::move(view);
 }
 
 int GlbBuilder::add_compressed_buffer_view(std::span<const std::uint8_t> compressed, std::size_t count,
                                            int byte_stride, MeshoptMode mode, std::optional<int> target) {
+  const int view = reserve_buffer_view();
+  fill_compressed_buffer_view(view, compressed, count, byte_stride, mode, target);
+  return view;
+}
+
+void GlbBuilder::fill_compressed_buffer_view(int index, std::span<const std::uint8_t> compressed, std::size_t count,
+                                             int byte_stride, MeshoptMode mode, std::optional<int> target) {
   use_extension("EXT_meshopt_compression", true);
   align_bin();
   nlohmann::json ext{{"buffer", 0},
@@ -71,14 +89,14 @@ int GlbBuilder::add_compressed_buffer_view(std::span<const std::uint8_t> compres
   if (mode == MeshoptMode::attributes) view["byteStride"] = byte_stride;
   if (target) view["target"] = *target;
   view["extensions"]["EXT_meshopt_compression"] = std::move(ext);
-  nlohmann::json& views = json_["bufferViews"];
-  views.push_back(std::move(view));
-  return static_cast<int>(views.size()) - 1;
+  json_["bufferViews"][std::size_t(index)] = std::move(view);
 }
 
 int GlbBuilder::add_accessor(int buffer_view, int component_type, bool normalized, std::size_t count,
-                             const std::string& type, const std::vector<double>& min, const std::vector<double>& max) {
+                             const std::string& type, const std::vector<double>& min, const std::vector<double>& max,
+                             std::size_t byte_offset) {
   nlohmann::json a{{"bufferView", buffer_view}, {"componentType", component_type}, {"count", count}, {"type", type}};
+  if (byte_offset > 0) a["byteOffset"] = byte_offset;
   if (normalized) a["normalized"] = true;
   if (!min.empty()) a["min"] = min;
   if (!max.empty()) a["max"] = max;

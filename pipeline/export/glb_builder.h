@@ -49,10 +49,19 @@ class GlbBuilder {
   // required. Returns the view's index.
   int add_compressed_buffer_view(std::span<const std::uint8_t> compressed, std::size_t count, int byte_stride,
                                  MeshoptMode mode, std::optional<int> target = {});
-  // Adds an accessor over `buffer_view` (offset 0) and returns its index.
+  // Reserves the index of a buffer view whose data comes later, so that
+  // accessors can name it first; fill_buffer_view / fill_compressed_buffer_view
+  // (the add_ calls' arguments) give it its data, before finish().
+  int reserve_buffer_view();
+  void fill_buffer_view(int view, std::span<const std::uint8_t> bytes, std::optional<int> byte_stride,
+                        std::optional<int> target);
+  void fill_compressed_buffer_view(int view, std::span<const std::uint8_t> compressed, std::size_t count,
+                                   int byte_stride, MeshoptMode mode, std::optional<int> target);
+  // Adds an accessor over `buffer_view` from `byte_offset` and returns its index.
   // `min` / `max` are written when non-empty (positions need them).
   int add_accessor(int buffer_view, int component_type, bool normalized, std::size_t count, const std::string& type,
-                   const std::vector<double>& min = {}, const std::vector<double>& max = {});
+                   const std::vector<double>& min = {}, const std::vector<double>& max = {},
+                   std::size_t byte_offset = 0);
   // Adds `name` to extensionsUsed (and extensionsRequired when `required`), once.
   void use_extension(const std::string& name, bool required);
 

@@ -51,18 +51,10 @@ void remap_mesh(ExportMesh& m, const std::vector<unsigned>& remap, std::size_t c
   meshopt_remapIndexBuffer(m.indices.data(), m.indices.data(), m.indices.size(), remap.data());
 }
 
-// A buffer view of `count` elements of `stride` bytes, meshopt-coded when `compress`.
-int add_stream(GlbBuilder& glb, std::span<const std::uint8_t> bytes, std::size_t count, int stride, bool compress) {
-  if (!compress) return glb.add_buffer_view(bytes, stride, gltf::kArrayBuffer);
-  std::vector<std::uint8_t> coded(meshopt_encodeVertexBufferBound(count, stride));
-  coded.resize(meshopt_encodeVertexBuffer(coded.data(), coded.size(), bytes.data(), count, stride));
-  return glb.add_compressed_buffer_view(coded, count, stride, MeshoptMode::attributes, gltf::kArrayBuffer);
-}
-
 }  // namespace
 
 namespace {
-int position_step(int bits) { return 1 << (16 - bits); }
+int position_levels(int bits) { return (1 << (bits - 1)) - 1; }
 }  // namespace
 
 PositionQuantization position_quantization(const Box3d& bounds, int bits) {
@@ -71,23 +63,28 @@ PositionQuantization position_quantization(const Box3d& bounds, int bits) {
   if (bits < 8 || bits > 16) throw std::invalid_argument("glTF export: position bits " + std::to_string(bits) + " outside 8..16");
   const Vec3d half = bounds.extent() * 0.5;
   const double largest = std::max({half.x, half.y, half.z, 1e-9});
-  const int step = position_step(bits), levels = 32767 / step;
-  // q = step * round(offset / largest * levels), so that q = +-levels * step at the extremes.
-  return {bounds.center(), largest * kInt16Max / (double(levels) * step), bits};
+  // q = round(offset / largest * levels), so that q = +-levels at the extremes.
+  return {bounds.center(), largest * kInt16Max / double(position_levels(bits)), bits};
+}
+
+int position_bits_within(const Box3d& bounds, double tolerance) {
+  if (!(tolerance > 0)) return 16;
+  int bits = 8;
+  while (bits < 16 && position_error_bound(position_quantization(bounds, bits)) > tolerance) ++bits;
+  return bits;
 }
 
 double position_error_bound(const PositionQuantization& q) {
   const double largest = std::max({std::abs(q.translation.x), std::abs(q.translation.y), std::abs(q.translation.z)}) + q.scale;
-  return q.scale * position_step(q.bits) / kInt16Max / 2 + 2 * largest * std::numeric_limits<float>::epsilon();
+  return q.scale / kInt16Max / 2 + 2 * largest * std::numeric_limits<float>::epsilon();
 }
 
 std::vector<std::int16_t> quantize_positions(std::span<const Vec3d> positions, const PositionQuantization& q) {
-  const int step = position_step(q.bits);
   std::vector<std::int16_t> out(positions.size() * 4, 0);
   for (std::size_t i = 0; i < positions.size(); ++i) {
-    const Vec3d r = (positions[i] - q.translation) * (kInt16Max / (q.scale * step));
+    const Vec3d r = (positions[i] - q.translation) * (kInt16Max / q.scale);
     for (int a = 0; a < 3; ++a) {
-      const double v = std::round(r[a]) * step;
+      const double v = std::round(r[a]);
       if (!(std::abs(v) <= kInt16Max))
         throw std::invalid_argument("glTF export: position " + std::to_string(i) + " lies outside its quantisation range");
       out[4 * i + a] = static_cast<std::int16_t>(v);
@@ -168,12 +165,75 @@ void optimize_mesh_order(ExportMesh& m) {
   remap_mesh(m, remap, used);
 }
 
-nlohmann::json add_primitive_streams(GlbBuilder& glb, const ExportMesh& m, const PositionQuantization& q,
-                                     bool compress, int color_bits) {
+StreamPool::Pool& StreamPool::pool(const std::string& kind, int stride, bool indices) {
+  for (Pool& p : pools_)
+    if (p.kind == kind && p.stride == stride && p.indices == indices) return p;
+  Pool p;
+  p.kind = kind;
+  p.stride = stride;
+  p.indices = indices;
+  p.view = glb_.reserve_buffer_view();
+  pools_.push_back(std::move(p));
+  return pools_.back();
+}
+
+StreamPool::Place StreamPool::add_vertices(const std::string& kind, std::span<const std::uint8_t> bytes,
+                                           std::size_t count, int stride) {
+  Pool& p = pool(kind, stride, false);
+  const Place place{p.view, p.bytes.size()};
+  p.bytes.insert(p.bytes.end(), bytes.begin(), bytes.end());
+  p.count += count;
+  return place;
+}
+
+StreamPool::Place StreamPool::add_indices(std::span<const std::uint32_t> indices, int index_size) {
+  // A view of its own: the index codec predicts each new vertex as the next
+  // number, which a second primitive's indices (from 0 again) would defeat
+  // (the demo's tdm cell: 2.3 times the bytes in one view).
+  pools_.push_back({"indices", index_size, true, glb_.reserve_buffer_view(), {}, 0});
+  Pool& p = pools_.back();
+  const Place place{p.view, 0};
+  for (std::uint32_t i : indices)
+    for (int b = 0; b < index_size; ++b) p.bytes.push_back(static_cast<std::uint8_t>(i >> (8 * b)));
+  p.count += indices.size();
+  return place;
+}
+
+void StreamPool::flush() {
+  for (const Pool& p : pools_) {
+    const std::optional<int> stride = p.indices ? std::nullopt : std::optional<int>(p.stride);
+    const int target = p.indices ? gltf::kElementArrayBuffer : gltf::kArrayBuffer;
+    if (!compress_) {
+      glb_.fill_buffer_view(p.view, p.bytes, stride, target);
+    } else if (!p.indices) {
+      std::vector<std::uint8_t> coded(meshopt_encodeVertexBufferBound(p.count, std::size_t(p.stride)));
+      coded.resize(meshopt_encodeVertexBuffer(coded.data(), coded.size(), p.bytes.data(), p.count, std::size_t(p.stride)));
+      glb_.fill_compressed_buffer_view(p.view, coded, p.count, p.stride, MeshoptMode::attributes, target);
+    } else {
+      std::vector<std::uint32_t> wide(p.count, 0);
+      for (std::size_t i = 0; i < p.count; ++i)
+        for (int b = 0; b < p.stride; ++b) wide[i] |= std::uint32_t(p.bytes[i * std::size_t(p.stride) + std::size_t(b)]) << (8 * b);
+      std::vector<std::uint8_t> coded(meshopt_encodeIndexBufferBound(p.count, p.count));
+      coded.resize(meshopt_encodeIndexBuffer(coded.data(), coded.size(), wide.data(), p.count));
+      glb_.fill_compressed_buffer_view(p.view, coded, p.count, p.stride, MeshoptMode::triangles, target);
+    }
+  }
+  pools_.clear();
+}
+
+nlohmann::json add_primitive_streams(StreamPool& pool, const ExportMesh& m, const PositionQuantization& q,
+                                     int color_bits) {
   check_mesh(m);
+  GlbBuilder& glb = pool.glb();
   glb.use_extension("KHR_mesh_quantization", true);
   const std::size_t n = m.positions.size();
   nlohmann::json attributes;
+  const auto accessor = [&](const std::string& kind, std::span<const std::uint8_t> bytes, int stride,
+                            int component_type, bool normalized, const std::string& type,
+                            const std::vector<double>& lo = {}, const std::vector<double>& hi = {}) {
+    const StreamPool::Place at = pool.add_vertices(kind, bytes, n, stride);
+    return glb.add_accessor(at.view, component_type, normalized, n, type, lo, hi, at.byte_offset);
+  };
 
   const std::vector<std::int16_t> positions = quantize_positions(m.positions, q);
   std::vector<double> lo(3, kInt16Max), hi(3, -kInt16Max);
@@ -183,45 +243,34 @@ nlohmann::json add_primitive_streams(GlbBuilder& glb, const ExportMesh& m, const
       hi[a] = std::max(hi[a], double(positions[4 * i + a]));
     }
   if (n == 0) lo.assign(3, 0), hi.assign(3, 0);
-  attributes["POSITION"] = glb.add_accessor(add_stream(glb, as_bytes_of(positions), n, 8, compress), gltf::kShort,
-                                            true, n, "VEC3", lo, hi);
+  attributes["POSITION"] = accessor("POSITION", as_bytes_of(positions), 8, gltf::kShort, true, "VEC3", lo, hi);
   if (!m.normals.empty())
-    attributes["NORMAL"] = glb.add_accessor(add_stream(glb, as_bytes_of(quantize_normals(m.normals)), n, 4, compress),
-                                            gltf::kByte, true, n, "VEC3");
+    attributes["NORMAL"] = accessor("NORMAL", as_bytes_of(quantize_normals(m.normals)), 4, gltf::kByte, true, "VEC3");
   if (!m.colors.empty())
     attributes["COLOR_0"] =
         color_bits == 8
-            ? glb.add_accessor(add_stream(glb, as_bytes_of(linear_colors8(m.colors)), n, 4, compress),
-                               gltf::kUnsignedByte, true, n, "VEC4")
-            : glb.add_accessor(add_stream(glb, as_bytes_of(linear_colors(m.colors)), n, 8, compress),
-                               gltf::kUnsignedShort, true, n, "VEC4");
+            ? accessor("COLOR_0", as_bytes_of(linear_colors8(m.colors)), 4, gltf::kUnsignedByte, true, "VEC4")
+            : accessor("COLOR_0", as_bytes_of(linear_colors(m.colors)), 8, gltf::kUnsignedShort, true, "VEC4");
   if (!m.uvs.empty()) {
-    if (uvs_in_unit_square(m.uvs)) {
-      attributes["TEXCOORD_0"] = glb.add_accessor(add_stream(glb, as_bytes_of(quantize_uvs(m.uvs)), n, 4, compress),
-                                                  gltf::kUnsignedShort, true, n, "VEC2");
+    if (m.uv_grid_width > 0 && m.uv_grid_height > 0) {
+      std::vector<std::uint16_t> grid(n * 2);
+      for (std::size_t i = 0; i < n; ++i) {
+        grid[2 * i] = static_cast<std::uint16_t>(std::lround(std::clamp(m.uvs[i].u, 0.0f, 1.0f) * m.uv_grid_width));
+        grid[2 * i + 1] = static_cast<std::uint16_t>(std::lround(std::clamp(m.uvs[i].v, 0.0f, 1.0f) * m.uv_grid_height));
+      }
+      attributes["TEXCOORD_0"] = accessor("TEXCOORD_0 grid", as_bytes_of(grid), 4, gltf::kUnsignedShort, false, "VEC2");
+    } else if (uvs_in_unit_square(m.uvs)) {
+      attributes["TEXCOORD_0"] = accessor("TEXCOORD_0", as_bytes_of(quantize_uvs(m.uvs)), 4, gltf::kUnsignedShort, true, "VEC2");
     } else {
-      attributes["TEXCOORD_0"] =
-          glb.add_accessor(add_stream(glb, as_bytes_of(m.uvs), n, 8, compress), gltf::kFloat, false, n, "VEC2");
+      attributes["TEXCOORD_0"] = accessor("TEXCOORD_0 float", as_bytes_of(m.uvs), 8, gltf::kFloat, false, "VEC2");
     }
   }
 
   // glTF forbids the index type's largest value (primitive restart).
   const bool short_indices = n < 65535;
-  const int index_size = short_indices ? 2 : 4;
-  int view;
-  if (compress) {
-    std::vector<std::uint8_t> coded(meshopt_encodeIndexBufferBound(m.indices.size(), n));
-    coded.resize(meshopt_encodeIndexBuffer(coded.data(), coded.size(), m.indices.data(), m.indices.size()));
-    view = glb.add_compressed_buffer_view(coded, m.indices.size(), index_size, MeshoptMode::triangles,
-                                          gltf::kElementArrayBuffer);
-  } else if (short_indices) {
-    std::vector<std::uint16_t> narrow(m.indices.begin(), m.indices.end());
-    view = glb.add_buffer_view(as_bytes_of(narrow), std::nullopt, gltf::kElementArrayBuffer);
-  } else {
-    view = glb.add_buffer_view(as_bytes_of(m.indices), std::nullopt, gltf::kElementArrayBuffer);
-  }
-  const int indices = glb.add_accessor(view, short_indices ? gltf::kUnsignedShort : gltf::kUnsignedInt, false,
-                                       m.indices.size(), "SCALAR");
+  const StreamPool::Place at = pool.add_indices(m.indices, short_indices ? 2 : 4);
+  const int indices = glb.add_accessor(at.view, short_indices ? gltf::kUnsignedShort : gltf::kUnsignedInt, false,
+                                       m.indices.size(), "SCALAR", {}, {}, at.byte_offset);
   return {{"attributes", attributes}, {"indices", indices}, {"mode", 4}};
 }
 

@@ -6,8 +6,8 @@
 
 namespace cellbake {
 
-TruthAhead::TruthAhead(const ChunkSource& source, const ShadingLights& lights)
-    : source_(source), lights_(lights), worker_([this] { run(); }) {}
+TruthAhead::TruthAhead(const ChunkSource& source, const ShadingLights& lights, const SceneDrawOptions& options)
+    : source_(source), lights_(lights), options_(options), worker_([this] { run(); }) {}
 
 TruthAhead::~TruthAhead() {
   {
@@ -66,7 +66,7 @@ void TruthAhead::run() {
     std::exception_ptr error = setup_error;
     if (!error) try {
         TruthFrame f;
-        f.stats = drawer->draw_truth(r.camera, r.width, r.height, SceneDrawOptions{}, f.frame);
+        f.stats = drawer->draw_truth(r.camera, r.width, r.height, options_, f.frame);
         frame = std::move(f);
       } catch (...) {
         error = std::current_exception();

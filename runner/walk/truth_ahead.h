@@ -26,9 +26,9 @@ struct TruthFrame {
 class TruthAhead {
  public:
   // Starts the worker, which creates its context and drawer of `source`
-  // (which must outlive this) lit by `lights`. Errors (no GL context) are
-  // thrown by the first take().
-  TruthAhead(const ChunkSource& source, const ShadingLights& lights);
+  // (which must outlive this) lit by `lights`, drawing with `options`
+  // (SceneDrawer::draw_truth). Errors (no GL context) are thrown by the first take().
+  TruthAhead(const ChunkSource& source, const ShadingLights& lights, const SceneDrawOptions& options = {});
   ~TruthAhead();  // waits for a frame in progress, then stops the worker
   TruthAhead(const TruthAhead&) = delete;
   TruthAhead& operator=(const TruthAhead&) = delete;
@@ -44,6 +44,7 @@ class TruthAhead {
 
   const ChunkSource& source_;
   ShadingLights lights_;
+  SceneDrawOptions options_;
   std::mutex mutex_;
   std::condition_variable changed_;
   struct Request {

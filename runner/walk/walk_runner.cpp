@@ -126,6 +126,7 @@ WalkResult run_walk(const std::filesystem::path& database, const std::filesystem
   const ShadingLights lights = shading_lights(shading_of_config_text(config_text), up);
   SceneDrawOptions draw_options;
   draw_options.samples.far_budget = far_budget_of_config_text(config_text).value_or(SampleSelectionParams{}.far_budget);
+  draw_options.truth_occlusion_culling = options.skip_hidden_truth;
   const CellIndex index(db);
 
   std::vector<PathView> views;
@@ -172,7 +173,7 @@ WalkResult run_walk(const std::filesystem::path& database, const std::filesystem
   SceneDrawer drawer(std::shared_ptr<GlContext>(create_headless_gl_context(1, 1)), store);
   drawer.set_shading(lights);
   std::optional<TruthAhead> ahead;
-  if (options.truth_ahead) ahead.emplace(store, lights);
+  if (options.truth_ahead) ahead.emplace(store, lights, draw_options);
   CellLoader loader(db, store);
   const auto camera_of = [&](std::size_t i) {
     return look_at_camera(views[i].eye, views[i].look, up, options.fov_y_deg, options.width, options.height,
@@ -200,6 +201,7 @@ WalkResult run_walk(const std::filesystem::path& database, const std::filesystem
     f.eye = views[i].eye;
     f.look = views[i].look;
     f.truth_ms = truth.stats.milliseconds;
+    f.truth_triangles = truth.stats.chunk_triangles;
     const CellEntry* entry = index.nearest(f.eye);
     f.cell = entry ? entry->id : 0;
     f.cell_switch = i > 0 && frames.back().cell != f.cell;
@@ -266,6 +268,7 @@ WalkResult run_walk(const std::filesystem::path& database, const std::filesystem
   j["path"] = options.path_file.empty() ? "auto" : options.path_file.string();
   j["size"] = {options.width, options.height};
   j["truth_ahead"] = options.truth_ahead;
+  j["skip_hidden_truth"] = options.skip_hidden_truth;
   write_output_file(result.json, j.dump(2) + "\n", inputs);
   write_output_file(result.text, walk_summary_text(s), inputs);
   result.frames = std::move(frames);

@@ -28,6 +28,7 @@ struct WalkOptions {
   double near_plane = 0.05;  // model units
   bool video = true;         // false: PNG frames even when ffmpeg is present
   bool truth_ahead = true;   // draw the truth of the next frame on a second thread
+  bool skip_hidden_truth = true;  // SceneDrawOptions::truth_occlusion_culling
   bool quiet = false;        // no progress output
 };
 

@@ -120,14 +120,14 @@ std::string walk_summary_text(const WalkSummary& s) {
 std::string walk_frames_csv(const std::vector<WalkFrame>& frames) {
   std::ostringstream o;
   o << "frame,t,eye_x,eye_y,eye_z,look_x,look_y,look_z,cell,cell_switch,fallback,psnr_db,ssim,hole_fraction,load_ms,"
-       "draw_ms,frame_ms,truth_ms,triangles\n";
+       "draw_ms,frame_ms,truth_ms,triangles,truth_triangles\n";
   for (const WalkFrame& f : frames)
     o << f.index << "," << num(f.t, "%.4f") << "," << num(f.eye.x, "%.6g") << "," << num(f.eye.y, "%.6g") << ","
       << num(f.eye.z, "%.6g") << "," << num(f.look.x, "%.6g") << "," << num(f.look.y, "%.6g") << ","
       << num(f.look.z, "%.6g") << "," << f.cell << "," << (f.cell_switch ? 1 : 0) << "," << (f.fallback ? 1 : 0)
       << "," << num(f.psnr_db, "%.4f") << "," << num(f.ssim, "%.5f") << "," << num(f.hole_fraction, "%.6f") << ","
       << num(f.load_ms, "%.3f") << "," << num(f.draw_ms, "%.3f") << "," << num(f.frame_ms, "%.3f") << ","
-      << num(f.truth_ms, "%.3f") << "," << f.triangles << "\n";
+      << num(f.truth_ms, "%.3f") << "," << f.triangles << "," << f.truth_triangles << "\n";
   return o.str();
 }
 

@@ -28,6 +28,7 @@ struct WalkFrame {
   double load_ms = 0, draw_ms = 0, frame_ms = 0;
   double truth_ms = 0;  // the truth frame (drawn ahead on another thread)
   std::uint64_t triangles = 0;  // the cells frame's triangles
+  std::uint64_t truth_triangles = 0;  // the truth frame's chunk triangles drawn (hidden chunks skipped)
 };
 
 // Nearest-rank percentile (p in [0, 100]) of `values`; NaN when empty.
