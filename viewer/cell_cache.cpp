@@ -170,6 +170,14 @@ void CellCache::run() {
       if (!row) throw std::runtime_error("cell " + std::to_string(id) + " is not in the database (yet)");
       if (missing) throw std::runtime_error("cell " + std::to_string(id) + " is not baked yet (status " + row->status + ")");
       cell = std::make_shared<const DecodedCell>(decode_cell(*row, params_.source));
+      if (params_.source && params_.load_chunks) {
+        try {
+          for (std::int64_t chunk : cell->near_ids) params_.source->load(chunk);
+          for (std::int64_t chunk : cell->far_whole_ids) params_.source->load(chunk);
+        } catch (const std::exception&) {
+          // A chunk the store lacks: the draw reports it (and falls back to the truth).
+        }
+      }
     } catch (const std::exception& e) {
       error = e.what();
     }

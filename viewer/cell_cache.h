@@ -26,6 +26,10 @@ struct CellCacheParams {
   std::size_t max_bytes = std::size_t{1} << 30;  // decoded cells kept (host memory); the newest is always kept
   double index_refresh_seconds = 2.0;            // how often the cell index is re-read
   const ChunkSource* source = nullptr;  // the cells' geometry store (thread-safe): far pieces cut on the loader thread (decode_cell)
+  // With `source`: after decoding a cell, also load its near and whole far
+  // chunks through `source` on the loader thread, so that a store with a
+  // chunk cache (GeometryStore) has them decoded before the drawing thread asks.
+  bool load_chunks = false;
 };
 
 struct CellCacheStats {

@@ -148,6 +148,7 @@ int run(const Options& opt) {
   CellCacheParams cache_params;
   cache_params.max_bytes = static_cast<std::size_t>(opt.cache_mb * 1048576.0);
   cache_params.source = &store;  // far pieces cut from their stored chunks on the loader thread
+  cache_params.load_chunks = opt.switch_mode == "staged";  // and the chunks read from the store there too
   CellCache cache(opt.database, cache_params);
   const auto [width, height] = parse_image_size(opt.size);
   const std::vector<PathView> path = opt.path.empty() ? std::vector<PathView>{} : read_camera_path(opt.path);
