@@ -92,6 +92,7 @@ TEST(FrameLog, SummaryCountsSwitchesAndFindsTheWorstFrameNearOne) {
     f.frame_ms = 10 + (k == 45 ? 30 : 0) + (k == 90 ? 50 : 0);
     f.upload_bytes = 100;
     f.cache_bytes = 1000 + k;
+    f.triangles = 7;
     frames.push_back(f);
   }
   const FrameSummary s = summarize_frames(frames, 5000, 10);
@@ -109,6 +110,7 @@ TEST(FrameLog, SummaryCountsSwitchesAndFindsTheWorstFrameNearOne) {
   const std::string csv = frame_log_csv(frames);
   EXPECT_EQ(test::count_of(csv, "\n"), 101u);
   EXPECT_NE(csv.find("\n40,2,1,1,10.000,"), std::string::npos) << csv.substr(0, 200);
+  EXPECT_NE(csv.find(",1040,7\n"), std::string::npos) << csv.substr(0, 200);
   const std::string text = frame_summary_text(s);
   EXPECT_NE(text.find("switches: 2\n"), std::string::npos) << text;
   EXPECT_NE(text.find("p99 / median: 4.00"), std::string::npos) << text;
@@ -244,12 +246,13 @@ TEST_F(BakedBox, AScriptedWalkUnderXvfbLogsEveryFrameAndCountsTheSwitches) {
     EXPECT_EQ(rows[0].front(), "frame");
     std::size_t switches = 0;
     for (std::size_t k = 1; k < rows.size(); ++k) {
-      ASSERT_EQ(rows[k].size(), 9u);
+      ASSERT_EQ(rows[k].size(), 10u);
       EXPECT_EQ(std::stoul(rows[k][0]), k - 1);  // every frame, in order
       EXPECT_EQ(std::stoll(rows[k][1]), index.containing(views[k - 1].eye)->id);
       switches += rows[k][3] == "1";
       EXPECT_GT(std::stod(rows[k][4]), 0.0);
       EXPECT_LE(std::stoull(rows[k][8]), 16u << 20);  // cache bytes within --cache-mb
+      EXPECT_GT(std::stoull(rows[k][9]), 0u);         // triangles drawn
     }
     EXPECT_EQ(switches, crossings);
     unsigned long frames = 0, summary_switches = 0;

@@ -25,9 +25,12 @@ std::shared_ptr<const DecodedCell> CellSwitch::choose(const std::shared_ptr<cons
     }
   }
   if (heading && shown_ && target && shown_->id == target->id && heading->id != target->id &&
-      spent.bytes < budget.bytes && spent.milliseconds < budget.milliseconds && drawer.gpu_caches_below(0.5)) {
+      heading->id != heading_uploaded_ && spent.bytes < budget.bytes && spent.milliseconds < budget.milliseconds &&
+      drawer.gpu_caches_below(0.5)) {
     const UploadBudget rest{budget.bytes - spent.bytes, budget.milliseconds - spent.milliseconds};
-    add(spent, drawer.upload_some(*heading, rest));
+    const UploadProgress part = drawer.upload_some(*heading, rest);
+    add(spent, part);
+    if (part.complete) heading_uploaded_ = heading->id;
   }
   return shown_;
 }

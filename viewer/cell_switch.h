@@ -34,6 +34,7 @@ class CellSwitch {
 
  private:
   std::shared_ptr<const DecodedCell> shown_;
+  std::int64_t heading_uploaded_ = 0;  // the heading cell whose upload ahead completed (not scanned again)
 };
 
 }  // namespace cellbake

@@ -441,6 +441,7 @@ int run(const Options& opt) {
         r.upload_ms = spent.milliseconds + info.stats.prepare_milliseconds;
         r.upload_bytes = drawer.uploaded_bytes() - uploaded_before;
         r.cache_bytes = cache.stats().bytes;
+        r.triangles = info.stats.chunk_triangles + info.stats.far_triangles;
         log.push_back(r);
         previous_cell = info.cell_id;
       }
