@@ -2,7 +2,8 @@
 //  [--seconds N] [--fps F] [--speed V] [--size WxH] [--no-video] --out DIR`:
 // a walk through the bake as a truth | cells | difference video with a plot
 // of PSNR and frame time along the path and a summary
-// (runner/walk/walk_runner.h).
+// (runner/walk/walk_runner.h); `--write-path FILE` instead of `--out` writes
+// the walk's camera path only.
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -25,9 +26,12 @@ void add_walk_command(CLI::App& app) {
       "walk", "Walk through the bake: a truth | cells | difference video (MP4), a plot of PSNR and frame time "
               "along the path, a summary");
   cmd->add_option("database", opt->database, "Cell database")->required();
-  cmd->add_option("--out,-o", opt->out,
-                  "Output folder: walk.mp4 (or frames/*.png), walk.svg, walk.json, walk.txt, walk.csv, worst.png")
-      ->required();
+  CLI::Option* out = cmd->add_option(
+      "--out,-o", opt->out, "Output folder: walk.mp4 (or frames/*.png), walk.svg, walk.json, walk.txt, walk.csv, worst.png");
+  CLI::Option* write_path = cmd->add_option(
+      "--write-path", opt->walk.write_path,
+      "Write the walk's camera path to this file (the --path format, e.g. for cellbake-view --path) and draw nothing");
+  out->excludes(write_path);
   cmd->add_option("--store", opt->walk.store, "Geometry store (default: the one the database names)");
   CLI::Option* path = cmd->add_option("--path", opt->walk.path_file,
                                       "Camera path file, one frame per line: \"ex ey ez lx ly lz\" (as render --path)");
@@ -61,12 +65,18 @@ void add_walk_command(CLI::App& app) {
                 "same frames except where surfaces tie exactly in depth)");
   cmd->add_flag("--json", opt->json, "Print the summary as JSON");
   cmd->callback([opt] {
+    if (opt->out.empty() && opt->walk.write_path.empty())
+      throw CLI::RequiredError("--out (or --write-path)");
     std::tie(opt->walk.width, opt->walk.height) = parse_image_size(opt->size);
     opt->walk.video = !opt->no_video;
     opt->walk.truth_ahead = !opt->serial;
     opt->walk.skip_hidden_truth = !opt->draw_hidden;
     opt->walk.quiet = quiet_output();
     const WalkResult r = run_walk(opt->database, opt->out, opt->walk);
+    if (!opt->walk.write_path.empty()) {
+      std::printf("camera path: %zu views written to %s\n", r.summary.frames, opt->walk.write_path.c_str());
+      return;
+    }
     if (opt->json) {
       nlohmann::json j = walk_summary_json(r.summary);
       j["dir"] = r.dir.string();

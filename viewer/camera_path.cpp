@@ -1,5 +1,6 @@
 #include "viewer/camera_path.h"
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -45,6 +46,20 @@ std::vector<PathView> read_camera_path(const std::filesystem::path& file) {
   }
   if (views.empty()) throw std::runtime_error(file.string() + ": camera path holds no view");
   return views;
+}
+
+std::string camera_path_text(const std::vector<PathView>& views) {
+  std::string text;
+  char number[32];
+  for (const PathView& v : views) {
+    const double values[6] = {v.eye.x, v.eye.y, v.eye.z, v.look.x, v.look.y, v.look.z};
+    for (int k = 0; k < 6; ++k) {
+      const auto end = std::to_chars(number, number + sizeof number, values[k]).ptr;
+      text.append(number, end);
+      text += k < 5 ? ' ' : '\n';
+    }
+  }
+  return text;
 }
 
 std::filesystem::path numbered_path(const std::filesystem::path& base, int index) {

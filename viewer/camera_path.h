@@ -23,6 +23,9 @@ std::pair<int, int> parse_image_size(const std::string& text);
 // Reads a camera path. Throws std::runtime_error("FILE:LINE: ...") on a
 // malformed line and when the file cannot be read or holds no view.
 std::vector<PathView> read_camera_path(const std::filesystem::path& file);
+// The text of a camera path file holding `views`, one "ex ey ez lx ly lz"
+// line each, numbers in their shortest form that reads back exactly.
+std::string camera_path_text(const std::vector<PathView>& views);
 // "dir/name.png", 7 -> "dir/name_0007.png".
 std::filesystem::path numbered_path(const std::filesystem::path& base, int index);
 

@@ -36,6 +36,7 @@ std::shared_ptr<const DecodedCell> CellCache::get(std::int64_t id) {
   ++stats_.misses;
   if (!failures_.contains(id)) {
     std::erase(queue_, id);
+    prefetched_.erase(id);
     queue_.push_front(id);
     wake_.notify_all();
   }
@@ -49,8 +50,11 @@ std::shared_ptr<const DecodedCell> CellCache::get_blocking(std::int64_t id) {
     if (auto it = cells_.find(id); it != cells_.end()) return it->second;
     if (failures_.contains(id) || stop_) return nullptr;
     // Not cached: not loaded yet, or loaded and already evicted by the loads
-    // of other cells before this thread woke. Queued first unless it is.
-    if (loading_ != id && std::find(queue_.begin(), queue_.end(), id) == queue_.end()) {
+    // of other cells before this thread woke. Queued first unless it is
+    // (also when only prefetched: a later prefetch() would drop it).
+    if (loading_ != id && (queue_.empty() || queue_.front() != id)) {
+      std::erase(queue_, id);
+      prefetched_.erase(id);
       queue_.push_front(id);
       wake_.notify_all();
     }
@@ -60,10 +64,20 @@ std::shared_ptr<const DecodedCell> CellCache::get_blocking(std::int64_t id) {
 
 void CellCache::prefetch(const std::vector<std::int64_t>& ids) {
   std::lock_guard lock(mutex_);
+  std::erase_if(queue_, [&](std::int64_t id) { return prefetched_.contains(id); });
+  prefetched_.clear();
   for (std::int64_t id : ids)
-    if (!cells_.contains(id) && !failures_.contains(id) && std::find(queue_.begin(), queue_.end(), id) == queue_.end())
+    if (!cells_.contains(id) && !failures_.contains(id) && std::find(queue_.begin(), queue_.end(), id) == queue_.end()) {
       queue_.push_back(id);
+      prefetched_.insert(id);
+    }
   wake_.notify_all();
+}
+
+std::shared_ptr<const DecodedCell> CellCache::peek(std::int64_t id) const {
+  std::lock_guard lock(mutex_);
+  const auto it = cells_.find(id);
+  return it == cells_.end() ? nullptr : it->second;
 }
 
 std::string CellCache::failure(std::int64_t id) const {
@@ -81,6 +95,7 @@ CellCacheStats CellCache::stats() const {
   std::lock_guard lock(mutex_);
   CellCacheStats s = stats_;
   s.cells = cells_.size();
+  s.max_bytes = params_.max_bytes;
   return s;
 }
 
@@ -100,6 +115,7 @@ void CellCache::store(std::int64_t id, std::shared_ptr<const DecodedCell> cell) 
     cells_.erase(victim);
     ++stats_.evictions;
   }
+  stats_.peak_bytes = std::max(stats_.peak_bytes, stats_.bytes);
 }
 
 void CellCache::run() {
@@ -116,6 +132,7 @@ void CellCache::run() {
       if (!queue_.empty()) {
         id = queue_.front();
         queue_.pop_front();
+        prefetched_.erase(id);
         if (cells_.contains(id)) id = 0;
         loading_ = id;
       }
@@ -153,6 +170,14 @@ void CellCache::run() {
       if (!row) throw std::runtime_error("cell " + std::to_string(id) + " is not in the database (yet)");
       if (missing) throw std::runtime_error("cell " + std::to_string(id) + " is not baked yet (status " + row->status + ")");
       cell = std::make_shared<const DecodedCell>(decode_cell(*row, params_.source));
+      if (params_.source && params_.load_chunks) {
+        try {
+          for (std::int64_t chunk : cell->near_ids) params_.source->load(chunk);
+          for (std::int64_t chunk : cell->far_whole_ids) params_.source->load(chunk);
+        } catch (const std::exception&) {
+          // A chunk the store lacks: the draw reports it (and falls back to the truth).
+        }
+      }
     } catch (const std::exception& e) {
       error = e.what();
     }

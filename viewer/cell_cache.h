@@ -26,11 +26,17 @@ struct CellCacheParams {
   std::size_t max_bytes = std::size_t{1} << 30;  // decoded cells kept (host memory); the newest is always kept
   double index_refresh_seconds = 2.0;            // how often the cell index is re-read
   const ChunkSource* source = nullptr;  // the cells' geometry store (thread-safe): far pieces cut on the loader thread (decode_cell)
+  // With `source`: after decoding a cell, also load its near and whole far
+  // chunks through `source` on the loader thread, so that a store with a
+  // chunk cache (GeometryStore) has them decoded before the drawing thread asks.
+  bool load_chunks = false;
 };
 
 struct CellCacheStats {
   std::uint64_t hits = 0, misses = 0, loads = 0, failures = 0, evictions = 0;
   std::size_t cells = 0, bytes = 0;
+  std::size_t peak_bytes = 0;  // the most `bytes` has been
+  std::size_t max_bytes = 0;   // the cap (CellCacheParams::max_bytes)
 };
 
 class CellCache {
@@ -48,8 +54,13 @@ class CellCache {
   // Waits until the cell is cached or has failed (queueing it again if
   // another load evicted it first); nullptr when it failed.
   std::shared_ptr<const DecodedCell> get_blocking(std::int64_t id);
-  // Queues cells to load behind any requested ones (already cached: ignored).
+  // Replaces the cells queued by earlier prefetch calls with `ids`, queued in
+  // this order behind any requested ones (cached or failed ones: ignored), so
+  // a viewer's latest ranking of its neighbours decides what loads next.
   void prefetch(const std::vector<std::int64_t>& ids);
+  // The decoded cell if cached, else nullptr; neither a hit nor a miss, queues
+  // nothing and leaves the cell's recency as it is.
+  std::shared_ptr<const DecodedCell> peek(std::int64_t id) const;
   // The failure message of a cell that could not be loaded or decoded ("" if none).
   std::string failure(std::int64_t id) const;
   // The latest cell index.
@@ -69,6 +80,7 @@ class CellCache {
   std::map<std::int64_t, std::list<std::int64_t>::iterator> recency_;
   std::list<std::int64_t> lru_;  // front = most recent
   std::map<std::int64_t, std::string> failures_;
+  std::set<std::int64_t> prefetched_;  // queued by prefetch(), not requested
   std::set<std::int64_t> missing_;  // failed because absent or not baked: retried once the index shows them done
   std::int64_t loading_ = 0;        // the cell the loader thread is reading (0: none)
   std::shared_ptr<const CellIndex> index_;

@@ -46,26 +46,19 @@ SceneDrawer::SceneDrawer(std::shared_ptr<GlContext> context, const ChunkSource& 
 
 SceneDrawer::~SceneDrawer() = default;
 
-void SceneDrawer::prepare(const DecodedCell& cell) {
-  if (auto it = cells_.find(cell.id); it != cells_.end()) {
-    lru_.splice(lru_.begin(), lru_, it->second.recency);
-    return;
-  }
-  ResidentCell resident;
-  try {
-    for (const DecodedFace& f : cell.faces) {
-      const std::size_t before = tdm_.gpu_bytes();
-      resident.handles.push_back(tdm_.upload(f.mesh, f.image, f.eye));
-      resident.bytes += tdm_.gpu_bytes() - before;
-    }
-  } catch (...) {
-    for (std::uint64_t h : resident.handles) tdm_.erase(h);
-    throw;
-  }
-  lru_.push_front(cell.id);
+void SceneDrawer::upload_face(const DecodedCell& cell, std::size_t index, std::vector<std::uint64_t>& handles,
+                              std::size_t& bytes) {
+  const DecodedFace& f = cell.faces[index];
+  const std::size_t before = tdm_.gpu_bytes();
+  handles.push_back(tdm_.upload(f.mesh, f.image, f.eye));
+  bytes += tdm_.gpu_bytes() - before;
+}
+
+void SceneDrawer::make_resident(std::int64_t cell_id, ResidentCell resident) {
+  lru_.push_front(cell_id);
   resident.recency = lru_.begin();
   resident_bytes_ += resident.bytes;
-  cells_.emplace(cell.id, std::move(resident));
+  cells_.emplace(cell_id, std::move(resident));
   while (resident_bytes_ > params_.tdm_cache_bytes && lru_.size() > 1) {
     const std::int64_t victim = lru_.back();
     lru_.pop_back();
@@ -74,6 +67,96 @@ void SceneDrawer::prepare(const DecodedCell& cell) {
     resident_bytes_ -= it->second.bytes;
     cells_.erase(it);
   }
+}
+
+void SceneDrawer::prepare(const DecodedCell& cell) {
+  if (auto it = cells_.find(cell.id); it != cells_.end()) {
+    lru_.splice(lru_.begin(), lru_, it->second.recency);
+    return;
+  }
+  // Faces a part upload (upload_some) already made are kept.
+  ResidentCell resident;
+  for (auto it = partial_.begin(); it != partial_.end(); ++it)
+    if (it->first == cell.id) {
+      resident.handles = std::move(it->second.handles);
+      resident.bytes = it->second.bytes;
+      partial_.erase(it);
+      break;
+    }
+  try {
+    for (std::size_t k = resident.handles.size(); k < cell.faces.size(); ++k)
+      upload_face(cell, k, resident.handles, resident.bytes);
+  } catch (...) {
+    for (std::uint64_t h : resident.handles) tdm_.erase(h);
+    throw;
+  }
+  make_resident(cell.id, std::move(resident));
+}
+
+UploadProgress SceneDrawer::upload_some(const DecodedCell& cell, const UploadBudget& budget) {
+  const double start = now_ms();
+  UploadProgress progress;
+  auto part = partial_.begin();
+  while (part != partial_.end() && part->first != cell.id) ++part;
+  if (part == partial_.end()) {
+    partial_.emplace_front(cell.id, PartialCell{});
+    // Resident faces (drawn before) are not uploaded again: start at the chunks.
+    if (cells_.contains(cell.id)) partial_.front().second.next_item = cell.faces.size();
+    while (partial_.size() > 4) {
+      for (std::uint64_t h : partial_.back().second.handles) tdm_.erase(h);
+      partial_.pop_back();
+    }
+  } else {
+    partial_.splice(partial_.begin(), partial_, part);
+  }
+  PartialCell& p = partial_.front().second;
+  const std::size_t faces = cell.faces.size(), near = cell.near_ids.size(), pieces = cell.far_pieces.size();
+  const std::size_t items = faces + near + pieces + cell.far_whole_ids.size();
+  const ChunkLoader load = [this](std::int64_t id) { return source_.load(id); };
+  try {
+    while (p.next_item < items) {
+      if (progress.items > 0 &&
+          (progress.bytes >= budget.bytes || now_ms() - start >= budget.milliseconds))
+        break;
+      const std::size_t k = p.next_item;
+      std::size_t bytes = 0;
+      if (k < faces) {
+        if (!cells_.contains(cell.id)) upload_face(cell, k, p.handles, bytes);
+      } else if (k < faces + near) {
+        bytes = chunks_.upload_ahead(cell.near_ids[k - faces], load);
+      } else if (k < faces + near + pieces) {
+        const DecodedFarPiece& piece = cell.far_pieces[k - faces - near];
+        bytes = chunks_.upload_ahead(piece.cache_id, [&](std::int64_t) { return far_piece_chunk(piece, source_); });
+      } else {
+        bytes = chunks_.upload_ahead(cell.far_whole_ids[k - faces - near - pieces], load);
+      }
+      if (k < faces) p.bytes += bytes;
+      ++p.next_item;
+      if (p.next_item == faces && !cells_.contains(cell.id)) {
+        ResidentCell resident;
+        resident.handles = std::move(p.handles);
+        resident.bytes = p.bytes;
+        p.handles.clear();
+        p.bytes = 0;
+        make_resident(cell.id, std::move(resident));
+      }
+      if (bytes > 0) {
+        progress.bytes += bytes;
+        ++progress.items;
+      }
+    }
+  } catch (...) {
+    for (std::uint64_t h : p.handles) tdm_.erase(h);
+    partial_.pop_front();
+    throw;
+  }
+  progress.complete = p.next_item >= items;
+  if (progress.complete) {
+    if (faces == 0 && !cells_.contains(cell.id)) make_resident(cell.id, ResidentCell{});
+    partial_.pop_front();
+  }
+  progress.milliseconds = now_ms() - start;
+  return progress;
 }
 
 void SceneDrawer::set_wireframe(bool on) {
@@ -98,6 +181,7 @@ SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width
   const double start = now_ms();
   const ChunkRendererStats before = chunks_.stats();
   if (options.far_field) prepare(cell);
+  const double prepared = now_ms();
   chunks_.begin_frame(width, height);
   set_wireframe(options.wireframe);
   SceneFrameStats stats;
@@ -173,6 +257,7 @@ SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width
     throw;
   }
   set_wireframe(false);
+  stats.prepare_milliseconds = prepared - start;
   return finish(stats, before, start, width, height, out);
 }
 

@@ -46,6 +46,19 @@ struct SceneDrawOptions {
   bool truth_occlusion_culling = false;
 };
 
+// A frame's allowance for GPU uploads ahead of drawing (SceneDrawer::upload_some).
+struct UploadBudget {
+  std::size_t bytes = std::size_t{8} << 20;  // vertex, index and texture bytes
+  double milliseconds = 6;                   // wall clock spent loading and uploading
+};
+
+struct UploadProgress {
+  std::size_t bytes = 0;    // uploaded by this call
+  std::size_t items = 0;    // faces and chunks uploaded by this call
+  double milliseconds = 0;  // spent in this call
+  bool complete = false;    // every face and chunk of the cell has been uploaded (or found cached)
+};
+
 struct SceneFrameStats {
   std::uint64_t chunk_triangles = 0;  // chunk triangles submitted (whole chunks, before discard)
   std::uint64_t far_triangles = 0;    // textured depth mesh triangles submitted
@@ -53,6 +66,7 @@ struct SceneFrameStats {
   std::uint64_t samples_drawn = 0;    // samples whose faces were considered (before per-face culling)
   std::uint64_t chunks_drawn = 0;
   double milliseconds = 0;  // begin_frame to read-back, wall clock
+  double prepare_milliseconds = 0;  // of those, uploading the cell's faces not yet resident
 };
 
 class SceneDrawer {
@@ -66,6 +80,17 @@ class SceneDrawer {
   // used cells beyond the cap (never `cell`).
   void prepare(const DecodedCell& cell);
   bool is_prepared(std::int64_t cell_id) const { return cells_.contains(cell_id); }
+  // Uploads part of what drawing `cell` needs: its faces (textured depth
+  // meshes), then its near-field chunks, far pieces and whole far chunks, in
+  // that order, resuming where the previous call for the cell stopped, and
+  // stops before the next face or chunk once `budget` bytes or milliseconds
+  // are spent (the first one always goes, so every call makes progress).
+  // Chunks already cached cost nothing. Once its faces are uploaded the cell
+  // is prepared (prepare()'s eviction applies). `complete` when nothing is
+  // left; later calls for the cell start over (finding everything cached).
+  // Up to four cells are kept part-uploaded; a fifth frees the oldest's faces.
+  // Never draws. Throws as prepare() and ChunkRenderer::upload_ahead do.
+  UploadProgress upload_some(const DecodedCell& cell, const UploadBudget& budget);
 
   // Renders the impostor of `cell` (prepared on demand) into a width x height
   // frame and reads it back into `out` (colour + planar depth).
@@ -89,6 +114,14 @@ class SceneDrawer {
   void set_shading(const ShadingLights& lights) { chunks_.set_shading(lights); }
 
   std::size_t tdm_gpu_bytes() const { return tdm_.gpu_bytes(); }
+  // True when the resident faces and the cached chunks each fill at most
+  // `fraction` of their caps (SceneDrawerParams): room to upload ahead.
+  bool gpu_caches_below(double fraction) const {
+    return resident_bytes_ <= fraction * params_.tdm_cache_bytes &&
+           chunks_.stats().cached_bytes <= fraction * params_.chunk_cache_bytes;
+  }
+  // Bytes uploaded so far: faces (textured depth meshes) and chunks.
+  std::uint64_t uploaded_bytes() const { return tdm_.uploaded_bytes() + chunks_.stats().uploaded_bytes; }
   ChunkRendererStats chunk_stats() const { return chunks_.stats(); }
   // Leaves the calling thread without a current context.
   void release_context() { context_->release_current(); }
@@ -99,6 +132,17 @@ class SceneDrawer {
     std::size_t bytes = 0;
     std::list<std::int64_t>::iterator recency;
   };
+  // A cell upload_some() has begun: its faces uploaded so far and the next item
+  // (faces first, then near chunks, far pieces, whole far chunks).
+  struct PartialCell {
+    std::vector<std::uint64_t> handles;
+    std::size_t bytes = 0;
+    std::size_t next_item = 0;
+  };
+  // Makes `resident` (all of `cell_id`'s faces) resident as the most recent cell, evicting beyond the cap.
+  void make_resident(std::int64_t cell_id, ResidentCell resident);
+  // Uploads face `index` of `cell`, appending its handle and adding its bytes.
+  void upload_face(const DecodedCell& cell, std::size_t index, std::vector<std::uint64_t>& handles, std::size_t& bytes);
   void set_wireframe(bool on);
   SceneFrameStats finish(SceneFrameStats stats, const ChunkRendererStats& before, double start_ms, int width,
                          int height, ViewFrame& out);
@@ -112,6 +156,7 @@ class SceneDrawer {
   std::unordered_map<std::int64_t, ResidentCell> cells_;
   std::list<std::int64_t> lru_;
   std::size_t resident_bytes_ = 0;
+  std::list<std::pair<std::int64_t, PartialCell>> partial_;  // front = most recently continued
 };
 
 }  // namespace cellbake

@@ -232,6 +232,7 @@ std::uint64_t TdmRenderer::upload(const FaceMesh& mesh, const DecodedImage& imag
   const std::uint64_t handle = next_handle_++;
   uploads_[handle] = u;
   bytes_ += u.bytes;
+  uploaded_bytes_ += u.bytes;
   return handle;
 }
 

@@ -64,6 +64,8 @@ class TdmRenderer {
                             const TdmDrawOptions& options = {});
   // Bytes held by uploads (vertex, index and texture data).
   std::size_t gpu_bytes() const { return bytes_; }
+  // Bytes uploaded so far, summed over every upload (freed ones included).
+  std::uint64_t uploaded_bytes() const { return uploaded_bytes_; }
 
  private:
   struct Upload {
@@ -81,6 +83,7 @@ class TdmRenderer {
   std::unordered_map<std::uint64_t, Upload> uploads_;
   std::uint64_t next_handle_ = 1;
   std::size_t bytes_ = 0;
+  std::uint64_t uploaded_bytes_ = 0;
 };
 
 }  // namespace cellbake

@@ -146,6 +146,11 @@ WalkResult run_walk(const std::filesystem::path& database, const std::filesystem
   InputFiles inputs{database, store.path()};
   if (!options.path_file.empty()) inputs.push_back(options.path_file);
   WalkResult result;
+  if (!options.write_path.empty()) {
+    write_output_file(options.write_path, camera_path_text(views), inputs);
+    result.summary.frames = views.size();
+    return result;
+  }
   result.dir = out_dir;
   std::filesystem::create_directories(out_dir);
   result.plot = out_dir / "walk.svg";

@@ -30,6 +30,7 @@ struct WalkOptions {
   bool truth_ahead = true;   // draw the truth of the next frame on a second thread
   bool skip_hidden_truth = true;  // SceneDrawOptions::truth_occlusion_culling
   bool quiet = false;        // no progress output
+  std::filesystem::path write_path;  // write the camera path here (the --path format) and draw nothing
 };
 
 // Files in the output folder: walk.mp4 (or frames/frame_NNNN.png), walk.svg
@@ -46,7 +47,9 @@ struct WalkResult {
 // or store cannot be opened, a malformed path file, no cell selected, an
 // output that would overwrite an input). A cell that cannot be drawn is
 // replaced by the truth (a warning naming it; frames counted as fallback).
-// Frame images and PSNR do not depend on truth_ahead; timings do.
+// Frame images and PSNR do not depend on truth_ahead; timings do. With
+// `write_path`, only the camera path is written there (no folder, no frames;
+// the result's summary counts its frames).
 WalkResult run_walk(const std::filesystem::path& database, const std::filesystem::path& out_dir,
                     const WalkOptions& options);
 

@@ -573,6 +573,7 @@ const ChunkRenderer::CachedChunk& ChunkRenderer::upload(const Chunk& chunk) {
   entry.recency = lru_.begin();
   cached_bytes_ += entry.bytes;
   ++stats_.uploads;
+  stats_.uploaded_bytes += entry.bytes;
   auto& stored = cache_[chunk.id] = entry;
   evict_beyond_cap();
   return stored;
@@ -695,6 +696,22 @@ void ChunkRenderer::draw_ids(const RenderCamera& camera, std::span<const std::in
   }
   gl_.BindVertexArray(0);
   check_gl_error(gl_, "chunk_renderer: draw");
+}
+
+std::size_t ChunkRenderer::upload_ahead(std::int64_t id, const ChunkLoader& load) {
+  if (auto it = cache_.find(id); it != cache_.end()) {
+    lru_.splice(lru_.begin(), lru_, it->second.recency);
+    return 0;
+  }
+  const std::shared_ptr<const Chunk> chunk = load(id);
+  if (!chunk) throw std::runtime_error("chunk_renderer: loader returned no chunk for id " + std::to_string(id));
+  if (chunk->id != id)
+    throw std::runtime_error("chunk_renderer: loader returned chunk " + std::to_string(chunk->id) + " for id " +
+                             std::to_string(id));
+  make_current();
+  const std::size_t bytes = upload(*chunk).bytes;
+  gl_.BindVertexArray(0);
+  return bytes;
 }
 
 void ChunkRenderer::test_boxes(const RenderCamera& camera, const std::vector<float>& boxes,

@@ -103,6 +103,7 @@ struct ChunkDrawRange {
 
 struct ChunkRendererStats {
   std::uint64_t uploads = 0;    // chunks uploaded into buffers
+  std::uint64_t uploaded_bytes = 0;  // their vertex + index bytes, summed over every upload
   std::uint64_t evictions = 0;  // chunks evicted by the cache cap
   std::uint64_t chunks_drawn = 0;
   std::uint64_t triangles_drawn = 0;  // submitted, before clipping and discard
@@ -183,6 +184,11 @@ class ChunkRenderer {
   // appended to it in drawing order.
   void draw_unoccluded(const RenderCamera& camera, const Box3d& discard_box, std::span<const ChunkRef> chunks,
                        const ChunkLoader& load, std::vector<std::int64_t>* drawn = nullptr);
+  // Loads chunk `id` through `load` and uploads it unless it is cached, as the
+  // most recently used entry, without drawing it (a viewer spreads a cell's
+  // uploads over frames this way). Returns the bytes uploaded (0 when it was
+  // cached). Throws as draw() does for a loader that returns no or another chunk.
+  std::size_t upload_ahead(std::int64_t id, const ChunkLoader& load);
   // True when draw_unoccluded() can skip hidden chunks (GL 4.3 available).
   bool occlusion_culling() const { return occlusion_program_ != 0; }
   // Same as draw(), for chunks the caller already holds (uploaded unless cached).

@@ -4,7 +4,14 @@
 // `cellbake render`; a background thread prefetches neighbouring cells. Cells
 // not (yet) in the database, failed or corrupt are drawn as ground truth and
 // flagged. `--frames N --screenshot FILE` renders N frames, saves the window
-// and exits (used under Xvfb by the tests). Guide: docs/viewer.md.
+// and exits (used under Xvfb by the tests). `--path FILE` walks a camera path
+// (one view per frame, then exits) and `--frame-log CSV` logs and summarises
+// its frame times (viewer/frame_log.h). Cell switches are staged
+// (viewer/cell_switch.h): the previous cell is drawn while the new one's GPU
+// uploads are spread over frames within `--upload-mb` / `--upload-ms`, and the
+// neighbours load in walking order (viewer/prefetch_order.h); `--switch
+// immediate` draws the new cell at once (the behaviour before, for
+// comparison). Guide: docs/viewer.md.
 #include <CLI/CLI.hpp>
 #define GLFW_INCLUDE_NONE  // GL types come from GL/glcorearb.h (stages/render/gl_functions.h)
 #include <GLFW/glfw3.h>
@@ -15,6 +22,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -22,13 +30,17 @@
 #include "stages/render/gl_functions.h"
 #include "storage/cell_db.h"
 #include "storage/geometry_store.h"
+#include "storage/output_file.h"
 #include "viewer/baked_config_text.h"
 #include "viewer/camera_path.h"
 #include "viewer/cell_cache.h"
+#include "viewer/cell_switch.h"
 #include "viewer/fly_camera.h"
+#include "viewer/frame_log.h"
 #include "viewer/image_metrics.h"
 #include "viewer/interactive/glfw_window_context.h"
 #include "viewer/png_file.h"
+#include "viewer/prefetch_order.h"
 #include "viewer/scene_drawer.h"
 #include "viewer/view_camera.h"
 
@@ -36,10 +48,22 @@ namespace cellbake {
 namespace {
 
 struct Options {
-  std::string database, store, size = "1280x720", eye, look, screenshot;
+  std::string database, store, size = "1280x720", eye, look, screenshot, path, frame_log, switch_mode = "staged";
   int frames = 0;
-  double fov = 60, near = 0.05, cache_mb = 1024;
+  double fov = 60, near = 0.05, cache_mb = 1024, upload_mb = 8, upload_ms = 6;
 };
+
+double elapsed_ms(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since).count();
+}
+
+// How many decoded cells besides the eye's fit the cache, judged by the
+// cells held now (at least one).
+std::size_t prefetch_limit(const CellCacheStats& s) {
+  if (s.cells == 0 || s.bytes == 0) return 1;
+  const double per_cell = static_cast<double>(s.bytes) / static_cast<double>(s.cells);
+  return static_cast<std::size_t>(std::max(1.0, std::floor(static_cast<double>(s.max_bytes) / per_cell) - 1));
+}
 
 enum class DrawMode : int { both, near_only, far_only, truth };
 
@@ -124,8 +148,14 @@ int run(const Options& opt) {
   CellCacheParams cache_params;
   cache_params.max_bytes = static_cast<std::size_t>(opt.cache_mb * 1048576.0);
   cache_params.source = &store;  // far pieces cut from their stored chunks on the loader thread
+  cache_params.load_chunks = opt.switch_mode == "staged";  // and the chunks read from the store there too
   CellCache cache(opt.database, cache_params);
   const auto [width, height] = parse_image_size(opt.size);
+  const std::vector<PathView> path = opt.path.empty() ? std::vector<PathView>{} : read_camera_path(opt.path);
+  const bool scripted = !path.empty();
+  const bool staged = opt.switch_mode == "staged";
+  const int total_frames = scripted ? static_cast<int>(path.size()) : opt.frames;
+  const UploadBudget budget{static_cast<std::size_t>(opt.upload_mb * 1048576.0), opt.upload_ms};
 
   glfwSetErrorCallback([](int code, const char* text) { std::fprintf(stderr, "glfw error %d: %s\n", code, text); });
   if (!glfwInit()) throw std::runtime_error("cannot initialise GLFW (no display? run under xvfb-run)");
@@ -139,7 +169,7 @@ int run(const Options& opt) {
   GLFWwindow* window = glfwCreateWindow(width, height, ("cellbake view " + opt.database).c_str(), nullptr, nullptr);
   if (!window) throw std::runtime_error("cannot create an OpenGL 3.3 core window");
   glfwMakeContextCurrent(window);
-  glfwSwapInterval(opt.frames > 0 ? 0 : 1);
+  glfwSwapInterval(total_frames > 0 ? 0 : 1);
 
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
@@ -168,12 +198,13 @@ int run(const Options& opt) {
     const Box3d model = store.model_bounds();
     fly.floor = model.empty() ? 0 : dot(model.lo, up);
     const auto index0 = cache.index();
-    const Vec3d start = !opt.eye.empty() ? parse_point(opt.eye, "--eye")
+    const Vec3d start = scripted            ? path.front().eye
+                        : !opt.eye.empty() ? parse_point(opt.eye, "--eye")
                         : !index0->cells().empty() ? index0->cells().front().bounds.center()
                                                    : model.center();
     fly.position = start;
-    if (!opt.look.empty()) {
-      const Vec3d d = parse_point(opt.look, "--look") - start;
+    if (!opt.look.empty() || scripted) {
+      const Vec3d d = (scripted ? path.front().look : parse_point(opt.look, "--look")) - start;
       int a = 0, b = 1;
       map_axes(up, a, b);
       fly.yaw_deg = std::atan2(d[b], d[a]) * 180 / 3.14159265358979323846;
@@ -186,15 +217,42 @@ int run(const Options& opt) {
     FrameInfo info;
     ViewFrame frame, truth;
     std::vector<Rgba8> shown;
+    CellSwitch cell_switch;
+    EyeMotion motion;
+    std::vector<FrameRecord> log;
+    std::int64_t previous_cell = 0;
+    if (scripted) {
+      // Loading: the first cell decoded and uploaded whole before the first frame.
+      const auto t = std::chrono::steady_clock::now();
+      if (const CellEntry* first = index0->containing(start))
+        if (const auto cell = cache.get_blocking(first->id)) {
+          drawer.prepare(*cell);
+          while (!drawer.upload_some(*cell, {std::numeric_limits<std::size_t>::max(), 1e300}).complete) {
+          }
+        }
+      std::printf("loading: first cell decoded and uploaded in %.1f ms\n", elapsed_ms(t));
+    }
     auto last = std::chrono::steady_clock::now();
 
     for (int frame_number = 0; !glfwWindowShouldClose(window); ++frame_number) {
+      const auto frame_start = std::chrono::steady_clock::now();
+      const std::uint64_t uploaded_before = drawer.uploaded_bytes();
+      UploadProgress spent;
       glfwPollEvents();
       const auto now = std::chrono::steady_clock::now();
       const double dt = std::min(0.1, std::chrono::duration<double>(now - last).count());
       last = now;
       ImGuiIO& io = ImGui::GetIO();
-      if (!io.WantCaptureKeyboard) {
+      if (scripted) {
+        // The path's view of this frame; the keys and the mouse move nothing.
+        const PathView& view = path[static_cast<std::size_t>(frame_number)];
+        fly.position = view.eye;
+        const Vec3d d = view.look - view.eye;
+        int a = 0, b = 1;
+        map_axes(up, a, b);
+        fly.yaw_deg = std::atan2(d[b], d[a]) * 180 / 3.14159265358979323846;
+        fly.pitch_deg = std::atan2(dot(d, up), std::hypot(d[a], d[b])) * 180 / 3.14159265358979323846;
+      } else if (!io.WantCaptureKeyboard) {
         const auto key = [&](int k) { return glfwGetKey(window, k) == GLFW_PRESS ? 1.0 : 0.0; };
         // Esc or Ctrl+Q quits (Q alone moves down).
         if (key(GLFW_KEY_ESCAPE) ||
@@ -208,7 +266,7 @@ int run(const Options& opt) {
       glfwGetCursorPos(window, &mx, &my);
       const bool look_button = glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
                                (glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS && !io.WantCaptureMouse);
-      if (look_button && state.mouse_look) fly.turn(-(mx - state.last_x) * 0.2, -(my - state.last_y) * 0.2);
+      if (look_button && state.mouse_look && !scripted) fly.turn(-(mx - state.last_x) * 0.2, -(my - state.last_y) * 0.2);
       state.mouse_look = look_button;
       state.last_x = mx, state.last_y = my;
 
@@ -221,16 +279,36 @@ int run(const Options& opt) {
       if (entry) {
         info.cell_id = entry->id;
         info.cull_half_size = entry->cull_half_size;
-        cell = opt.frames > 0 ? cache.get_blocking(entry->id) : cache.get(entry->id);
-        if (!cell) {
+        const double reach = 1.01 * (entry->bounds.hi.x - entry->bounds.lo.x);
+        if (staged) {
+          motion.add(fly.position);
+          PrefetchOrder order = prefetch_order(*index, *entry, fly.position, motion.velocity(), reach);
+          order.ids.resize(std::min(order.ids.size(), prefetch_limit(cache.stats())));
+          cache.prefetch(order.ids);
+          // Blocks only while nothing has been drawn yet (--frames, --path).
+          const bool wait = total_frames > 0 && !cell_switch.shown();
+          const auto target = wait ? cache.get_blocking(entry->id) : cache.get(entry->id);
+          const auto heading = order.heading ? cache.peek(order.heading) : nullptr;
+          if (target || cache.failure(entry->id).empty()) {
+            try {
+              cell = cell_switch.choose(target, heading, drawer, budget, spent);
+            } catch (const std::exception& e) {
+              std::fprintf(stderr, "warning: cell %lld: %s; drawing ground truth\n", (long long)entry->id, e.what());
+              cell_switch.reset();
+              info.flag = std::string("uploading failed: ") + e.what();
+            }
+          }
+        } else {
+          cell = total_frames > 0 ? cache.get_blocking(entry->id) : cache.get(entry->id);
+          std::vector<std::int64_t> neighbours;
+          for (const CellEntry& c : index->cells())
+            if (c.id != entry->id && distance_to_box(entry->bounds.center(), c.bounds) <= reach) neighbours.push_back(c.id);
+          cache.prefetch(neighbours);
+        }
+        if (!cell && info.flag.empty()) {
           const std::string failure = cache.failure(entry->id);
           info.flag = failure.empty() ? "loading" : failure;
         }
-        std::vector<std::int64_t> neighbours;
-        const double reach = 1.01 * (entry->bounds.hi.x - entry->bounds.lo.x);
-        for (const CellEntry& c : index->cells())
-          if (c.id != entry->id && distance_to_box(entry->bounds.center(), c.bounds) <= reach) neighbours.push_back(c.id);
-        cache.prefetch(neighbours);
       } else {
         info.flag = "eye outside every baked cell";
       }
@@ -292,6 +370,8 @@ int run(const Options& opt) {
       ImGui::Text("far field: %llu samples drawn (budget %llu triangles)", (unsigned long long)info.stats.samples_drawn,
                   (unsigned long long)far_budget);
       ImGui::Text("frame %.1f ms   draw %.1f ms", info.frame_ms, info.stats.milliseconds);
+      if (cell && cell->id != info.cell_id)
+        ImGui::Text("drawing cell %lld while cell %lld uploads", (long long)cell->id, (long long)info.cell_id);
       const CellCacheStats cs = cache.stats();
       ImGui::Text("cache: %zu cells, %.1f MB, hits %llu, misses %llu, failed %llu", cs.cells, cs.bytes / 1048576.0,
                   (unsigned long long)cs.hits, (unsigned long long)cs.misses, (unsigned long long)cs.failures);
@@ -341,17 +421,39 @@ int run(const Options& opt) {
       ImGui::Render();
       ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
 
-      if (opt.frames > 0 && frame_number + 1 >= opt.frames) {
-        if (!opt.screenshot.empty()) {
-          std::vector<Rgba8> pixels;
-          read_window(gl, fw, fh, pixels);
-          write_png(opt.screenshot, fw, fh, pixels, {opt.database, opt.store});
-          std::printf("screenshot %s (%dx%d) after %d frames, cell %lld%s\n", opt.screenshot.c_str(), fw, fh,
-                      opt.frames, (long long)info.cell_id, info.flag.empty() ? "" : " (ground truth)");
-        }
-        break;
+      const bool last_frame = total_frames > 0 && frame_number + 1 >= total_frames;
+      if (last_frame && !opt.screenshot.empty()) {
+        std::vector<Rgba8> pixels;
+        read_window(gl, fw, fh, pixels);
+        write_png(opt.screenshot, fw, fh, pixels, {opt.database, opt.store});
+        std::printf("screenshot %s (%dx%d) after %d frames, cell %lld%s\n", opt.screenshot.c_str(), fw, fh,
+                    total_frames, (long long)info.cell_id, info.flag.empty() ? "" : " (ground truth)");
       }
       glfwSwapBuffers(window);
+      if (scripted) {
+        FrameRecord r;
+        r.frame = frame_number;
+        r.cell_id = info.cell_id;
+        r.drawn_cell = cell ? cell->id : 0;
+        r.switched = frame_number > 0 && info.cell_id != previous_cell;
+        r.frame_ms = elapsed_ms(frame_start);
+        r.draw_ms = info.stats.milliseconds;
+        r.upload_ms = spent.milliseconds + info.stats.prepare_milliseconds;
+        r.upload_bytes = drawer.uploaded_bytes() - uploaded_before;
+        r.cache_bytes = cache.stats().bytes;
+        r.triangles = info.stats.chunk_triangles + info.stats.far_triangles;
+        log.push_back(r);
+        previous_cell = info.cell_id;
+      }
+      if (last_frame) break;
+    }
+    if (scripted) {
+      const CellCacheStats cs = cache.stats();
+      std::printf("%s", frame_summary_text(summarize_frames(log, cs.max_bytes)).c_str());
+      if (!opt.frame_log.empty()) {
+        write_output_file(opt.frame_log, frame_log_csv(log), {opt.database, store_path, opt.path});
+        std::printf("frame log: %s\n", opt.frame_log.c_str());
+      }
     }
     context->make_current();
     gl.DeleteTextures(1, &display);
@@ -377,8 +479,26 @@ int main(int argc, char** argv) {
   app.add_option("--fov", opt.fov, "Vertical field of view, degrees")->check(CLI::Range(20.0, 120.0));
   app.add_option("--near", opt.near, "Near plane, model units")->check(CLI::PositiveNumber);
   app.add_option("--cache-mb", opt.cache_mb, "Memory cap of decoded cells, MiB")->check(CLI::PositiveNumber);
-  app.add_option("--frames", opt.frames, "Render this many frames, then exit")->check(CLI::NonNegativeNumber);
-  app.add_option("--screenshot", opt.screenshot, "With --frames: save the last frame as this PNG");
+  CLI::Option* frames =
+      app.add_option("--frames", opt.frames, "Render this many frames, then exit")->check(CLI::NonNegativeNumber);
+  app.add_option("--screenshot", opt.screenshot, "With --frames or --path: save the last frame as this PNG");
+  app.add_option("--path", opt.path,
+                 "Scripted walk: one view of this camera path file per frame (\"ex ey ez lx ly lz\" lines, as "
+                 "`cellbake walk --write-path` writes), then exit with a summary of frame times")
+      ->excludes(frames);
+  app.add_option("--frame-log", opt.frame_log,
+                 "With --path: write one CSV line per frame (cell, switch, frame ms, uploads, cache bytes)");
+  app.add_option("--switch", opt.switch_mode,
+                 "Cell switches: staged (keep drawing the previous cell while the new one uploads within the "
+                 "budget; prefetch in walking order) or immediate (draw the new cell at once, as before)")
+      ->check(CLI::IsMember({"staged", "immediate"}))
+      ->capture_default_str();
+  app.add_option("--upload-mb", opt.upload_mb, "Staged switches: GPU upload budget per frame, MiB")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--upload-ms", opt.upload_ms, "Staged switches: GPU upload budget per frame, milliseconds")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   try {
     return cellbake::run(opt);
