@@ -3,7 +3,7 @@
 // (stages/cube_sampler.h): "osmesa" and "egl" rasterise with ChunkRenderer on
 // a GL context of that kind, "embree" ray-casts on the CPU through one BVH
 // cache shared by all of a bake's samplers, "auto" picks EGL when EGL
-// can draw on a hardware (GPU) device, else Embree (README.md "Sampling backends").
+// can draw on a hardware (GPU) device, else Embree (docs/usage.md "Sampling backends").
 #pragma once
 
 #include <cstddef>

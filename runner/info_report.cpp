@@ -318,10 +318,10 @@ void print_info(const GeometryStore& store, const InfoModelFile* model, const st
         "with --chunk-triangles %zu for one\n",
         (unsigned long long)summary.chunks, c);
   std::printf(
-      "  estimated bake: ~%s on %d threads (%.1f core-seconds per cell: the demo plant's 6.3 at 512^2 faces "
+      "  estimated bake: ~%s on %d threads (%.1f core-seconds per cell: the demo plant's %.1f at 512^2 faces "
       "scaled to this model's size; within about 2x), ~%.1f MB\n",
       duration_text(s.estimate.seconds).c_str(), s.threads, s.estimate.core_seconds_per_cell,
-      s.estimate.bytes / 1e6);
+      kMeasuredCoreSecondsPerCell, s.estimate.bytes / 1e6);
   if (model) std::printf("  %s\n", ingest.c_str());
   std::printf("  %s\n", s.command.c_str());
   std::printf("  (`bake ... --dry-run` checks it; `--cells 1-4` bakes a few cells first)\n");
