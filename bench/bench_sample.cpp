@@ -1,7 +1,7 @@
 // Panoramic sampling speed (stages/sample.h): one 512^2 x 6 colour + depth cube
 // map of a random scene of ~1 M triangles in 1000 chunks, rendered offscreen
-// with OSMesa (llvmpipe). MISSION.md's reference figure on this machine is
-// ~0.19-0.24 s per cube map with LP_NUM_THREADS=2. Run as
+// with OSMesa (llvmpipe). The project's reference figure on its 2-core machine
+// is ~0.19-0.24 s per cube map with LP_NUM_THREADS=2. Run as
 //   LP_NUM_THREADS=2 build/bench/bench_sample
 // (the llvmpipe thread count is read from the environment; the bench sets nothing).
 // Both wall time and the CPU time of the whole process (all llvmpipe threads)

@@ -1,7 +1,7 @@
 // Spatial video (issue #16 item 3): do neighbouring cells' cube faces, coded
 // as a video sequence, cost fewer bytes than the bake's per-face AVIF at equal
 // error, and can one cell still be decoded alone within the viewer's budget?
-// The thesis' "spatial MPEG" (MPEGWALK, thesis ch. 4; ../shared/seeds/004_*)
+// The thesis' "spatial MPEG" (MPEGWALK; Wilson, UNC 2002, ch. 4)
 // codes the faces of cells along a space-filling curve as a video.
 //
 // For the selected cells (one centre sample each, as bench_image_codecs:

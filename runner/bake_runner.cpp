@@ -105,7 +105,7 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
   validate_bake_config(given);
   const int threads = options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
   // Several single-threaded llvmpipe contexts use the cores better than one
-  // multi-threaded one (measured, MISSION.md); respect a user's own setting.
+  // multi-threaded one (measured on the 2-core project machine); respect a user's own setting.
   if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", threads > 1 ? "1" : "2", 1);
 
   require_sound_store(given.store, options.check_store);  // a damaged store bakes nothing

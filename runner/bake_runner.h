@@ -1,7 +1,9 @@
 // The bake runner: the only code that schedules cells. A oneTBB flow graph
-// runs cells x stages (cull_box -> sample -> depth_mesh + simplify -> encode ->
-// write) with one GL context per worker thread for the sample stage and a
-// single serial writer that commits each cell in its own transaction.
+// runs cells through four nodes: cull_box -> sample (at most `threads` at
+// once, each worker with its own cube sampler: an Embree tracer or a GL
+// context) -> depth_mesh, far_choice and encode in one node (the far choice
+// meshes and simplifies faces on demand) -> a single serial writer that
+// commits each cell in its own transaction.
 #pragma once
 
 #include <cstdint>

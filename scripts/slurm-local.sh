@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # A single-node Slurm cluster on loopback in a private state directory, for
 # tests and trying `cellbake submit` on one machine (see
-# docs/slurm-notes facts: Debian 12, Slurm 22.05, munge 0.5, run as root).
+# tested with Debian 12's Slurm 22.05 and munge 0.5, run as root).
 #
 #   scripts/slurm-local.sh start    # munged + slurmctld + slurmd, waits for an idle node
 #   scripts/slurm-local.sh status   # daemons alive? node state

@@ -1,6 +1,6 @@
 // `cellbake verify`: renders every selected (done) cell's impostor and the
 // ground truth from several viewpoints inside the cell (runner/verify/verify_views.h)
-// in parallel (oneTBB, one OSMesa context per worker thread, released after
+// in parallel (oneTBB, one headless GL context per worker thread, OSMesa or EGL, released after
 // each view), compares them (viewer/image_metrics.h) and writes the report
 // folder (runner/verify/verify_report.h). Resumable: per-cell results are kept in
 // DIR/verify-cells.json keyed by the cell's content hash and the verify
