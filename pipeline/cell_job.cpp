@@ -140,41 +140,6 @@ void run_cull_box(CellWork& work, const BakeConfig& config, const ChunkSource& s
   work.cull = find_cull_box(work.cell.center(), p, source);
 }
 
-namespace {
-
-// The sample points the best-next-view search may add next (Wilson 2002 ch. 3):
-// Voronoi candidates in the navigable part's plane when it is flat along an
-// axis (a floor slab), else the 27 lattice points of the box (corners, edge
-// and face midpoints, centre) not sampled yet.
-std::vector<Vec3d> next_view_candidates(const Box3d& nav, const std::vector<SampleWork>& samples) {
-  const Vec3d e = nav.extent();
-  int flat = -1;
-  for (int a = 2; a >= 0; --a)
-    if (e[a] <= 1e-9 * (e.x + e.y + e.z + 1)) flat = a;
-  std::vector<Vec3d> out;
-  if (flat >= 0) {
-    const int u = flat == 0 ? 1 : 0, v = flat == 2 ? 1 : 2;
-    std::vector<Vec2d> points;
-    for (const SampleWork& s : samples) points.push_back({s.cube.eye[u], s.cube.eye[v]});
-    for (const Vec2d& c : voronoi_candidates(points, {{nav.lo[u], nav.lo[v]}, {nav.hi[u], nav.hi[v]}})) {
-      Vec3d p = nav.center();
-      p[u] = c.x;
-      p[v] = c.y;
-      out.push_back(p);
-    }
-    return out;
-  }
-  for (int k = 0; k < 27; ++k) {
-    const double f[3] = {0.5 * (k % 3), 0.5 * (k / 3 % 3), 0.5 * (k / 9)};
-    const Vec3d p{nav.lo.x + f[0] * e.x, nav.lo.y + f[1] * e.y, nav.lo.z + f[2] * e.z};
-    bool taken = false;
-    for (const SampleWork& s : samples) taken = taken || s.cube.eye == p;
-    if (!taken) out.push_back(p);
-  }
-  return out;
-}
-
-}  // namespace
 
 Box3d far_field_discard_box(const Box3d& cell_bounds, double cull_half_size, const BakeConfig& config) {
   const double footprint = 2.0 * cull_half_size / config.face_size;
@@ -244,7 +209,9 @@ void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& sou
   std::map<Vec3d, VoidRayMemory, decltype(bits_less)> memories(bits_less);
   while (true) {
     const auto t0 = Clock::now();
-    const std::vector<Vec3d> candidates = next_view_candidates(nav, work.samples);
+    std::vector<Vec3d> eyes;
+    for (const SampleWork& s : work.samples) eyes.push_back(s.cube.eye);
+    const std::vector<Vec3d> candidates = next_view_candidates(nav, eyes);
     std::vector<VoidSample> existing;
     for (const SampleWork& s : work.samples) existing.push_back({&s.cube});
     double worst = 0;

@@ -180,4 +180,32 @@ std::vector<Vec2d> voronoi_candidates(const std::vector<Vec2d>& samples, const R
   return finish(raw);
 }
 
+std::vector<Vec3d> next_view_candidates(const Box3d& nav, std::span<const Vec3d> eyes) {
+  const Vec3d e = nav.extent();
+  int flat = -1;
+  for (int a = 2; a >= 0; --a)
+    if (e[a] <= 1e-9 * (e.x + e.y + e.z + 1)) flat = a;
+  std::vector<Vec3d> out;
+  if (flat >= 0) {
+    const int u = flat == 0 ? 1 : 0, v = flat == 2 ? 1 : 2;
+    std::vector<Vec2d> points;
+    for (const Vec3d& eye : eyes) points.push_back({eye[u], eye[v]});
+    for (const Vec2d& c : voronoi_candidates(points, {{nav.lo[u], nav.lo[v]}, {nav.hi[u], nav.hi[v]}})) {
+      Vec3d p = nav.center();
+      p[u] = c.x;
+      p[v] = c.y;
+      out.push_back(p);
+    }
+    return out;
+  }
+  for (int k = 0; k < 27; ++k) {
+    const double f[3] = {0.5 * (k % 3), 0.5 * (k / 3 % 3), 0.5 * (k / 9)};
+    const Vec3d p{nav.lo.x + f[0] * e.x, nav.lo.y + f[1] * e.y, nav.lo.z + f[2] * e.z};
+    bool taken = false;
+    for (const Vec3d& eye : eyes) taken = taken || eye == p;
+    if (!taken) out.push_back(p);
+  }
+  return out;
+}
+
 }  // namespace cellbake

@@ -7,7 +7,10 @@
 // moves in a plane); stages/sample_void.h scores the candidates.
 #pragma once
 
+#include <span>
 #include <vector>
+
+#include "stages/geometry.h"
 
 namespace cellbake {
 
@@ -48,5 +51,14 @@ struct Rect2d {
 // only, not on their order (they are sorted before insertion), bit for bit.
 // Throws std::invalid_argument for non-finite coordinates or rect.lo > rect.hi.
 std::vector<Vec2d> voronoi_candidates(const std::vector<Vec2d>& samples, const Rect2d& rect);
+
+// The points a cell's best-next-view search scores next, given its navigable
+// part `nav` and the eyes sampled so far: when `nav` is flat along an axis
+// (extent <= 1e-9 * (sum of extents + 1); the first such axis from x), the
+// voronoi_candidates of the eyes in the plane of the other two axes (in
+// axis order), each at nav's centre along the flat one; else the 27 lattice
+// points of the box (corners, edge and face midpoints, centre; x fastest)
+// that are not exactly an eye. Deterministic; throws as voronoi_candidates.
+std::vector<Vec3d> next_view_candidates(const Box3d& nav, std::span<const Vec3d> eyes);
 
 }  // namespace cellbake

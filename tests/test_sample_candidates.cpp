@@ -265,5 +265,29 @@ TEST(VoronoiCandidates, DeterministicUnderPermutation) {
   }
 }
 
+TEST(NextViewCandidates, AFloorSlabGivesVoronoiCandidatesInItsPlaneAtItsHeight) {
+  // A slab flat along z at 1.7: one eye at its centre gives the four corners.
+  const Box3d nav{{0, 0, 1.7}, {4, 2, 1.7}};
+  const std::vector<Vec3d> eyes = {{2, 1, 1.7}};
+  const std::vector<Vec3d> got = next_view_candidates(nav, eyes);
+  EXPECT_EQ(got, (std::vector<Vec3d>{{0, 0, 1.7}, {0, 2, 1.7}, {4, 0, 1.7}, {4, 2, 1.7}}));
+  // Flat along y (a y-up floor): the plane is x, z.
+  const Box3d y_up{{0, 3, 0}, {2, 3, 2}};
+  const std::vector<Vec3d> centre = {{1, 3, 1}};
+  for (const Vec3d& p : next_view_candidates(y_up, centre)) EXPECT_EQ(p.y, 3.0);
+  EXPECT_EQ(next_view_candidates(y_up, centre).size(), 4u);
+}
+
+TEST(NextViewCandidates, ABoxGivesItsLatticePointsNotYetSampled) {
+  const Box3d nav{{0, 0, 0}, {2, 2, 2}};
+  EXPECT_EQ(next_view_candidates(nav, {}).size(), 27u);
+  const std::vector<Vec3d> eyes = {{1, 1, 1}, {0, 0, 0}, {5, 5, 5}};  // the last is no lattice point
+  const std::vector<Vec3d> got = next_view_candidates(nav, eyes);
+  ASSERT_EQ(got.size(), 25u);
+  EXPECT_EQ(got.front(), (Vec3d{1, 0, 0}));  // x fastest, the sampled corner left out
+  EXPECT_EQ(got.back(), (Vec3d{2, 2, 2}));
+  EXPECT_EQ(std::count(got.begin(), got.end(), Vec3d{1, 1, 1}), 0);
+}
+
 }  // namespace
 }  // namespace cellbake
