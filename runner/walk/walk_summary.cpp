@@ -5,6 +5,9 @@
 #include <cstdio>
 #include <set>
 #include <sstream>
+#include <utility>
+
+#include "viewer/frame_log.h"
 
 namespace cellbake {
 namespace {
@@ -31,10 +34,7 @@ double median(std::vector<double> v) {
 }  // namespace
 
 double percentile(std::vector<double> values, double p) {
-  if (values.empty()) return kNaN;
-  std::sort(values.begin(), values.end());
-  const double rank = std::ceil(std::clamp(p, 0.0, 100.0) / 100.0 * double(values.size()));
-  return values[std::size_t(std::max(1.0, rank)) - 1];
+  return values.empty() ? kNaN : nearest_rank_percentile(std::move(values), p);
 }
 
 WalkSummary summarise_walk(const std::vector<WalkFrame>& frames, double fps) {

@@ -31,7 +31,8 @@ struct WalkFrame {
   std::uint64_t truth_triangles = 0;  // the truth frame's chunk triangles drawn (hidden chunks skipped)
 };
 
-// Nearest-rank percentile (p in [0, 100]) of `values`; NaN when empty.
+// Nearest-rank percentile (p in [0, 100]) of `values` (viewer/frame_log.h
+// nearest_rank_percentile); NaN when empty.
 double percentile(std::vector<double> values, double p);
 
 struct WalkSummary {
