@@ -13,7 +13,7 @@
 
 #include "bench/bench_store_eyes.h"
 #include "stages/cull_box.h"
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 #include "storage/geometry_store.h"
 #include "tests/fixture_memory_chunk_source.h"
 

@@ -1,5 +1,5 @@
 // EGL vs OSMesa (issue #12): the same 512^2 x 6 cube maps of real cells of a
-// geometry store through the sample stage (stages/sample.h), once per GL
+// geometry store through the sample stage (stages/sample/sample.h), once per GL
 // backend, side by side in one run. Same cells and cull boxes as bench_sample's
 // BM_SampleStore (cull_box stage, 4 m cells); one renderer per backend kept
 // across cells, caches warmed by one untimed pass. Run as
@@ -38,8 +38,8 @@
 #include "stages/render/chunk_renderer.h"
 #include "stages/render/gl_context.h"
 #include "stages/render/gl_functions.h"
-#include "stages/sample.h"
-#include "stages/seen_triangles.h"
+#include "stages/sample/sample.h"
+#include "stages/far/seen_triangles.h"
 #include "storage/geometry_store.h"
 
 namespace cellbake {

@@ -28,7 +28,7 @@
 #include "bench/bench_sampled_faces.h"
 #include "pipeline/bake_config.h"
 #include "pipeline/cell_grid.h"
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 #include "viewer/image_metrics.h"
 
 namespace cellbake {

@@ -9,9 +9,9 @@
 
 #include <vector>
 
-#include "stages/sample_candidates.h"
-#include "stages/sample_redundancy.h"
-#include "stages/sample_void.h"
+#include "stages/sample/sample_candidates.h"
+#include "stages/sample/sample_redundancy.h"
+#include "stages/sample/sample_void.h"
 #include "tests/fixture_analytic_cube.h"
 
 namespace cellbake {

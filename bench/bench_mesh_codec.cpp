@@ -24,7 +24,7 @@
 #include <string>
 #include <vector>
 
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 #include "storage/cell_db.h"
 
 namespace cellbake {

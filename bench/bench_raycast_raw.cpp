@@ -42,7 +42,7 @@
 #include "stages/raycast/embree_cube_sampler.h"
 #include "stages/raycast/instance_scene.h"
 #include "stages/raycast/ray_segments.h"
-#include "stages/sample.h"
+#include "stages/sample/sample.h"
 #include "storage/geometry_store.h"
 
 namespace cellbake {

@@ -1,4 +1,4 @@
-// Panoramic sampling speed (stages/sample.h): one 512^2 x 6 colour + depth cube
+// Panoramic sampling speed (stages/sample/sample.h): one 512^2 x 6 colour + depth cube
 // map of a random scene of ~1 M triangles in 1000 chunks, rendered offscreen
 // with OSMesa (llvmpipe). The project's reference figure on its 2-core machine
 // is ~0.19-0.24 s per cube map with LP_NUM_THREADS=2. Run as
@@ -35,7 +35,7 @@
 #include "stages/cull_box.h"
 #include "stages/raycast/embree_cube_sampler.h"
 #include "runner/heap_tuning.h"
-#include "stages/sample.h"
+#include "stages/sample/sample.h"
 #include "storage/geometry_store.h"
 #include "tests/fixture_chunk_source.h"
 

@@ -19,7 +19,7 @@
 #include "pipeline/cell_job.h"
 #include "pipeline/sample_backend.h"
 #include "stages/background_fill.h"
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 #include "storage/geometry_store.h"
 #include "viewer/image_metrics.h"
 

@@ -21,7 +21,7 @@
 #include "bench/bench_room_scene.h"
 #include "pipeline/scenes/depth_mesh_analytic_scene.h"
 #include "stages/depth_mesh.h"
-#include "stages/simplify.h"
+#include "stages/simplify/simplify.h"
 
 namespace {
 

@@ -36,7 +36,7 @@
 #include "pipeline/cell_job.h"
 #include "pipeline/sample_backend.h"
 #include "stages/depth_mesh.h"
-#include "stages/simplify.h"
+#include "stages/simplify/simplify.h"
 #include "storage/geometry_store.h"
 
 namespace cellbake {

@@ -50,7 +50,7 @@ extern "C" {
 #include "bench/bench_video_group.h"
 #include "pipeline/bake_config.h"
 #include "pipeline/cell_grid.h"
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 
 namespace cellbake {
 namespace {

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "stages/geometry.h"
-#include "stages/render/shading.h"
+#include "stages/shading.h"
 
 namespace cellbake {
 
@@ -61,7 +61,7 @@ struct BakeConfig {
   // under 4096, one chunk): effective_near_budget(); 0 keeps near_budget as is.
   double near_budget_fraction = 0.1;
 
-  // [far]: how each face tile's far field is drawn (stages/far_choice.h):
+  // [far]: how each face tile's far field is drawn (stages/far/far_choice.h):
   // "cheapest" (exact far geometry where it costs no more triangles than the
   // depth meshes it replaces), "tdm" (depth meshes only) or "geometry".
   std::string far_choice = "cheapest";
@@ -80,7 +80,7 @@ struct BakeConfig {
   std::uint64_t far_seen_geometry_below = 2'000'000;
   double far_seen_geometry_per_hit = 0.25;
   // What the samples' rays hit is grown by this many rings of triangles
-  // sharing a vertex before it stands in for depth meshes (stages/far_choice.h
+  // sharing a vertex before it stands in for depth meshes (stages/far/far_choice.h
   // grow_seen_triangles): slivers next to a hit, seen from elsewhere in the
   // cell (12.7 M plant, cells 28-36, random views: 1 ring 37.5 dB, worst view
   // 27.2, holes up to 0.47 %; 2 rings 39.2, 29.9, 0.28 %; 3 rings 40.1).
@@ -130,7 +130,7 @@ struct BakeConfig {
   // [shading]: the fixed light model every chunk drawing applies (the samples
   // bake it into their images; viewers read it back from the database's meta
   // `config`). Directions are in the up-axis frame (z = model.up); defaults
-  // and meaning in stages/render/shading.h. "unlit" keeps vertex colours as they are.
+  // and meaning in stages/shading.h. "unlit" keeps vertex colours as they are.
   ShadingParams shading;
 
   // [samples]: where a cell's panoramic samples go (Wilson 2002 ch. 3, ch. 5)

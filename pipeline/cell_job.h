@@ -22,10 +22,10 @@
 #include "stages/cube_map.h"
 #include "stages/cull_box.h"
 #include "stages/depth_mesh.h"
-#include "stages/far_choice.h"
-#include "stages/render/shading.h"
-#include "stages/sample.h"
-#include "stages/simplify.h"
+#include "stages/far/far_choice.h"
+#include "stages/shading.h"
+#include "stages/sample/sample.h"
+#include "stages/simplify/simplify.h"
 #include "storage/cell_db.h"
 
 namespace cellbake {
@@ -132,7 +132,7 @@ inline constexpr int kMaxPendingFaces = 8;
 // face_mesh until the far choice is done.
 inline constexpr int kMaxRulerFaces = 8;
 // Chooses exact far geometry or depth meshes per face tile and drops the
-// depth-mesh triangles that geometry replaces (stages/far_choice.h); meshes
+// depth-mesh triangles that geometry replaces (stages/far/far_choice.h); meshes
 // and simplifies only the faces the choice depends on (a face drawn wholly as
 // geometry is usually never meshed). Fills the row's far geometry and
 // per-face choice (loads the chunks it keeps triangles of from `source`).

@@ -1,5 +1,5 @@
 // Whole floors as bake regions (issue #36): `bake --floors all|0,2` and
-// `[cells] floors` turn the floors `cellbake info` finds (stages/floor_finder.h,
+// `[cells] floors` turn the floors `cellbake info` finds (stages/model_analysis/floor_finder.h,
 // with the same parameters, so the indices are info's) into regions of eye
 // positions before cell ids are given: per selected floor, per footprint (a
 // configured region, or the model's bounds when none is configured), the
@@ -13,9 +13,9 @@
 
 #include "pipeline/bake_config.h"
 #include "stages/chunk_source.h"
-#include "stages/floor_finder.h"
+#include "stages/model_analysis/floor_finder.h"
 #include "stages/geometry.h"
-#include "stages/storey_units.h"
+#include "stages/model_analysis/storey_units.h"
 
 namespace cellbake {
 
@@ -28,7 +28,7 @@ struct FloorRegion {
 
 // The floors `cellbake info` reports: found with the finder's lengths in
 // metres; when their storeys are no storeys in metres but are in other units
-// (stages/storey_units.h), found again with the lengths (headroom, separation,
+// (stages/model_analysis/storey_units.h), found again with the lengths (headroom, separation,
 // bins) in the most typical of those, whose metres per unit `unit` then holds.
 struct ModelFloors {
   FloorFinderResult found;

@@ -17,7 +17,7 @@
 #include "pipeline/readers/isolated_read.h"
 #include "stages/chunk_lod.h"
 #include "stages/geometry.h"
-#include "stages/up_axis_from_geometry.h"
+#include "stages/model_analysis/up_axis_from_geometry.h"
 
 namespace cellbake {
 
@@ -49,7 +49,7 @@ struct IngestParams {
   double import_seconds = 3600;
   // The up axis to record in the store: "z" or "y"; "" = what the files say
   // (ModelInfo::up), else what the geometry says when it is sure
-  // (stages/up_axis_from_geometry.h), else none.
+  // (stages/model_analysis/up_axis_from_geometry.h), else none.
   std::string up;
   // Simplified levels of every chunk for the far field's LOD tier (issue #35;
   // stages/chunk_lod.h), stored in the store's chunk_lods table.

@@ -1,6 +1,6 @@
 // Which backend answers the sample stage (config `sample.backend`, issue #12),
 // and the factory that gives each bake worker thread its CubeSampler
-// (stages/cube_sampler.h): "osmesa" and "egl" rasterise with ChunkRenderer on
+// (stages/sample/cube_sampler.h): "osmesa" and "egl" rasterise with ChunkRenderer on
 // a GL context of that kind, "embree" ray-casts on the CPU through one BVH
 // cache shared by all of a bake's samplers, "auto" picks EGL when EGL
 // can draw on a hardware (GPU) device, else Embree (docs/usage.md "Sampling backends").
@@ -10,7 +10,7 @@
 #include <memory>
 #include <string>
 
-#include "stages/cube_sampler.h"
+#include "stages/sample/cube_sampler.h"
 #include "stages/raycast/chunk_bvh_cache.h"
 #include "stages/raycast/hit_texturing.h"
 

@@ -18,7 +18,7 @@
 #include "pipeline/sample_backend.h"
 #include "runner/progress.h"
 #include "runner/shards.h"
-#include "stages/cube_sampler.h"
+#include "stages/sample/cube_sampler.h"
 #include "stages/raycast/chunk_bvh_cache.h"
 #include "stages/tsan_handoff.h"
 #include "storage/cell_db.h"

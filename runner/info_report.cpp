@@ -13,9 +13,9 @@
 #include "pipeline/floor_regions.h"
 #include "runner/number_text.h"
 #include "runner/store_status.h"
-#include "stages/floor_finder.h"
-#include "stages/storey_units.h"
-#include "stages/up_axis_from_geometry.h"
+#include "stages/model_analysis/floor_finder.h"
+#include "stages/model_analysis/storey_units.h"
+#include "stages/model_analysis/up_axis_from_geometry.h"
 
 namespace cellbake {
 namespace {

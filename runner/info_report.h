@@ -1,6 +1,6 @@
 // `cellbake info`'s report on a geometry store: the store's facts (as
 // `status` prints them), the up axis it uses and why, the floors found by
-// casting rays down over a grid (stages/floor_finder.h) and a suggested bake —
+// casting rays down over a grid (stages/model_analysis/floor_finder.h) and a suggested bake —
 // a region at eye height over the main floor, a cell size, the near budget the
 // bake would use and an estimated time — as command lines to run. Model units
 // are taken as metres (eye height 1.7, cells of 2-4).

@@ -33,8 +33,9 @@ if [ "${1:-}" = replay ]; then
   built=$(date +%s)
   echo "[fuzz] replay: built in $(( built - start )) s; ${runs} mutants per target"
   # Leaks and third-party reports as scripts/sanitize.sh; one allocation over
-  # 2560 MiB is a finding (scripts/fuzz.sh's -rss_limit_mb).
-  export ASAN_OPTIONS="detect_leaks=1:fast_unwind_on_malloc=0:max_allocation_size_mb=2560:${ASAN_OPTIONS:-}"
+  # 2560 MiB is a finding (scripts/fuzz.sh's -rss_limit_mb); full unwinding on
+  # malloc only where a suppression needs it (tests/fuzz/CMakeLists.txt).
+  export ASAN_OPTIONS="detect_leaks=1:max_allocation_size_mb=2560:${ASAN_OPTIONS:-}"
   export LSAN_OPTIONS="suppressions=${PWD}/tests/sanitizers/lsan.supp:print_suppressions=0:${LSAN_OPTIONS:-}"
   export UBSAN_OPTIONS="suppressions=${PWD}/tests/sanitizers/ubsan.supp:print_stacktrace=1:halt_on_error=1:${UBSAN_OPTIONS:-}"
   status=0

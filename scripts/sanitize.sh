@@ -40,9 +40,10 @@ tsan_exclude='^(Bake\.(KilledBakeResumesToTheSameDatabase|ChangedParametersRecom
 bash scripts/install-deps.sh build test
 
 supp="${PWD}/tests/sanitizers"
-# The fuzz replay's ASan options (scripts/fuzz.sh replay): full unwinding on
-# malloc for the suppressions, one allocation over 2560 MiB a finding (libFuzzer's -rss_limit_mb).
-fuzz_asan_options="detect_leaks=1:fast_unwind_on_malloc=0:max_allocation_size_mb=2560:${ASAN_OPTIONS:-}"
+# The fuzz replay's ASan options (scripts/fuzz.sh replay): one allocation over
+# 2560 MiB a finding (libFuzzer's -rss_limit_mb); the image decoder's test adds
+# full unwinding on malloc for its suppression (tests/fuzz/CMakeLists.txt).
+fuzz_asan_options="detect_leaks=1:max_allocation_size_mb=2560:${ASAN_OPTIONS:-}"
 # ASan's fast (frame-pointer) unwinding on malloc: it reaches the library frames
 # lsan.supp names (OpenImageIO's leaked error string), and unlike the full
 # unwinder (fast_unwind_on_malloc=0, scripts/fuzz.sh) it never takes libgcc's

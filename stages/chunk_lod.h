@@ -10,7 +10,7 @@
 // seen from the nearest point a view may stand, stays under a pixel budget
 // (the screen-space error test of Luebke et al. 2003, "Level of Detail for 3D
 // Graphics", ch. 4); which tiles draw geometry at all is the far choice's
-// measure of triangles (stages/far_choice.h, after Maciel & Shirley 1995).
+// measure of triangles (stages/far/far_choice.h, after Maciel & Shirley 1995).
 #pragma once
 
 #include <cstddef>

@@ -1,5 +1,5 @@
 // Some triangles of a chunk as a chunk of their own: the far field's exact
-// geometry keeps only the triangles its samples saw (stages/far_choice.h).
+// geometry keeps only the triangles its samples saw (stages/far/far_choice.h).
 #pragma once
 
 #include <cstdint>

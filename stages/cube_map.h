@@ -43,7 +43,7 @@ inline Vec3d cube_face_direction(const FaceBasis& b, double s, double t) {
 
 // Each face is split into kFarTiles x kFarTiles tiles (row-major, row 0 at
 // the top): the grid the far field's representation is chosen on
-// (stages/far_choice.h) and viewers cull depth meshes with.
+// (stages/far/far_choice.h) and viewers cull depth meshes with.
 constexpr int kFarTiles = 4;
 constexpr int kFarTilesPerFace = kFarTiles * kFarTiles;
 
@@ -58,7 +58,7 @@ inline int pixel_tile(int col, int row, int size) {
 // either the whole chunk (`triangles` empty: a source that knows only which
 // chunks it drew) or the triangles that drew pixels, ascending, each with the
 // tiles it drew in (both sampling backends know: the ray caster's hits, the
-// rasteriser's primitive ids; stages/seen_triangles.h).
+// rasteriser's primitive ids; stages/far/seen_triangles.h).
 struct SeenChunk {
   std::int64_t id = 0;
   std::uint32_t tiles = 0;

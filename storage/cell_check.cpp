@@ -10,9 +10,9 @@
 
 #include "stages/cube_map.h"
 #include "stages/cull_box.h"
-#include "stages/encode.h"
-#include "stages/encode_triangle_list.h"
-#include "stages/far_choice.h"
+#include "stages/encode/encode.h"
+#include "stages/encode/encode_triangle_list.h"
+#include "stages/far/far_choice.h"
 #include "storage/cell_content_hash.h"
 #include "storage/chunk_codec.h"
 #include "storage/far_geometry_check.h"

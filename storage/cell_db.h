@@ -32,7 +32,7 @@ struct FaceRow {
   int face = 0;                      // 0..5, cube_map.h order
   std::string image_format;          // "jpeg" | "webp" | "png" | "avif" | "jxl"; kNoFaceImage: none stored
   std::vector<std::uint8_t> image;   // encoded colour image (empty for kNoFaceImage)
-  std::vector<std::uint8_t> mesh;    // encoded FaceMesh (stages/encode.h)
+  std::vector<std::uint8_t> mesh;    // encoded FaceMesh (stages/encode/encode.h)
   std::uint32_t triangles = 0;
   double boundary_error_px = 0;         // measured max screen-space movement of outlines (silhouettes, skins, borders)
   double depth_error = 0;            // achieved max relative depth error

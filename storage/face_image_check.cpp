@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 #include "stages/texel_footprint.h"
 
 namespace cellbake {

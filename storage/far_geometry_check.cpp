@@ -6,7 +6,7 @@
 #include <exception>
 
 #include "stages/chunk_subset.h"
-#include "stages/encode_triangle_list.h"
+#include "stages/encode/encode_triangle_list.h"
 
 namespace cellbake {
 namespace {

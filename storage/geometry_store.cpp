@@ -11,7 +11,7 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 #include "stages/hashing.h"
 #include "storage/chunk_codec.h"
 #include "storage/output_file.h"

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 #include "stages/geometry.h"
 
 namespace cellbake::test {

@@ -16,7 +16,7 @@
 #include "pipeline/ingest.h"
 #include "runner/bake_runner.h"
 #include "runner/parallel.h"
-#include "stages/simplify.h"
+#include "stages/simplify/simplify.h"
 #include "storage/cell_db.h"
 #include "fixture_room_obj.h"
 #include "test_support.h"

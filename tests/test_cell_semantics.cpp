@@ -13,8 +13,8 @@
 
 #include "pipeline/cell_database_check.h"
 #include "runner/merge_shards.h"
-#include "stages/encode.h"
-#include "stages/encode_triangle_list.h"
+#include "stages/encode/encode.h"
+#include "stages/encode/encode_triangle_list.h"
 #include "storage/cell_check.h"
 #include "storage/cell_content_hash.h"
 #include "storage/cell_db.h"

@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "stages/depth_mesh.h"
-#include "stages/encode.h"
-#include "stages/simplify.h"
+#include "stages/encode/encode.h"
+#include "stages/simplify/simplify.h"
 
 namespace cellbake {
 namespace {

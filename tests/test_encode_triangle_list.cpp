@@ -1,4 +1,4 @@
-// The far geometry's triangle-number coding (stages/encode_triangle_list.h)
+// The far geometry's triangle-number coding (stages/encode/encode_triangle_list.h)
 // and the viewer's cut of a far piece out of its stored chunk.
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "stages/encode_triangle_list.h"
+#include "stages/encode/encode_triangle_list.h"
 #include "tests/fixture_memory_chunk_source.h"
 #include "viewer/decoded_cell.h"
 

@@ -23,7 +23,7 @@
 #include "pipeline/export/cell_gltf_export.h"
 #include "pipeline/export/glb_builder.h"
 #include "pipeline/export/gltf_vertex_streams.h"
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 #include "storage/cell_db.h"
 #include "storage/chunk_codec.h"
 #include "storage/geometry_store.h"

@@ -1,5 +1,5 @@
 // The far field chosen per cube-face tile between exact far geometry and
-// textured depth meshes (issue #13, stages/far_choice.h): the pure pieces
+// textured depth meshes (issue #13, stages/far/far_choice.h): the pure pieces
 // (which tiles can see a box, which tile a depth-mesh triangle lies in,
 // dropping a tile's triangles, a chunk's subset, the greedy choice on
 // hand-built meshes and seen lists) and small end-to-end bakes of hand-built
@@ -19,7 +19,7 @@
 #include "pipeline/bake_config.h"
 #include "runner/bake_runner.h"
 #include "stages/chunk_subset.h"
-#include "stages/far_choice.h"
+#include "stages/far/far_choice.h"
 #include "stages/render/gl_context.h"
 #include "storage/cell_check.h"
 #include "storage/cell_db.h"

@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "stages/encode_triangle_list.h"
+#include "stages/encode/encode_triangle_list.h"
 #include "stages/render/gl_context.h"
 #include "storage/cell_check.h"
 #include "storage/cell_content_hash.h"

@@ -137,7 +137,7 @@ TEST(UpAxis, IngestRecordsTheFormatsAxisOrTheGivenOne) {
   EXPECT_EQ(up_of(glb_store), "y");
   EXPECT_NE(run_cellbake("status " + q(glb_store)).output.find("up axis: y"), std::string::npos);
 
-  // OBJ: no convention; the room's floor and ceiling say z (stages/up_axis_from_geometry.h).
+  // OBJ: no convention; the room's floor and ceiling say z (stages/model_analysis/up_axis_from_geometry.h).
   const auto obj_store = cli_room_store(dir);
   EXPECT_EQ(up_of(obj_store), "z");
   EXPECT_NE(run_cellbake("status " + q(obj_store)).output.find("up axis: z (detected from the geometry: large flat "

@@ -14,7 +14,7 @@
 #include "pipeline/ingest.h"
 #include "runner/bake_runner.h"
 #include "runner/parallel.h"
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 #include "storage/cell_db.h"
 #include "viewer/decoded_cell.h"
 #include "fixture_room_obj.h"

@@ -17,7 +17,7 @@
 #include <string>
 
 #include "pipeline/bake_estimate.h"
-#include "stages/floor_finder.h"
+#include "stages/model_analysis/floor_finder.h"
 #include "tests/fixture_house_model.h"
 #include "tests/fixture_memory_chunk_source.h"
 #include "tests/fixture_room_obj.h"

@@ -13,7 +13,7 @@
 #include <thread>
 
 #include "pipeline/ingest.h"
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 #include "runner/merge_shards.h"
 #include "storage/cell_check.h"
 #include "storage/cell_content_hash.h"

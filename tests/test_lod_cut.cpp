@@ -1,8 +1,8 @@
-// The view-dependent cut through chunk levels (stages/lod_cut.h), on chunks
+// The view-dependent cut through chunk levels (stages/far/lod_cut.h), on chunks
 // with analytic pixel sizes and level errors.
 #include <gtest/gtest.h>
 
-#include "stages/lod_cut.h"
+#include "stages/far/lod_cut.h"
 
 using namespace cellbake;
 

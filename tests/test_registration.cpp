@@ -34,11 +34,12 @@
 #include <vector>
 
 #include "stages/depth_mesh.h"
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 #include "stages/render/chunk_renderer.h"
 #include "stages/render/gl_context.h"
-#include "stages/sample.h"
-#include "stages/simplify.h"
+#include "stages/render/gl_sample_cube.h"
+#include "stages/sample/sample.h"
+#include "stages/simplify/simplify.h"
 #include "tests/fixture_chunk_source.h"
 #include "tests/test_support.h"
 #include "viewer/shared_gl_context.h"

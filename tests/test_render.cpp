@@ -16,7 +16,7 @@
 #include "pipeline/ingest.h"
 #include "runner/bake_runner.h"
 #include "runner/parallel.h"
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 #include "stages/render/chunk_renderer.h"
 #include "stages/render/gl_context.h"
 #include "storage/cell_db.h"

@@ -11,7 +11,8 @@
 
 #include "stages/render/chunk_renderer.h"
 #include "stages/render/gl_context.h"
-#include "stages/sample.h"
+#include "stages/render/gl_sample_cube.h"
+#include "stages/sample/sample.h"
 #include "tests/fixture_chunk_source.h"
 
 namespace cellbake {

@@ -28,7 +28,7 @@
 #include "stages/render/gl_context.h"
 #include "stages/render/gl_context_egl.h"
 #include "stages/render/gl_cube_sampler.h"
-#include "stages/sample.h"
+#include "stages/sample/sample.h"
 #include "tests/fixture_chunk_source.h"
 
 namespace cellbake {

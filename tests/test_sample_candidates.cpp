@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "stages/sample_candidates.h"
+#include "stages/sample/sample_candidates.h"
 
 namespace cellbake {
 namespace {

@@ -2,7 +2,7 @@
 // selection: small hand-made cases with exact answers.
 #include <gtest/gtest.h>
 
-#include "stages/sample_points.h"
+#include "stages/sample/sample_points.h"
 #include "viewer/sample_selection.h"
 #include "viewer/view_camera.h"
 

@@ -8,7 +8,7 @@
 #include <random>
 
 #include "stages/background_fill.h"
-#include "stages/sample_redundancy.h"
+#include "stages/sample/sample_redundancy.h"
 #include "tests/fixture_analytic_cube.h"
 
 namespace cellbake {

@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "stages/sample_void.h"
+#include "stages/sample/sample_void.h"
 #include "tests/fixture_analytic_cube.h"
 
 namespace cellbake {

@@ -1,4 +1,4 @@
-// The fixed light model (stages/render/shading.h) as ChunkRenderer draws it,
+// The fixed light model (stages/shading.h) as ChunkRenderer draws it,
 // with analytic answers: Lambert's cosine between a plane facing the key
 // light and one tilted away, two-sided lighting, unlit = the vertex colour
 // exactly, the same scene rotated from z-up to y-up lit the same, and a baked
@@ -18,7 +18,7 @@
 #include "stages/cube_map.h"
 #include "stages/render/chunk_renderer.h"
 #include "stages/render/gl_context.h"
-#include "stages/render/shading.h"
+#include "stages/shading.h"
 #include "storage/cell_db.h"
 #include "storage/geometry_store.h"
 #include "tests/fixture_cameras.h"

@@ -15,7 +15,7 @@
 
 #include "pipeline/scenes/depth_mesh_analytic_scene.h"
 #include "stages/depth_mesh.h"
-#include "stages/simplify.h"
+#include "stages/simplify/simplify.h"
 
 namespace cellbake {
 namespace {

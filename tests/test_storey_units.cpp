@@ -9,7 +9,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "stages/storey_units.h"
+#include "stages/model_analysis/storey_units.h"
 #include "tests/fixture_house_model.h"
 #include "tests/test_support.h"
 

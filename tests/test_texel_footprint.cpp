@@ -6,7 +6,7 @@
 #include <random>
 
 #include "stages/background_fill.h"
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 #include "stages/texel_footprint.h"
 
 namespace cellbake {

@@ -11,7 +11,7 @@
 
 #include "pipeline/ingest.h"
 #include "runner/parallel.h"
-#include "stages/up_axis_from_geometry.h"
+#include "stages/model_analysis/up_axis_from_geometry.h"
 #include "tests/fixture_house_model.h"
 #include "tests/fixture_memory_chunk_source.h"
 #include "tests/test_support.h"

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "stages/geometry.h"
-#include "stages/render/shading.h"
+#include "stages/shading.h"
 
 namespace cellbake {
 

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "stages/chunk_subset.h"
-#include "stages/encode_triangle_list.h"
+#include "stages/encode/encode_triangle_list.h"
 #include "storage/chunk_codec.h"
 #include "storage/far_geometry_check.h"
 

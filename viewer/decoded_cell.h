@@ -8,7 +8,7 @@
 
 #include "stages/chunk_source.h"
 #include "stages/cube_map.h"
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 #include "stages/geometry.h"
 #include "storage/cell_db.h"
 #include "viewer/sample_selection.h"
@@ -83,7 +83,7 @@ struct DecodedCell {
 
 // Decodes `row` (loaded with blobs). Throws std::runtime_error naming the cell,
 // sample and face when the cell is not "done", a face index is out of range,
-// a blob is corrupt or truncated (the validated decoders of stages/encode.h),
+// a blob is corrupt or truncated (the validated decoders of stages/encode/encode.h),
 // or far geometry bounds are inverted or not finite, or a row's level is
 // damaged (far_geometry_level_problem): the caller then falls back for this
 // cell alone. With `source` (the cell's geometry store), the far pieces are

@@ -26,7 +26,7 @@ void write_png(const std::filesystem::path& file, int width, int height, const s
   OIIO::Filesystem::IOVecOutput proxy(bytes);
   OIIO::Filesystem::IOProxy* proxy_ptr = &proxy;
   OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
-  spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy_ptr);  // through the spec: see stages/encode.cpp
+  spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy_ptr);  // through the spec: see stages/encode/encode.cpp
   auto png = OIIO::ImageOutput::create("png");
   if (!png) throw std::runtime_error("write_png: OpenImageIO has no PNG writer");
   const bool ok =

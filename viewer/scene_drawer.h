@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "stages/chunk_source.h"
-#include "stages/lod_cut.h"
+#include "stages/far/lod_cut.h"
 #include "stages/render/chunk_renderer.h"
 #include "stages/render/gl_context.h"
 #include "viewer/decoded_cell.h"
@@ -101,7 +101,7 @@ class SceneDrawer {
                              ViewFrame& out);
 
   // Renders every chunk in the camera's frustum at the store's levels
-  // (stages/lod_cut.h): at `error_px` pixels when max_triangles is 0, else at
+  // (stages/far/lod_cut.h): at `error_px` pixels when max_triangles is 0, else at
   // the finest cut of at most `max_triangles` triangles. The cut made is
   // returned through `cut` when given (levels in chunk id order).
   SceneFrameStats draw_lod_cut(const RenderCamera& camera, int width, int height, const SceneDrawOptions& options,

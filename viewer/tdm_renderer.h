@@ -12,7 +12,7 @@
 #include <unordered_map>
 
 #include "stages/cube_map.h"
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 #include "stages/render/chunk_renderer.h"
 #include "stages/render/gl_context.h"
 

@@ -10,7 +10,7 @@
 #include "pipeline/export/glb_builder.h"
 #include "pipeline/export/gltf_image.h"
 #include "pipeline/export/gltf_vertex_streams.h"
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 
 namespace cellbake {
 namespace {

@@ -2,7 +2,7 @@
 // draws them (viewer/scene_drawer.h): the near field's chunks whole, the exact
 // far geometry (pieces cut out of store chunks, simplified levels, whole
 // chunks), and every sample's textured depth meshes with their face images.
-// Chunks are lit as the bake lit them (stages/render/shading.h: the light
+// Chunks are lit as the bake lit them (stages/shading.h: the light
 // model is view-independent) and the lit colours are stored per vertex under
 // KHR_materials_unlit, so a viewer shows what `cellbake render` shows; the
 // face images already hold lit colours. Positions are quantised
@@ -24,7 +24,7 @@
 #include <vector>
 
 #include "stages/chunk_source.h"
-#include "stages/render/shading.h"
+#include "stages/shading.h"
 #include "storage/cell_db.h"
 #include "viewer/decoded_cell.h"
 

@@ -5,7 +5,7 @@
 
 #include <stdexcept>
 
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 
 namespace cellbake {
 
@@ -25,7 +25,7 @@ GltfImage encode_gltf_image(const std::vector<Rgba8>& pixels, int width, int hei
   OIIO::Filesystem::IOVecOutput proxy(bytes);
   OIIO::Filesystem::IOProxy* proxy_ptr = &proxy;
   OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-  // The proxy goes in through the spec (as stages/encode.cpp does: OIIO 2.4's
+  // The proxy goes in through the spec (as stages/encode/encode.cpp does: OIIO 2.4's
   // JPEG writer crashes when destroyed unopened with a proxy attached).
   spec.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy_ptr);
   spec.attribute("Compression", "jpeg:" + std::to_string(quality));

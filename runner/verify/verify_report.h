@@ -43,7 +43,7 @@ struct VerifyViewResult {
   double triangle_ratio = std::numeric_limits<double>::quiet_NaN();
   double ms_impostor = 0, ms_truth = 0;  // warm frame, wall clock
   // `verify --lod-cut` (NaN otherwise): the model drawn as a view-dependent
-  // cut through the store's chunk levels (stages/lod_cut.h), the yardstick
+  // cut through the store's chunk levels (stages/far/lod_cut.h), the yardstick
   // of issue #35: with the impostor's triangles (at the threshold that fits
   // them), and at 1 pixel of error.
   double psnr_db_cut = std::numeric_limits<double>::quiet_NaN();

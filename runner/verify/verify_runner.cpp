@@ -21,7 +21,7 @@
 #include "runner/verify/verify_report.h"
 #include "runner/walk/walk_runner.h"
 #include "stages/render/gl_context.h"
-#include "stages/sample_points.h"
+#include "stages/sample/sample_points.h"
 #include "storage/cell_db.h"
 #include "storage/geometry_store.h"
 #include "storage/store_check.h"

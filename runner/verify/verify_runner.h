@@ -40,7 +40,7 @@ struct VerifyOptions {
   bool sample_views = true;                 // also look from every sample point of the cell (reported apart)
   bool reference_views = true;              // also look from the centre and the corners (reported apart)
   // Also draw every view as a cut through the store's chunk levels
-  // (stages/lod_cut.h) with the impostor's triangles and at 1 pixel of
+  // (stages/far/lod_cut.h) with the impostor's triangles and at 1 pixel of
   // error: the yardstick of the far field (VerifyViewResult::psnr_db_cut).
   bool lod_cut = false;
   // Every frame (truth, cells, cut) is drawn at this many times the image

@@ -5,7 +5,7 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "stages/sample_points.h"
+#include "stages/sample/sample_points.h"
 
 namespace cellbake {
 namespace {

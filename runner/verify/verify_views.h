@@ -33,7 +33,7 @@ struct VerifyViewPlan {
 
 // The views of one cell: first `random_views` (>= 1) eyes drawn uniformly from
 // the box `navigable` (the cell's bounds intersected with its region,
-// stages/sample_points.h navigable_part; a part that is flat along an axis
+// stages/sample/sample_points.h navigable_part; a part that is flat along an axis
 // gives eyes on that plane), each looking along a yaw drawn uniformly from
 // [0, 2 pi) around `up`; then, when `reference_views`, the centre of
 // `navigable` and its distinct corners (4 of a flat rectangle, 8 of a box),

@@ -12,7 +12,7 @@
 
 #include "stages/chunk_source.h"
 #include "stages/render/chunk_renderer.h"
-#include "stages/render/shading.h"
+#include "stages/shading.h"
 #include "viewer/image_metrics.h"
 #include "viewer/scene_drawer.h"
 

@@ -17,7 +17,7 @@
 #include "runner/walk/walk_path.h"
 #include "runner/walk/walk_plot.h"
 #include "stages/render/gl_context.h"
-#include "stages/sample_points.h"
+#include "stages/sample/sample_points.h"
 #include "storage/cell_db.h"
 #include "storage/geometry_store.h"
 #include "storage/output_file.h"

@@ -14,7 +14,7 @@
 
 #include "stages/raycast/instance_scene.h"
 #include "stages/raycast/ray_segments.h"
-#include "stages/seen_triangles.h"
+#include "stages/far/seen_triangles.h"
 
 namespace cellbake {
 namespace {

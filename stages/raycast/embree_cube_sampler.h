@@ -35,7 +35,7 @@
 #include <string>
 #include <vector>
 
-#include "stages/cube_sampler.h"
+#include "stages/sample/cube_sampler.h"
 #include "stages/raycast/chunk_bvh_cache.h"
 #include "stages/raycast/hit_shading.h"
 #include "stages/raycast/hit_texturing.h"

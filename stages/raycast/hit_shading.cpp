@@ -1,5 +1,5 @@
 // Two-sided Lambert over two directional lights plus ambient (the model of
-// stages/render/shading.h), evaluated per ray hit in float as the GL fragment
+// stages/shading.h), evaluated per ray hit in float as the GL fragment
 // shader of stages/render/chunk_renderer.cpp does.
 #include "stages/raycast/hit_shading.h"
 

@@ -1,5 +1,5 @@
 // The colour of a ray hit, computed as ChunkRenderer's fragment shader does
-// (the light model of stages/render/shading.h), so that the Embree and GL
+// (the light model of stages/shading.h), so that the Embree and GL
 // sampling backends produce the same pixels:
 //   base  = the triangle's vertex colours at the hit's barycentric coordinates
 //           (barycentric in 3D = GL's perspective-correct interpolation);
@@ -16,7 +16,7 @@
 #include <cstdint>
 
 #include "stages/geometry.h"
-#include "stages/render/shading.h"
+#include "stages/shading.h"
 
 namespace cellbake {
 

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "stages/cube_map.h"
-#include "stages/sample.h"
+#include "stages/sample/sample.h"
 
 namespace cellbake {
 

@@ -27,7 +27,7 @@
 namespace cellbake {
 
 // The chunks a cube map at `eye` may show: the union over the six faces of
-// chunks_in_face() (stages/sample.h), sorted by id. Loads nothing.
+// chunks_in_face() (stages/sample/sample.h), sorted by id. Loads nothing.
 std::vector<ChunkRef> cube_chunks(const Vec3d& eye, const Box3d& cull_box, double near_plane,
                                   const ChunkSource& source);
 

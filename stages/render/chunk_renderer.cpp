@@ -42,7 +42,7 @@ void main() {
 }
 )";
 
-// The light model of stages/render/shading.h: the interpolated vertex normal
+// The light model of stages/shading.h: the interpolated vertex normal
 // when the chunk has normals, else a flat face normal from the screen-space
 // derivatives of the eye-relative position (exact for planar triangles, in
 // world axes); two-sided Lambert over two lights plus ambient. A fragment

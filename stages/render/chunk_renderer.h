@@ -1,5 +1,5 @@
 // Draws chunked geometry offscreen and reads back colour plus linear planar
-// view depth: the drawing core shared by the panoramic sampler (stages/sample.h)
+// view depth: the drawing core shared by the panoramic sampler (stages/sample/sample.h)
 // and the headless viewer.
 //
 // Precision: chunks keep float32 positions relative to a double origin; every
@@ -16,7 +16,7 @@
 // Colours: the chunk's vertex colours, times the texel of the triangle's
 // material texture when it has one (trilinear mipmapping, the file's wrap
 // modes; alpha-tested materials drop texels with alpha < 0.5), under the fixed
-// light model of stages/render/shading.h (the chunk's vertex normals when it
+// light model of stages/shading.h (the chunk's vertex normals when it
 // has them, else flat face normals from screen-space derivatives), or as they
 // are when the shading is unlit.
 #pragma once
@@ -36,7 +36,7 @@
 #include "stages/cube_map.h"
 #include "stages/geometry.h"
 #include "stages/render/gl_context.h"
-#include "stages/render/shading.h"
+#include "stages/shading.h"
 
 namespace cellbake {
 
@@ -137,7 +137,7 @@ class ChunkRenderer {
   // it current again). Call after each unit of work on a pooled thread so the
   // renderer can later be used or destroyed from any thread.
   void release_context() { context_->release_current(); }
-  // The light model of every later draw (stages/render/shading.h); the
+  // The light model of every later draw (stages/shading.h); the
   // default is shading_lights(ShadingParams{}, z up). Takes effect at the next
   // draw call; the occlusion test is unaffected. Throws std::invalid_argument
   // for non-unit directions or negative or non-finite strengths.

@@ -1,5 +1,7 @@
 #include "stages/render/gl_cube_sampler.h"
 
+#include "stages/render/gl_sample_cube.h"
+
 #include <stdexcept>
 #include <utility>
 

@@ -1,12 +1,12 @@
-// The GL sampling backend: stages/sample.h's sample_cube() on a ChunkRenderer
+// The GL sampling backend: stages/render/gl_sample_cube.h's sample_cube() on a ChunkRenderer
 // (an OSMesa or EGL context), behind the CubeSampler seam of
-// stages/cube_sampler.h. Pixel-identical to calling sample_cube() directly.
+// stages/sample/cube_sampler.h. Pixel-identical to calling sample_cube() directly.
 #pragma once
 
 #include <memory>
 #include <string>
 
-#include "stages/cube_sampler.h"
+#include "stages/sample/cube_sampler.h"
 #include "stages/render/chunk_renderer.h"
 
 namespace cellbake {

@@ -1,8 +1,8 @@
-// libFuzzer target: decode_face_mesh (stages/encode.h, blob versions 1 and 2)
+// libFuzzer target: decode_face_mesh (stages/encode/encode.h, blob versions 1 and 2)
 // on arbitrary bytes; a mesh that decodes must have its indices in range.
 #include <exception>
 
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   cellbake::FaceMesh mesh;

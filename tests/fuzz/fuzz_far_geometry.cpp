@@ -16,7 +16,7 @@
 #include <span>
 
 #include "stages/chunk_subset.h"
-#include "stages/encode_triangle_list.h"
+#include "stages/encode/encode_triangle_list.h"
 #include "storage/far_geometry_check.h"
 
 namespace {

@@ -1,9 +1,9 @@
-// libFuzzer target: decode_image (stages/encode.h: PNG, JPEG, WebP through
+// libFuzzer target: decode_image (stages/encode/encode.h: PNG, JPEG, WebP through
 // OpenImageIO, AVIF, JPEG XL) on arbitrary bytes; a decoded image must have
 // width x height pixels within the documented caps.
 #include <exception>
 
-#include "stages/encode.h"
+#include "stages/encode/encode.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   cellbake::DecodedImage image;

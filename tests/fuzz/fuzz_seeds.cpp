@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "stages/cube_map.h"
-#include "stages/encode.h"
-#include "stages/encode_triangle_list.h"
+#include "stages/encode/encode.h"
+#include "stages/encode/encode_triangle_list.h"
 #include "storage/cell_db.h"
 #include "storage/chunk_codec.h"
 #include "tests/fixture_hostile_models.h"

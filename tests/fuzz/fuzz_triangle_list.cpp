@@ -1,10 +1,10 @@
-// libFuzzer target: decode_triangle_list (stages/encode_triangle_list.h), the
+// libFuzzer target: decode_triangle_list (stages/encode/encode_triangle_list.h), the
 // far geometry's triangle numbers, on arbitrary bytes; a list that decodes is
 // strictly ascending and encodes back to a blob that decodes to itself.
 #include <exception>
 #include <span>
 
-#include "stages/encode_triangle_list.h"
+#include "stages/encode/encode_triangle_list.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   std::vector<std::uint32_t> list;
