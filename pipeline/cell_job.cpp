@@ -6,6 +6,7 @@
 #include <map>
 #include <tuple>
 #include <unordered_map>
+#include <utility>
 
 #include "pipeline/sample_backend.h"
 #include "stages/background_fill.h"
@@ -48,15 +49,39 @@ std::vector<char> seen_far_chunks(const CellWork& work) {
 
 using Clock = std::chrono::steady_clock;
 
+// Adds the seconds from its construction to its destruction to the cell's
+// `stage`, less those spent in pause_during: a stage's own time, without the
+// stages it runs inside it (which time themselves).
 class StageTimer {
  public:
   StageTimer(CellWork& work, const char* stage) : work_(work), stage_(stage), start_(Clock::now()) {}
-  ~StageTimer() { work_.seconds[stage_] += std::chrono::duration<double>(Clock::now() - start_).count(); }
+  ~StageTimer() { stop(); }
+  StageTimer(const StageTimer&) = delete;
+  StageTimer& operator=(const StageTimer&) = delete;
+
+  // Runs `nested` (a stage that times itself) with this timer stopped, and
+  // returns what it returns.
+  template <typename Nested>
+  decltype(auto) pause_during(Nested&& nested) {
+    stop();
+    const Restart restart{*this};
+    return std::forward<Nested>(nested)();
+  }
 
  private:
+  struct Restart {
+    StageTimer& timer;
+    ~Restart() { timer.start_ = Clock::now(), timer.running_ = true; }
+  };
+  void stop() {
+    if (running_) work_.seconds[stage_] += std::chrono::duration<double>(Clock::now() - start_).count();
+    running_ = false;
+  }
+
   CellWork& work_;
   const char* stage_;
   Clock::time_point start_;
+  bool running_ = true;
 };
 
 DepthMeshParams depth_mesh_params(const BakeConfig& config) {
@@ -229,7 +254,7 @@ void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& sou
   }
 }
 
-void run_depth_mesh(CellWork& work, const BakeConfig& /*config: the meshing keys are read on demand*/) {
+void run_sample_tree(CellWork& work, const BakeConfig& /*config: the meshing keys are read on demand*/) {
   StageTimer timer(work, "depth_mesh");
   std::vector<Vec3d> eyes;
   for (const SampleWork& s : work.samples) eyes.push_back(s.cube.eye);
@@ -363,13 +388,38 @@ std::uint64_t face_mesh_bound(CellWork& work, const BakeConfig& config, std::siz
 
 namespace {
 
+// The simplifier's error for face `face` of sample `sample`, whose simplified
+// mesh is still the one face_mesh made: with the face's ruler when face_mesh
+// kept one, else by building the dense mesh again (timed as depth_mesh) and
+// analysing it (timed as simplify); the same figures either way.
+SimplifyError measure_face_error(CellWork& work, const BakeConfig& config, std::size_t sample, int face,
+                                 const SimplifyRuler& ruler) {
+  const SampleWork& s = work.samples[sample];
+  const std::size_t k = std::size_t(face);
+  const std::string where = face_where(sample, face);
+  FaceMesh dense;
+  if (!ruler) {
+    StageTimer timer(work, "depth_mesh");
+    try {
+      dense = build_depth_mesh_face(s.cube, depth_mesh_params(config, work, sample), face, &work.depth_mesh_scratch);
+    } catch (const std::exception& e) {
+      throw StageError("depth_mesh", where + e.what());
+    }
+  }
+  StageTimer timer(work, "simplify");
+  try {
+    return ruler ? ruler.measure(s.simplified[k]) : measure_simplification_error(dense, s.simplified[k], config.face_size);
+  } catch (const std::exception& e) {
+    throw StageError("simplify", where + e.what());
+  }
+}
+
 // Drops the depth-mesh triangles geometry tiles replace, and measures the
 // simplifier's error (stored with each face) for the faces that keep some,
-// against the simplified mesh as it was before the drop: with the face's
-// ruler when face_mesh kept one, else by building the dense mesh again
-// (timed as depth_mesh) and analysing it (timed as simplify); the same
-// figures either way. Faces drawn wholly as geometry store no mesh and no error.
-void drop_replaced_and_measure_kept(CellWork& work, const BakeConfig& config) {
+// against the simplified mesh as it was before the drop (measure_face_error,
+// run with `own_time` paused). Faces drawn wholly as geometry store no mesh
+// and no error.
+void drop_replaced_and_measure_kept(CellWork& work, const BakeConfig& config, StageTimer& own_time) {
   for (std::size_t i = 0; i < work.samples.size(); ++i) {
     SampleWork& s = work.samples[i];
     for (int f = 0; f < kCubeFaces; ++f) {
@@ -382,37 +432,70 @@ void drop_replaced_and_measure_kept(CellWork& work, const BakeConfig& config) {
         s.simplified[k] = FaceMesh{};
         continue;
       }
-      const std::string where = face_where(i, f);
-      FaceMesh dense;
-      if (!ruler) {
-        StageTimer timer(work, "depth_mesh");
-        try {
-          dense = build_depth_mesh_face(s.cube, depth_mesh_params(config, work, i), f, &work.depth_mesh_scratch);
-        } catch (const std::exception& e) {
-          throw StageError("depth_mesh", where + e.what());
-        }
-      }
-      StageTimer timer(work, "simplify");
-      try {
-        const SimplifyError e = ruler ? ruler.measure(s.simplified[k])
-                                      : measure_simplification_error(dense, s.simplified[k], config.face_size);
-        s.boundary_error_px[k] = e.max_boundary_error_px;
-        s.depth_error[k] = e.max_depth_error_relative;
-      } catch (const std::exception& e) {
-        throw StageError("simplify", where + e.what());
-      }
+      const SimplifyError e = own_time.pause_during([&] { return measure_face_error(work, config, i, f, ruler); });
+      s.boundary_error_px[k] = e.max_boundary_error_px;
+      s.depth_error[k] = e.max_depth_error_relative;
       s.simplified[k] = std::move(kept);
     }
   }
 }
 
-// The time stages run inside the far choice have taken so far (meshing on
-// demand, the delta scans' reduction), without adding stages that never ran.
-double nested_stage_seconds(const CellWork& work) {
-  double sum = 0;
-  for (const char* stage : {"depth_mesh", "simplify", "redundancy"})
-    if (const auto it = work.seconds.find(stage); it != work.seconds.end()) sum += it->second;
-  return sum;
+// What the samples saw, grown by far.seen_rings rings of neighbouring
+// triangles (each chunk's adjacency built once per cell).
+void grow_seen_rings(CellWork& work, const BakeConfig& config, const ChunkSource& source) {
+  if (config.far_seen_rings <= 0) return;
+  std::unordered_map<std::int64_t, std::pair<std::shared_ptr<const Chunk>, VertexTriangles>> chunks;
+  std::vector<std::uint16_t> scratch;
+  for (SampleWork& s : work.samples)
+    for (CubeFace& face : s.cube.faces)
+      for (SeenChunk& seen : face.seen) {
+        if (seen.whole()) continue;
+        auto it = chunks.find(seen.id);
+        if (it == chunks.end()) {
+          std::shared_ptr<const Chunk> chunk = source.load(seen.id);
+          VertexTriangles adjacency = vertex_triangles(*chunk);
+          it = chunks.emplace(seen.id, std::make_pair(std::move(chunk), std::move(adjacency))).first;
+        }
+        grow_seen_triangles(seen, *it->second.first, it->second.second, config.far_seen_rings, scratch);
+      }
+}
+
+// Every eye the viewer may draw the cell from: the cell, and the samples in it.
+Box3d viewer_eyes(const CellWork& work) {
+  Box3d eyes = work.cell.bounds;
+  for (const SampleWork& s : work.samples) eyes.expand(s.cube.eye);
+  return eyes;
+}
+
+// Each far chunk's coarsest stored level within far.lod_error_px, seen from
+// the nearest of `eyes`, and whether it may replace the chunk's exact seen
+// triangles (far.lod_replaces_exact; "auto": where the chunk's triangles are
+// thinner than the pixel rays that found them, so what the samples hit may
+// miss what other eyes see). Empty when far.lod_error_px is 0.
+std::vector<FarLodChoice> choose_far_levels(const CellWork& work, const BakeConfig& config, const ChunkSource& source,
+                                            const Box3d& eyes) {
+  std::vector<FarLodChoice> lods;
+  if (config.far_lod_error_px <= 0) return lods;
+  lods.resize(work.far_chunks.size());
+  std::vector<char> seen;
+  if (config.far_lod_replaces_exact == "auto") seen = seen_far_chunks(work);
+  for (std::size_t i = 0; i < work.far_chunks.size(); ++i) {
+    const std::vector<ChunkLodRef> levels = source.lods(work.far_chunks[i].id);
+    if (levels.empty()) continue;
+    const double distance = box_distance(eyes, work.far_chunks[i].bounds);
+    const double allowed = allowed_lod_error(distance, config.far_lod_error_px, config.face_size);
+    lods[i].level = choose_lod_level(levels, allowed);
+    if (lods[i].level == 0) continue;
+    for (const ChunkLodRef& l : levels)
+      if (l.level == lods[i].level) lods[i].triangles = l.triangle_count;
+    if (config.far_lod_replaces_exact == "off")
+      lods[i].replaces_exact = false;
+    else if (config.far_lod_replaces_exact == "auto")
+      lods[i].replaces_exact =
+          seen[i] && seen_subset_may_miss(median_triangle_width(*source.load(work.far_chunks[i].id)), distance,
+                                          kThinTrianglePixels, config.face_size);
+  }
+  return lods;
 }
 
 // What the samples saw, drawn as geometry in every tile, when it is at most
@@ -444,99 +527,51 @@ std::optional<FarChoice> sparse_seen_far_field(const CellWork& work, const BakeC
   return all;
 }
 
-}  // namespace
+// The samples as the far choice reads them: the faces meshed so far, what
+// each face saw, and for the others a guess of their mesh's size.
+std::vector<FarChoiceSample> far_choice_samples(const CellWork& work, const BakeConfig& config) {
+  const DepthMeshParams mesh_params = depth_mesh_params(config);
+  std::vector<FarChoiceSample> samples;
+  for (const SampleWork& s : work.samples) {
+    FarChoiceSample c;
+    for (int f = 0; f < kCubeFaces; ++f) {
+      c.meshes[std::size_t(f)] = s.meshed[std::size_t(f)] ? &s.simplified[std::size_t(f)] : nullptr;
+      c.seen[std::size_t(f)] = &s.cube.faces[std::size_t(f)].seen;
+      if (!c.meshes[std::size_t(f)])
+        c.mesh_guess[std::size_t(f)] = outline_edge_guess(s.cube.faces[std::size_t(f)], mesh_params);
+    }
+    samples.push_back(c);
+  }
+  return samples;
+}
 
-void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource& source) {
-  // This stage's own time: what it spends meshing faces on demand counts as
-  // depth_mesh and simplify.
-  const auto t0 = Clock::now();
-  const double nested0 = nested_stage_seconds(work);
-  struct OwnTime {
-    CellWork& work;
-    Clock::time_point t0;
-    double nested0;
-    ~OwnTime() {
-      const double nested = nested_stage_seconds(work) - nested0;
-      work.seconds["far_choice"] += std::chrono::duration<double>(Clock::now() - t0).count() - nested;
-    }
-  } own_time{work, t0, nested0};
-  // Every eye the viewer may draw the cell from: the cell, and the samples in it.
-  Box3d eyes = work.cell.bounds;
-  // What the samples saw, grown by far.seen_rings rings of neighbouring
-  // triangles (each chunk's adjacency built once per cell).
-  if (config.far_seen_rings > 0) {
-    std::unordered_map<std::int64_t, std::pair<std::shared_ptr<const Chunk>, VertexTriangles>> chunks;
-    std::vector<std::uint16_t> scratch;
-    for (SampleWork& s : work.samples)
-      for (CubeFace& face : s.cube.faces)
-        for (SeenChunk& seen : face.seen) {
-          if (seen.whole()) continue;
-          auto it = chunks.find(seen.id);
-          if (it == chunks.end()) {
-            std::shared_ptr<const Chunk> chunk = source.load(seen.id);
-            VertexTriangles adjacency = vertex_triangles(*chunk);
-            it = chunks.emplace(seen.id, std::make_pair(std::move(chunk), std::move(adjacency))).first;
-          }
-          grow_seen_triangles(seen, *it->second.first, it->second.second, config.far_seen_rings, scratch);
-        }
-  }
-  for (const SampleWork& s : work.samples) eyes.expand(s.cube.eye);
-  // Each far chunk's coarsest stored level within far.lod_error_px, seen
-  // from the nearest eye the viewer may draw the cell from, and whether it
-  // may replace the chunk's exact seen triangles (far.lod_replaces_exact;
-  // "auto": where the chunk's triangles are thinner than the pixel rays that
-  // found them, so what the samples hit may miss what other eyes see).
-  std::vector<FarLodChoice> lods;
-  if (config.far_lod_error_px > 0) {
-    lods.resize(work.far_chunks.size());
-    std::vector<char> seen;
-    if (config.far_lod_replaces_exact == "auto") seen = seen_far_chunks(work);
-    for (std::size_t i = 0; i < work.far_chunks.size(); ++i) {
-      const std::vector<ChunkLodRef> levels = source.lods(work.far_chunks[i].id);
-      if (levels.empty()) continue;
-      const double distance = box_distance(eyes, work.far_chunks[i].bounds);
-      const double allowed = allowed_lod_error(distance, config.far_lod_error_px, config.face_size);
-      lods[i].level = choose_lod_level(levels, allowed);
-      if (lods[i].level == 0) continue;
-      for (const ChunkLodRef& l : levels)
-        if (l.level == lods[i].level) lods[i].triangles = l.triangle_count;
-      if (config.far_lod_replaces_exact == "off")
-        lods[i].replaces_exact = false;
-      else if (config.far_lod_replaces_exact == "auto")
-        lods[i].replaces_exact =
-            seen[i] && seen_subset_may_miss(median_triangle_width(*source.load(work.far_chunks[i].id)), distance,
-                                            kThinTrianglePixels, config.face_size);
-    }
-  }
+// Sets work.far: all geometry where the samples saw little (far.choice
+// "cheapest", sparse_seen_far_field), else the per-tile choice
+// (stages/far/far_choice.h) once the delta scans lost their redundant pixels,
+// meshing and simplifying faces on demand. The nested stages (redundancy,
+// depth_mesh, simplify) time themselves, with `own_time` paused.
+void choose_far(CellWork& work, const BakeConfig& config, const Box3d& eyes, std::span<const FarLodChoice> lods,
+                StageTimer& own_time) {
   const FarChoiceMode mode = parse_far_choice_mode(config.far_choice);
   if (mode == FarChoiceMode::cheapest) work.far = sparse_seen_far_field(work, config, eyes, lods);
-  if (!work.far) {
-    remove_redundancy(work, config);
-    const DepthMeshParams mesh_params = depth_mesh_params(config);
-    std::vector<FarChoiceSample> samples;
-    for (const SampleWork& s : work.samples) {
-      FarChoiceSample c;
-      for (int f = 0; f < kCubeFaces; ++f) {
-        c.meshes[std::size_t(f)] = s.meshed[std::size_t(f)] ? &s.simplified[std::size_t(f)] : nullptr;
-        c.seen[std::size_t(f)] = &s.cube.faces[std::size_t(f)].seen;
-        if (!c.meshes[std::size_t(f)])
-          c.mesh_guess[std::size_t(f)] = outline_edge_guess(s.cube.faces[std::size_t(f)], mesh_params);
-      }
-      samples.push_back(c);
-    }
-    work.far = choose_far_field(
-        eyes, work.far_chunks, samples, mode, config.far_geometry_factor,
-        [&](std::size_t sample, int face) -> const FaceMesh& { return face_mesh(work, config, sample, face); },
-        [&](std::size_t sample, int face) { return face_mesh_bound(work, config, sample, face); }, lods);
-  }
-  for (const char* stage : {"redundancy", "simplify"}) work.seconds.try_emplace(stage, 0.0);  // 0 when skipped
-  for (SampleWork& s : work.samples)  // bounded faces the choice never meshed: drawn wholly as geometry
-    for (auto& p : s.pending) p.reset();
-  drop_replaced_and_measure_kept(work, config);
-  work.depth_mesh_scratch = DepthMeshScratch{};
-  work.far_chunks.clear();
-  // The row's far geometry: whole chunks by reference, seen triangles by their
-  // numbers in the stored chunk (the viewer cuts them out of the store's chunk).
+  if (work.far) return;
+  own_time.pause_during([&] { remove_redundancy(work, config); });
+  const std::vector<FarChoiceSample> samples = far_choice_samples(work, config);
+  work.far = choose_far_field(
+      eyes, work.far_chunks, samples, mode, config.far_geometry_factor,
+      [&](std::size_t sample, int face) -> const FaceMesh& {
+        return own_time.pause_during([&]() -> const FaceMesh& { return face_mesh(work, config, sample, face); });
+      },
+      [&](std::size_t sample, int face) {
+        return own_time.pause_during([&] { return face_mesh_bound(work, config, sample, face); });
+      },
+      lods);
+}
+
+// The row's far geometry (whole chunks by reference, seen triangles by their
+// numbers in the stored chunk: the viewer cuts them out of the store's chunk)
+// and its per-face choice.
+void write_far_rows(CellWork& work, const ChunkSource& source) {
   CellRow& row = work.row;
   row.far_geometry.clear();
   row.far_choice.clear();
@@ -563,6 +598,24 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
     row.far_choice.push_back({f, c.geometry_tiles, c.tdm_triangles, c.replaced_triangles, c.geometry_triangles});
   }
 }
+
+}  // namespace
+
+void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource& source) {
+  StageTimer own_time(work, "far_choice");  // paused while the stages run inside it time themselves
+  grow_seen_rings(work, config, source);
+  const Box3d eyes = viewer_eyes(work);
+  const std::vector<FarLodChoice> lods = choose_far_levels(work, config, source, eyes);
+  choose_far(work, config, eyes, lods, own_time);
+  for (const char* stage : {"redundancy", "simplify"}) work.seconds.try_emplace(stage, 0.0);  // 0 when skipped
+  for (SampleWork& s : work.samples)  // bounded faces the choice never meshed: drawn wholly as geometry
+    for (auto& p : s.pending) p.reset();
+  drop_replaced_and_measure_kept(work, config, own_time);
+  work.depth_mesh_scratch = DepthMeshScratch{};
+  work.far_chunks.clear();
+  write_far_rows(work, source);
+}
+
 
 void run_encode(CellWork& work, const BakeConfig& config) {
   StageTimer timer(work, "encode");
