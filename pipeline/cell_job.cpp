@@ -408,7 +408,8 @@ SimplifyError measure_face_error(CellWork& work, const BakeConfig& config, std::
   }
   StageTimer timer(work, "simplify");
   try {
-    return ruler ? ruler.measure(s.simplified[k]) : measure_simplification_error(dense, s.simplified[k], config.face_size);
+    return ruler ? ruler.measure(s.simplified[k])
+                 : measure_simplification_error(dense, s.simplified[k], config.face_size);
   } catch (const std::exception& e) {
     throw StageError("simplify", where + e.what());
   }
