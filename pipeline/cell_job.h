@@ -117,6 +117,9 @@ Box3d far_field_discard_box(const Box3d& cell_bounds, double cull_half_size, con
 // The SampleParams and lights of every sample a cell takes with `config`.
 SampleParams cell_sample_params(const BakeConfig& config);
 ShadingLights cell_shading_lights(const BakeConfig& config);
+// The depth-mesh parameters of `config` (skin angle and depth jump; no skin
+// witnesses).
+DepthMeshParams cell_depth_mesh_params(const BakeConfig& config);
 // Takes the cell's samples with `sampler` (whichever backend it is).
 void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& source, CubeSampler& sampler);
 // Links the samples into their dependency tree (SampleWork::parent; timed as
@@ -133,6 +136,11 @@ void run_sample_tree(CellWork& work, const BakeConfig& config);
 // geometry and per-face choice written (loading the chunks it keeps
 // triangles of from `source`).
 void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource& source);
+// far.lod_replaces_exact = "auto": a far chunk's level replaces its exact
+// seen triangles when their median width is under this many cube-face pixels
+// from the nearest eye (measured at 12.7 M, cells 28-36: 1 px 36.91 dB
+// median over random views, levels everywhere 36.77, never 32.00).
+inline constexpr double kThinTrianglePixels = 1.0;
 void run_encode(CellWork& work, const BakeConfig& config);
 
 // The stages run_far_choice runs on demand, when it needs their output.
@@ -155,6 +163,13 @@ inline constexpr int kMaxPendingFaces = 8;
 // At most this many faces of a cell keep a SimplifyRuler (~15 MB each) from
 // face_mesh until the far choice is done.
 inline constexpr int kMaxRulerFaces = 8;
+// The simplifier's error for face `face` of sample `sample`, whose simplified
+// mesh is still the one face_mesh made: with `ruler` when face_mesh kept one
+// for the face, else by building the dense mesh again (timed as depth_mesh)
+// and analysing it (timed as simplify); the same figures either way. A
+// failure throws StageError naming the stage.
+SimplifyError measure_face_error(CellWork& work, const BakeConfig& config, std::size_t sample, int face,
+                                 const SimplifyRuler& ruler);
 
 // A failure of a stage run inside another (a face meshed on demand by the far choice).
 struct StageError : std::runtime_error {
