@@ -115,7 +115,7 @@ int run(int argc, char** argv) {
     work.cell = cell;
     run_cull_box(work, config, store);
     run_sample(work, config, store, *sampler);
-    run_depth_mesh(work, config);
+    run_sample_tree(work, config);
     DepthMeshParams mesh_params;
     mesh_params.skin_angle_degrees = config.skin_angle_deg;
     mesh_params.max_relative_depth_jump = config.depth_jump;

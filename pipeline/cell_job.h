@@ -1,11 +1,21 @@
 // The per-cell job: which stage feeds which, stage names and versions, the
 // parameter/input hashes that make reruns resumable, and the assembly of a
-// cell database row. Stages run in the order
-//   cull_box -> sample -> depth_mesh -> simplify -> far_choice -> encode
-// (the far choice meshes and simplifies, on demand, only the faces its
-// decision depends on) and the runner schedules them (sample needs a CubeSampler, one per thread;
-// the others are plain CPU work). A stage that throws turns the cell into a failed row whose
-// message names the cell and the stage.
+// cell database row. The runner calls the steps in this order (sample needs
+// a CubeSampler, one per thread; the others are plain CPU work):
+//   step              timed as (stage_seconds) and named in errors as
+//   run_cull_box      cull_box
+//   run_sample        sample (its best-next-view choices also as void)
+//   run_sample_tree   depth_mesh: the samples linked into their dependency tree
+//   run_far_choice    far_choice, and inside it, on demand: redundancy
+//                     (remove_redundancy), depth_mesh and simplify (face_mesh)
+//   run_encode        encode
+// No step meshes every face: the far choice removes the delta scans'
+// redundant pixels, then builds and simplifies depth meshes only for the
+// faces its decision depends on (a face drawn wholly as geometry is usually
+// never meshed; that laziness is what keeps a bake cheap). Each stage's
+// seconds are its own: the far choice's timer stops while the stages inside
+// it run. A stage that throws turns the cell into a failed row whose message
+// names the cell and the stage.
 #pragma once
 
 #include <array>
@@ -54,11 +64,12 @@ struct CellHashes {
 // Hashes of what determines a cell's rows (not thread count, shard or timing).
 CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& config, const std::string& store_hash);
 
-// One panoramic sample of a cell in flight: taken by run_sample, reduced to
-// its delta scan and meshed by run_depth_mesh, simplified, encoded.
+// One panoramic sample of a cell in flight: taken by run_sample, linked into
+// the samples' tree by run_sample_tree, reduced to its delta scan and its
+// faces meshed and simplified on demand in run_far_choice, encoded.
 struct SampleWork {
   CubeSample cube;
-  int parent = -1;                        // dependency tree (set by run_depth_mesh)
+  int parent = -1;                        // dependency tree (set by run_sample_tree)
   double void_after = -1;                 // worst candidate's void fraction once this sample was taken (-1: not measured)
   std::uint64_t covered = 0, removed = 0; // pixels with a surface, and of those removed as redundant
   double seconds = 0;                     // this sample's share of the bake (render + redundancy + mesh + simplify + encode)
@@ -106,13 +117,34 @@ Box3d far_field_discard_box(const Box3d& cell_bounds, double cull_half_size, con
 // The SampleParams and lights of every sample a cell takes with `config`.
 SampleParams cell_sample_params(const BakeConfig& config);
 ShadingLights cell_shading_lights(const BakeConfig& config);
+// The depth-mesh parameters of `config` (skin angle and depth jump; no skin
+// witnesses).
+DepthMeshParams cell_depth_mesh_params(const BakeConfig& config);
 // Takes the cell's samples with `sampler` (whichever backend it is).
 void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& source, CubeSampler& sampler);
-// Links the samples into their dependency tree. Delta scans are reduced to
-// what their ancestors do not hold (remove_redundancy) and the faces' depth
-// meshes built later, on demand (face_mesh), only when the far choice needs
-// depth meshes.
-void run_depth_mesh(CellWork& work, const BakeConfig& config);
+// Links the samples into their dependency tree (SampleWork::parent; timed as
+// "depth_mesh", the stage whose inputs it prepares). Builds no mesh: delta
+// scans are reduced to what their ancestors do not hold (remove_redundancy)
+// and the faces' depth meshes built (face_mesh) later, inside run_far_choice.
+void run_sample_tree(CellWork& work, const BakeConfig& config);
+// Chooses exact far geometry or depth meshes per face tile and drops the
+// depth-mesh triangles that geometry replaces (stages/far/far_choice.h), in
+// named steps: seen triangles grown by far.seen_rings, far chunk levels
+// chosen, the choice (remove_redundancy, then face_mesh_bound and face_mesh
+// only for the faces the choice depends on: a face drawn wholly as geometry
+// is usually never meshed), the kept meshes' errors measured, the row's far
+// geometry and per-face choice written (loading the chunks it keeps
+// triangles of from `source`).
+void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource& source);
+// far.lod_replaces_exact = "auto": a far chunk's level replaces its exact
+// seen triangles when their median width is under this many cube-face pixels
+// from the nearest eye (measured at 12.7 M, cells 28-36: 1 px 36.91 dB
+// median over random views, levels everywhere 36.77, never 32.00).
+inline constexpr double kThinTrianglePixels = 1.0;
+void run_encode(CellWork& work, const BakeConfig& config);
+
+// The stages run_far_choice runs on demand, when it needs their output.
+
 // Reduces each delta scan to what its ancestors do not hold (timed as
 // "redundancy"); once per cell, before any face is meshed.
 void remove_redundancy(CellWork& work, const BakeConfig& config);
@@ -131,13 +163,13 @@ inline constexpr int kMaxPendingFaces = 8;
 // At most this many faces of a cell keep a SimplifyRuler (~15 MB each) from
 // face_mesh until the far choice is done.
 inline constexpr int kMaxRulerFaces = 8;
-// Chooses exact far geometry or depth meshes per face tile and drops the
-// depth-mesh triangles that geometry replaces (stages/far/far_choice.h); meshes
-// and simplifies only the faces the choice depends on (a face drawn wholly as
-// geometry is usually never meshed). Fills the row's far geometry and
-// per-face choice (loads the chunks it keeps triangles of from `source`).
-void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource& source);
-void run_encode(CellWork& work, const BakeConfig& config);
+// The simplifier's error for face `face` of sample `sample`, whose simplified
+// mesh is still the one face_mesh made: with `ruler` when face_mesh kept one
+// for the face, else by building the dense mesh again (timed as depth_mesh)
+// and analysing it (timed as simplify); the same figures either way. A
+// failure throws StageError naming the stage.
+SimplifyError measure_face_error(CellWork& work, const BakeConfig& config, std::size_t sample, int face,
+                                 const SimplifyRuler& ruler);
 
 // A failure of a stage run inside another (a face meshed on demand by the far choice).
 struct StageError : std::runtime_error {

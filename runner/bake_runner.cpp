@@ -242,7 +242,7 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
       return w;
     };
     const auto mesh_body = [&](WorkPtr w) {
-      run_stage(*w, "depth_mesh", [&] { run_depth_mesh(*w, config); });
+      run_stage(*w, "depth_mesh", [&] { run_sample_tree(*w, config); });
       run_stage(*w, "far_choice", [&] { run_far_choice(*w, config, store); });
       run_stage(*w, "encode", [&] { run_encode(*w, config); });
       return w;
