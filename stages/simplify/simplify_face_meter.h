@@ -6,6 +6,7 @@
 // §5.2.3).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -29,8 +30,8 @@ struct FaceViolation {
 
 // Reads the labelled faces of `cdt` (whose constraints `owners` owns) against
 // the dense face `g` with regions `regions` and outlines `outlines`. All are
-// referred to and must outlive the meter; the outlines' on_outline is read
-// once, on construction.
+// referred to and must outlive the meter; which lattice points lie off the
+// outlines is indexed once, on construction (refining outlines keeps them).
 class TinFaceMeter {
  public:
   // `eps`: the relative depth error a dense vertex may have.
