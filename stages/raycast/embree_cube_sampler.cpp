@@ -3,14 +3,15 @@
 // streams: Fuetterling et al. 2015, JCGT 4(5); https://www.embree.org/api.html.
 #include "stages/raycast/embree_cube_sampler.h"
 
-#include <embree3/rtcore.h>
-
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include "stages/raycast/instance_scene.h"
 #include "stages/raycast/ray_segments.h"
@@ -22,59 +23,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-constexpr unsigned kStream = 1024;  // rays per rtcIntersect1M call
-// How many hits ahead shading asks for a triangle's indices, and for its
-// corners' attributes (prefetch_triangle_indices, prefetch_corner_attributes).
-constexpr unsigned kPrefetchIndicesAhead = 32;
-constexpr unsigned kPrefetchAttributesAhead = 16;
-
-void init_ray(RTCRayHit& r, const Vec3f& origin, const Vec3d& dir, float tnear, float tfar, unsigned id) {
-  r.ray.org_x = origin.x;
-  r.ray.org_y = origin.y;
-  r.ray.org_z = origin.z;
-  r.ray.dir_x = static_cast<float>(dir.x);
-  r.ray.dir_y = static_cast<float>(dir.y);
-  r.ray.dir_z = static_cast<float>(dir.z);
-  r.ray.tnear = tnear;
-  r.ray.tfar = tfar;
-  r.ray.time = 0;
-  r.ray.mask = 0xFFFFFFFFu;
-  r.ray.id = id;
-  r.ray.flags = 0;
-  r.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  r.hit.primID = RTC_INVALID_GEOMETRY_ID;
-  r.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-}
-
-// Alpha-tested layers a ray passes through before it gives up (background).
-constexpr int kMaxAlphaLayers = 64;
-
-// The chunk a ray hit in `scene` (null: a miss).
-const Chunk* hit_chunk(const InstanceScene& scene, const RTCRayHit& r) {
-  if (r.hit.geomID == RTC_INVALID_GEOMETRY_ID) return nullptr;
-  return scene.instance(r.hit.instID[0]).chunks[r.hit.geomID].get();
-}
-
-// The chunk triangle and barycentrics of a ray's hit in `scene`.
-SurfaceHit surface_hit(const InstanceScene& scene, const RTCRayHit& r) {
-  SurfaceHit hit;
-  hit.chunk = hit_chunk(scene, r);
-  hit.triangle = r.hit.primID;
-  hit.u = r.hit.u;
-  hit.v = r.hit.v;
-  hit.geometric_normal = {r.hit.Ng_x, r.hit.Ng_y, r.hit.Ng_z};  // instances only translate
-  return hit;
-}
-
-// Per face and pixel, the nearest hit over the batches traced so far: its
-// colour, depth (the limit of later batches' rays) and chunk triangle.
-struct FaceHits {
-  std::vector<Rgba8> color;
-  std::vector<float> depth;
-  std::vector<std::int64_t> chunk;  // -1: none
-  std::vector<std::uint32_t> triangle;
-};
 
 // True when no ray of the size x size faces can hit anything inside `box`
 // (world) nearer than what it already hit. Per face, in the face's frame
@@ -117,6 +65,68 @@ bool box_hidden(const Box3d& box, const Vec3d& eye, const std::array<FaceHits, k
   return true;
 }
 
+// The groups a cube map traces, and whether they fit one batch (one scene).
+struct CubeGroups {
+  std::vector<ChunkGroupRefs> groups;  // nearest first unless one_batch
+  bool one_batch = true;
+};
+
+// Sorts `groups` by the distance of their bounds to `eye`, nearest first.
+void sort_nearest_first(std::vector<ChunkGroupRefs>& groups, const Vec3d& eye) {
+  std::vector<std::pair<double, std::size_t>> order;
+  for (std::size_t i = 0; i < groups.size(); ++i) order.emplace_back(groups[i].bounds.distance_to(eye), i);
+  std::sort(order.begin(), order.end());
+  std::vector<ChunkGroupRefs> sorted;
+  for (const auto& [distance, i] : order) sorted.push_back(std::move(groups[i]));
+  groups = std::move(sorted);
+}
+
+// The groups of `cache` holding the chunks a cube map at `eye` may see. When
+// they exceed one batch, the cache's focus moves to `eye` and they come
+// nearest first, so later batches are mostly hidden behind what earlier ones
+// hit and are skipped without being built.
+CubeGroups choose_groups(ChunkBvhCache& cache, const Vec3d& eye, const Box3d& cull_box, double near_plane,
+                         const ChunkSource& source) {
+  CubeGroups cube;
+  // A model that is one group is traced whole: a cube map sees it unless it
+  // lies inside the cull box, and the same BVH answers whichever of its
+  // chunks the faces see, so the source's chunk query (~5 % of a cube map on
+  // the 12.7 M plant) is skipped.
+  cube.groups = cache.all_groups(source);
+  if (cube.groups.size() == 1 && cull_box.strictly_contains(cube.groups.front().bounds)) cube.groups.clear();
+  if (cube.groups.size() > 1) cube.groups = cache.groups_of(cube_chunks(eye, cull_box, near_plane, source), source);
+  std::size_t estimated_bytes = 0;
+  for (const ChunkGroupRefs& g : cube.groups) estimated_bytes += g.estimated_bytes;
+  cube.one_batch = estimated_bytes <= cache.one_batch_bytes();
+  if (!cube.one_batch) {
+    cache.set_focus(eye);
+    sort_nearest_first(cube.groups, eye);
+  }
+  return cube;
+}
+
+// The next batch of `cube`'s groups from index `next` on, which it advances
+// past them: every group when all fit one batch; else groups in order up to
+// the cache's batch bytes, skipping (and counting in `hidden`) those that
+// box_hidden finds behind the hits in `faces` so far. Empty when none is left.
+std::vector<std::size_t> next_batch(const CubeGroups& cube, std::size_t& next, const ChunkBvhCache& cache,
+                                    const Vec3d& eye, const std::array<FaceHits, kCubeFaces>& faces, int size,
+                                    std::uint64_t& hidden) {
+  std::vector<std::size_t> batch;  // groups
+  std::size_t bytes = 0;
+  for (; next < cube.groups.size(); ++next) {
+    const ChunkGroupRefs& g = cube.groups[next];
+    if (!cube.one_batch && box_hidden(g.bounds, eye, faces, size)) {
+      ++hidden;
+      continue;
+    }
+    if (!cube.one_batch && !batch.empty() && bytes + g.estimated_batch_bytes > cache.batch_bytes()) break;
+    batch.push_back(g.group);
+    bytes += g.estimated_batch_bytes;
+  }
+  return batch;
+}
+
 }  // namespace
 
 std::vector<std::uint32_t> block_order(int size) {
@@ -142,200 +152,58 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
   validate_sample_inputs(eye, params);
   const HitTexturer texturer(source, *textures_);
   auto t0 = Clock::now();
-  // A model that is one group is traced whole: a cube map sees it unless it
-  // lies inside the cull box, and the same BVH answers whichever of its
-  // chunks the faces see, so the source's chunk query (~5 % of a cube map on
-  // the 12.7 M plant) is skipped.
-  std::vector<ChunkGroupRefs> groups = cache_->all_groups(source);
-  if (groups.size() == 1 && cull_box.strictly_contains(groups.front().bounds)) groups.clear();
-  if (groups.size() > 1)
-    groups = cache_->groups_of(cube_chunks(eye, cull_box, params.near_plane, source), source);
-  std::size_t estimated_bytes = 0;
-  for (const ChunkGroupRefs& g : groups) estimated_bytes += g.estimated_bytes;
-  const bool one_batch = estimated_bytes <= cache_->one_batch_bytes();
-  if (!one_batch) {
-    cache_->set_focus(eye);
-    // Nearest groups first, so later batches are mostly hidden behind what
-    // earlier ones hit and are skipped without being built.
-    std::vector<std::pair<double, std::size_t>> order;
-    for (std::size_t i = 0; i < groups.size(); ++i) order.emplace_back(groups[i].bounds.distance_to(eye), i);
-    std::sort(order.begin(), order.end());
-    std::vector<ChunkGroupRefs> sorted;
-    for (const auto& [distance, i] : order) sorted.push_back(std::move(groups[i]));
-    groups = std::move(sorted);
-  }
+  const CubeGroups cube = choose_groups(*cache_, eye, cull_box, params.near_plane, source);
   stats_.gather_seconds += seconds_since(t0);
-
   const int size = params.face_size * params.supersample;
-  if (order_size_ != size) {
-    order_ = block_order(size);
-    coordinate_.resize(std::size_t(size));
-    inverse_coordinate_.resize(std::size_t(size));
-    for (int i = 0; i < size; ++i) {
-      coordinate_[std::size_t(i)] = 2.0 * (i + 0.5) / size - 1.0;  // 0 (odd sizes): slab_interval handles it
-      inverse_coordinate_[std::size_t(i)] = 1.0 / coordinate_[std::size_t(i)];
-    }
-    tile_of_ = pixel_tiles(size);
-    order_size_ = size;
-  }
-  const EyeBox box = eye_relative_box(cull_box, eye);
-  const std::size_t pixels = std::size_t(size) * std::size_t(size);
+  set_render_size(size);
   std::array<FaceHits, kCubeFaces> faces;
-  for (FaceHits& f : faces) {
-    f.color.assign(pixels, Rgba8{0, 0, 0, 0});
-    f.depth.assign(pixels, kBackgroundDepth);
-    f.chunk.assign(pixels, -1);
-    f.triangle.assign(pixels, 0);
-  }
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-  std::vector<RTCRayHit> rays(kStream), again(kStream);
-  std::vector<float> second(kStream);  // where each ray's second segment starts (inf: none)
-  for (std::size_t next = 0; next < groups.size();) {
-    // The next batch: every group when all fit (as one scene); else groups in
-    // order up to the batch bytes, skipping those hidden behind earlier hits.
+  for (FaceHits& f : faces) f.clear(std::size_t(size) * std::size_t(size));
+  FaceTracer tracer(shader_, texturer, eye_relative_box(cull_box, eye), params.near_plane, size, order_, coordinate_,
+                    inverse_coordinate_, face_slabs_, stats_);
+  for (std::size_t next = 0; next < cube.groups.size();) {
     t0 = Clock::now();
-    std::vector<std::size_t> batch;  // groups
-    std::size_t bytes = 0;
-    for (; next < groups.size(); ++next) {
-      const ChunkGroupRefs& g = groups[next];
-      if (!one_batch && box_hidden(g.bounds, eye, faces, size)) {
-        ++stats_.groups_hidden;
-        continue;
-      }
-      if (!one_batch && !batch.empty() && bytes + g.estimated_batch_bytes > cache_->batch_bytes()) break;
-      batch.push_back(g.group);
-      bytes += g.estimated_batch_bytes;
-    }
+    std::vector<std::size_t> batch = next_batch(cube, next, *cache_, eye, faces, size, stats_.groups_hidden);
     if (batch.empty()) break;
     std::vector<std::shared_ptr<const ChunkGroupBvh>> bvhs =
-        cache_->acquire_groups(std::move(batch), source, !one_batch);
+        cache_->acquire_groups(std::move(batch), source, !cube.one_batch);
     stats_.gather_seconds += seconds_since(t0);
-    t0 = Clock::now();
-    const InstanceScene scene(*cache_, std::move(bvhs), eye);
-    stats_.scene_seconds += seconds_since(t0);
-    stats_.instances += scene.size();
-    ++stats_.batches;
-    t0 = Clock::now();
-    for (int face = 0; face < kCubeFaces; ++face) {
-      FaceHits& out = faces[std::size_t(face)];
-      const FaceBasis b = cube_face_basis(face);
-      const auto to_float = [](const Vec3d& v) { return Vec3f{float(v.x), float(v.y), float(v.z)}; };
-      const Vec3f step_x = to_float(b.right * (2.0 / size)), step_y = to_float(b.up * (2.0 / size));
-      // A hit counts only when strictly nearer than an earlier batch's: ties
-      // keep the earlier one (with one batch, the limit is +inf throughout).
-      const auto accept = [&](std::uint32_t p, const SurfaceHit& hit, float t, const std::array<float, 4>* texel) {
-        if (!(t < out.depth[p])) return;
-        out.color[p] = shader_.shade(hit, texel);
-        out.depth[p] = t;
-        out.chunk[p] = hit.chunk->id;
-        out.triangle[p] = hit.triangle;
-        ++stats_.hits;
-      };
-      face_slabs_.set(b, box, coordinate_, inverse_coordinate_);
-      for (std::size_t start = 0; start < pixels; start += kStream) {
-        const unsigned count = unsigned(std::min<std::size_t>(kStream, pixels - start));
-        for (unsigned k = 0; k < count; ++k) {
-          const std::uint32_t p = order_[start + k];
-          const std::uint32_t row = p / std::uint32_t(size), col = p - row * std::uint32_t(size);
-          const Vec3d dir = cube_face_direction(b, coordinate_[col], -coordinate_[row]);
-          const RaySegments seg = face_slabs_.segments(col, row, params.near_plane);
-          init_ray(rays[k], scene.ray_origin(), dir, seg.t0, std::min(seg.t1, out.depth[p]), p);
-          second[k] = seg.two && seg.t2 < out.depth[p] ? seg.t2 : std::numeric_limits<float>::infinity();
-        }
-        rtcIntersect1M(scene.scene(), &context, rays.data(), count, sizeof(RTCRayHit));
-        stats_.rays += count;
-        // Rays that missed their first segment and have a second one: trace that.
-        unsigned missed = 0;
-        for (unsigned k = 0; k < count; ++k) {
-          if (rays[k].hit.geomID != RTC_INVALID_GEOMETRY_ID || std::isinf(second[k])) continue;
-          RTCRayHit& r = again[missed++];
-          r = rays[k];
-          r.ray.tnear = second[k];
-          r.ray.tfar = out.depth[order_[start + k]];
-          r.ray.id = k;
-          r.hit.geomID = r.hit.primID = r.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-        }
-        if (missed > 0) {
-          rtcIntersect1M(scene.scene(), &context, again.data(), missed, sizeof(RTCRayHit));
-          stats_.second_rays += missed;
-          for (unsigned m = 0; m < missed; ++m) rays[again[m].ray.id] = again[m];
-        }
-        // Hits ahead: their triangles' indices, then (nearer) their corners'
-        // attributes, so shading does not wait on each dependent load in turn.
-        for (unsigned k = 0; k < count; ++k) {
-          if (k + kPrefetchIndicesAhead < count)
-            if (const Chunk* c = hit_chunk(scene, rays[k + kPrefetchIndicesAhead]))
-              prefetch_triangle_indices(*c, rays[k + kPrefetchIndicesAhead].hit.primID);
-          if (k + kPrefetchAttributesAhead < count)
-            if (const Chunk* c = hit_chunk(scene, rays[k + kPrefetchAttributesAhead]))
-              prefetch_corner_attributes(*c, rays[k + kPrefetchAttributesAhead].hit.primID);
-          const RTCRayHit& r = rays[k];
-          if (r.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
-          const std::uint32_t p = order_[start + k];
-          SurfaceHit hit = surface_hit(scene, r);
-          if (texturer.untextured()) {
-            accept(p, hit, r.ray.tfar, nullptr);
-            continue;
-          }
-          const Vec3f dir{r.ray.dir_x, r.ray.dir_y, r.ray.dir_z};
-          HitTexel texel = texturer.texel(hit, dir, r.ray.tfar, step_x, step_y);
-          float t = r.ray.tfar;
-          if (texel.dropped) {
-            // Alpha-tested away: go on behind it, one hit at a time, within the
-            // ray's segments up to the nearest earlier hit (rare: foliage edges).
-            const RaySegments seg = ray_segments(Vec3d{dir.x, dir.y, dir.z}, box, params.near_plane);
-            const float limit = out.depth[p];
-            RTCIntersectContext single;
-            rtcInitIntersectContext(&single);
-            // The dropped triangle; Embree may return it again from just past
-            // it (an instance's transform rounds the ray's tnear), so each
-            // such return moves the start on by a growing relative step.
-            unsigned dropped_inst = r.hit.instID[0], dropped_geom = r.hit.geomID, dropped_prim = r.hit.primID;
-            float step = 0;
-            for (int behind = 0; behind < kMaxAlphaLayers && texel.dropped; ++behind) {
-              RTCRayHit next;
-              const float from = std::max(std::nextafter(t, std::numeric_limits<float>::infinity()), t + step);
-              bool found = false;
-              if (from < seg.t1) {
-                init_ray(next, scene.ray_origin(), Vec3d{dir.x, dir.y, dir.z}, std::max(from, seg.t0),
-                         std::min(seg.t1, limit), p);
-                rtcIntersect1(scene.scene(), &single, &next);
-                found = next.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-              }
-              if (!found && seg.two) {
-                init_ray(next, scene.ray_origin(), Vec3d{dir.x, dir.y, dir.z}, std::max(from, seg.t2), limit,
-                         p);
-                rtcIntersect1(scene.scene(), &single, &next);
-                found = next.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-              }
-              ++stats_.alpha_retraces;
-              if (!found) break;
-              if (next.hit.instID[0] == dropped_inst && next.hit.geomID == dropped_geom &&
-                  next.hit.primID == dropped_prim) {
-                step = step > 0 ? 2 * step : std::max(t, 1.0f) * 1e-6f;
-                continue;
-              }
-              step = 0;
-              dropped_inst = next.hit.instID[0], dropped_geom = next.hit.geomID, dropped_prim = next.hit.primID;
-              hit = surface_hit(scene, next);
-              t = next.ray.tfar;
-              texel = texturer.texel(hit, dir, t, step_x, step_y);
-            }
-            if (texel.dropped) continue;  // nothing opaque behind here
-          }
-          accept(p, hit, t, texel.textured ? &texel.texel : nullptr);
-        }
-      }
-    }
-    cache_->check_device("tracing a cube map");
-    stats_.trace_seconds += seconds_since(t0);
-    // This batch's scene is gone: its BVHs may make room for the next batch.
-    if (!one_batch) cache_->trim();
+    trace_batch(std::move(bvhs), eye, cube.one_batch, tracer, faces);
   }
+  return finish_cube(eye, params, faces);
+}
 
+void EmbreeCubeSampler::set_render_size(int size) {
+  if (order_size_ == size) return;
+  order_ = block_order(size);
+  coordinate_.resize(std::size_t(size));
+  inverse_coordinate_.resize(std::size_t(size));
+  for (int i = 0; i < size; ++i) {
+    coordinate_[std::size_t(i)] = 2.0 * (i + 0.5) / size - 1.0;  // 0 (odd sizes): slab_interval handles it
+    inverse_coordinate_[std::size_t(i)] = 1.0 / coordinate_[std::size_t(i)];
+  }
+  tile_of_ = pixel_tiles(size);
+  order_size_ = size;
+}
+
+void EmbreeCubeSampler::trace_batch(std::vector<std::shared_ptr<const ChunkGroupBvh>> bvhs, const Vec3d& eye,
+                                    bool one_batch, FaceTracer& tracer, std::array<FaceHits, kCubeFaces>& faces) {
+  auto t0 = Clock::now();
+  const InstanceScene scene(*cache_, std::move(bvhs), eye);
+  stats_.scene_seconds += seconds_since(t0);
+  stats_.instances += scene.size();
+  ++stats_.batches;
   t0 = Clock::now();
+  for (int face = 0; face < kCubeFaces; ++face) tracer.trace(scene, face, faces[std::size_t(face)]);
+  cache_->check_device("tracing a cube map");
+  stats_.trace_seconds += seconds_since(t0);
+  // Traced: this batch's BVHs (let go with its scene on return) may make room
+  // for the next batch.
+  if (!one_batch) cache_->trim();
+}
+
+CubeSample EmbreeCubeSampler::finish_cube(const Vec3d& eye, const SampleParams& params,
+                                          std::array<FaceHits, kCubeFaces>& faces) {
+  const auto t0 = Clock::now();
   CubeSample sample;
   sample.eye = eye;
   SeenScratch scratch;

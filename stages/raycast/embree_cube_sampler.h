@@ -13,6 +13,7 @@
 // the directions have forward component 1; its colour is hit_shading.h's,
 // times the material's texel (hit_texturing.h) when it has a texture; a hit
 // an alpha test drops is traced again from just behind it.
+// The rays of one face against one batch are traced by face_tracer.h.
 // Supersampled faces go through downsample_face like the GL path's. When a
 // cube map's groups exceed ChunkBvhCache::batch_bytes (half the cache's cap)
 // it is traced batch by batch, nearest groups first, each batch's rays
@@ -30,6 +31,7 @@
 // API https://www.embree.org/api.html (rtcIntersect1M).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -37,6 +39,7 @@
 
 #include "stages/sample/cube_sampler.h"
 #include "stages/raycast/chunk_bvh_cache.h"
+#include "stages/raycast/face_tracer.h"
 #include "stages/raycast/hit_shading.h"
 #include "stages/raycast/hit_texturing.h"
 #include "stages/raycast/ray_segments.h"
@@ -76,8 +79,18 @@ class EmbreeCubeSampler final : public CubeSampler {
   const ChunkBvhCache& cache() const { return *cache_; }
 
  private:
+  // The cube map at `eye`: its groups chosen, traced batch by batch, finished.
   CubeSample trace_cube(const Vec3d& eye, const Box3d& cull_box, const SampleParams& params,
                         const ChunkSource& source);
+  // Makes order_, coordinate_, inverse_coordinate_ and tile_of_ for size x
+  // size faces (kept when they already are).
+  void set_render_size(int size);
+  // Instances `bvhs` in the frame of `eye`, traces the six faces against them
+  // into `faces` and, unless the cube map is `one_batch`, trims the cache.
+  void trace_batch(std::vector<std::shared_ptr<const ChunkGroupBvh>> bvhs, const Vec3d& eye, bool one_batch,
+                   FaceTracer& tracer, std::array<FaceHits, kCubeFaces>& faces);
+  // The sample of the traced `faces` (downsampled, their seen triangles listed).
+  CubeSample finish_cube(const Vec3d& eye, const SampleParams& params, std::array<FaceHits, kCubeFaces>& faces);
 
   std::shared_ptr<ChunkBvhCache> cache_;
   std::shared_ptr<MipTextureCache> textures_;
