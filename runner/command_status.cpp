@@ -129,6 +129,7 @@ void note_state(std::string& have, const std::string& seen) {
   if (rank(seen) > rank(have)) have = seen;
 }
 
+// `status`'s command line.
 struct StatusOptions {
   std::vector<std::string> dbs;
   bool json = false, check = false, repair = false;
@@ -166,6 +167,7 @@ void show_store_status(const StatusOptions& opt) {
                              " damaged geometry store(s) (problems listed above); re-ingest the model");
 }
 
+// A meta value --check found damaged.
 struct DamagedMeta {
   std::string database, key, reason;
 };

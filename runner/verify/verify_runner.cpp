@@ -163,6 +163,7 @@ struct BakedFacts {
   std::uint64_t far_budget = 0;
 };
 
+// Reads them from the database's meta; a damaged cell_size fails the run naming the key.
 BakedFacts read_baked_facts(const CellDb& db, const VerifyOptions& options) {
   BakedFacts facts;
   facts.up_name = db.meta("up").value_or("z");
@@ -203,6 +204,8 @@ struct SelectedCells {
   std::map<std::int64_t, CellStamp> stamps;
 };
 
+// The done cells CellIndex reads, and the done rows it cannot read (so they
+// fail located in the report), narrowed to --cells.
 SelectedCells select_done_cells(const CellDb& db, const std::string& selection) {
   SelectedCells selected;
   std::vector<CellSpec>& specs = selected.specs;
@@ -318,6 +321,7 @@ struct ViewDrawing {
   }
 };
 
+// The drawing of a cell's views under the options and the far budget.
 ViewDrawing view_drawing(const VerifyOptions& options, std::uint64_t far_budget) {
   ViewDrawing d;
   d.options.samples.far_budget = far_budget;
