@@ -37,6 +37,7 @@
 #include "stages/cull_box.h"
 #include "stages/render/chunk_renderer.h"
 #include "stages/render/gl_context.h"
+#include "stages/render/gl_sample_cube.h"
 #include "stages/render/gl_functions.h"
 #include "stages/sample/sample.h"
 #include "stages/far/seen_triangles.h"

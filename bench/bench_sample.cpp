@@ -32,6 +32,7 @@
 #include "bench/bench_store_eyes.h"
 #include "stages/render/chunk_renderer.h"
 #include "stages/render/gl_context.h"
+#include "stages/render/gl_sample_cube.h"
 #include "stages/cull_box.h"
 #include "stages/raycast/embree_cube_sampler.h"
 #include "runner/heap_tuning.h"

@@ -223,23 +223,11 @@ ReadOptions read_options(const IngestParams& params) {
   return options;
 }
 
-}  // namespace
-
-IngestReport ingest_models(const std::vector<std::filesystem::path>& models, const std::filesystem::path& store,
-                           const IngestParams& params, const ParallelFor& parallel_for,
-                           const ProgressCallback& progress) {
-  if (models.empty()) throw std::invalid_argument("ingest: no model files given");
-  if (params.max_chunk_triangles < 1) throw std::invalid_argument("ingest: max_chunk_triangles must be >= 1");
-  IngestReport report;
-  const auto t_read = Clock::now();
-  const std::filesystem::path temp_dir =
-      params.temp_dir.empty() ? std::filesystem::absolute(store).parent_path() : params.temp_dir;
-  std::filesystem::create_directories(temp_dir);
-  TriangleSpill spill(temp_dir / (store.filename().string() + ".spill-" + std::to_string(::getpid())),
-                      params.memory_budget_bytes);
-
-  if (params.max_texture_size < 1) throw std::invalid_argument("ingest: max_texture_size must be >= 1");
-  GeometryStoreWriter writer(store);
+// What reading the model files gathers for the store, beside the triangles
+// themselves (in the spill): materials (each file's after the previous ones'),
+// the files' provenance, a sort key per kept triangle, the files' claims about
+// the up axis, the kept triangles' bounds, and the textures imported so far.
+struct ReadModels {
   std::map<std::string, StoredTexture> texture_ids;  // by resolved file path or embedded-image key
   std::vector<Material> materials;
   std::vector<SourceFileRecord> sources;
@@ -252,77 +240,107 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   std::vector<std::string> up_claims;  // "FILE: y (reason)" for files that say
   std::string up_from_files;
   bool up_disagree = false;
-  if (!params.up.empty() && params.up != "z" && params.up != "y")
-    throw std::invalid_argument("ingest: up must be \"z\" or \"y\"");
   Box3d read_bounds;  // of the kept triangles: fixes the bins of the up-axis evidence
-  for (const auto& model : models) {
-    SourceFileRecord src;
-    src.path = model.string();
-    require_regular_file(model);
-    src.hash = hash_file(model, src.bytes);  // provenance (the sources table), not the content hash
-    const auto material_offset = static_cast<std::uint32_t>(materials.size());
-    std::uint64_t file_triangles = 0;
-    const bool translate = params.translate != Vec3d{0, 0, 0};
-    ModelInfo info = read_model(model, [&](const Triangle& in) {
-      Triangle t = in;
-      ++report.triangles_read;
-      if (translate)
-        for (auto& p : t.p) p = p + params.translate;
-      for (const auto& p : t.p)
-        if (!is_finite(p)) throw InputError(model.string(), "", "non-finite coordinate after translation");
-      if (is_degenerate(t)) {
-        ++report.skipped_degenerate;
-        return;
-      }
-      if (spill.count() >= std::numeric_limits<std::uint32_t>::max())
-        throw InputError(model.string(), "", "more than 4294967295 triangles are not supported");
-      t.material += material_offset;
-      for (const auto& p : t.p) read_bounds.expand(p);
-      keys.push_back(make_triangle_key(t, static_cast<std::uint32_t>(spill.count())));
-      spill.add(t);
-      ++file_triangles;
-      if (progress && (report.triangles_read & 0xFFFF) == 0)
-        progress("read " + model.filename().string(), report.triangles_read, 0);
-    }, read_options(params));
-    if (progress) progress("read " + model.filename().string(), report.triangles_read, 0);  // the file's last count
-    for (std::uint32_t m = 0; m < info.materials.size(); ++m) {
-      Material material = info.materials[m];
-      if (!material.texture.empty())
-        attach_texture(material, m, info, model, params, writer, texture_ids, report);
-      materials.push_back(material);
-    }
-    if (!info.up.empty()) {
-      up_claims.push_back(model.filename().string() + ": " + info.up + " (" + info.up_source + ")");
-      if (up_from_files.empty()) {
-        up_from_files = info.up;
-        report.up_source = model.filename().string() + ": " + info.up_source;
-      }
-      up_disagree |= info.up != up_from_files;
-    }
-    report.polygons_triangulated += info.polygons_triangulated;
-    for (const std::string& w : info.warnings) report.input_warnings.push_back(model.filename().string() + ":" + w);
-    if (const std::string note = describe_vertex_colours(info); !note.empty())
-      report.vertex_colour_notes.push_back(model.filename().string() + ": " + note);
-    src.triangles = file_triangles;
-    sources.push_back(src);
+};
+
+// What a model file says beside its triangles: its materials (textures
+// imported), its up axis claim, triangulated polygons, warnings and vertex
+// colour notes.
+void record_model_info(const ModelInfo& info, const std::filesystem::path& model, const IngestParams& params,
+                       GeometryStoreWriter& writer, ReadModels& read, IngestReport& report) {
+  for (std::uint32_t m = 0; m < info.materials.size(); ++m) {
+    Material material = info.materials[m];
+    if (!material.texture.empty())
+      attach_texture(material, m, info, model, params, writer, read.texture_ids, report);
+    read.materials.push_back(material);
   }
-  spill.finish();
-  if (spill.count() == 0)
-    throw InputError(models.front().string(), "",
-                     report.triangles_read ? "model has only degenerate triangles" : "model contains no triangles");
-  report.read_seconds = seconds_since(t_read);
+  if (!info.up.empty()) {
+    read.up_claims.push_back(model.filename().string() + ": " + info.up + " (" + info.up_source + ")");
+    if (read.up_from_files.empty()) {
+      read.up_from_files = info.up;
+      report.up_source = model.filename().string() + ": " + info.up_source;
+    }
+    read.up_disagree |= info.up != read.up_from_files;
+  }
+  report.polygons_triangulated += info.polygons_triangulated;
+  for (const std::string& w : info.warnings) report.input_warnings.push_back(model.filename().string() + ":" + w);
+  if (const std::string note = describe_vertex_colours(info); !note.empty())
+    report.vertex_colour_notes.push_back(model.filename().string() + ": " + note);
+}
 
-  const auto t_chunk = Clock::now();
-  if (progress) progress("chunk", 0, 0);
-  const std::vector<ChunkRange> ranges = split_into_chunks(keys, params.max_chunk_triangles);
-  if (progress) progress("chunk", keys.size(), keys.size());
-  report.chunk_seconds = seconds_since(t_chunk);
+// Reads one model file: its triangles translated, checked, the degenerate ones
+// skipped and the rest kept in the spill with their keys; then its materials
+// and the rest of what it says; its provenance record added.
+void read_one_model(const std::filesystem::path& model, const IngestParams& params, TriangleSpill& spill,
+                    GeometryStoreWriter& writer, ReadModels& read, IngestReport& report,
+                    const ProgressCallback& progress) {
+  SourceFileRecord src;
+  src.path = model.string();
+  require_regular_file(model);
+  src.hash = hash_file(model, src.bytes);  // provenance (the sources table), not the content hash
+  const auto material_offset = static_cast<std::uint32_t>(read.materials.size());
+  std::uint64_t file_triangles = 0;
+  const bool translate = params.translate != Vec3d{0, 0, 0};
+  ModelInfo info = read_model(model, [&](const Triangle& in) {
+    Triangle t = in;
+    ++report.triangles_read;
+    if (translate)
+      for (auto& p : t.p) p = p + params.translate;
+    for (const auto& p : t.p)
+      if (!is_finite(p)) throw InputError(model.string(), "", "non-finite coordinate after translation");
+    if (is_degenerate(t)) {
+      ++report.skipped_degenerate;
+      return;
+    }
+    if (spill.count() >= std::numeric_limits<std::uint32_t>::max())
+      throw InputError(model.string(), "", "more than 4294967295 triangles are not supported");
+    t.material += material_offset;
+    for (const auto& p : t.p) read.read_bounds.expand(p);
+    read.keys.push_back(make_triangle_key(t, static_cast<std::uint32_t>(spill.count())));
+    spill.add(t);
+    ++file_triangles;
+    if (progress && (report.triangles_read & 0xFFFF) == 0)
+      progress("read " + model.filename().string(), report.triangles_read, 0);
+  }, read_options(params));
+  if (progress) progress("read " + model.filename().string(), report.triangles_read, 0);  // the file's last count
+  record_model_info(info, model, params, writer, read, report);
+  src.triangles = file_triangles;
+  read.sources.push_back(src);
+}
 
-  const auto t_write = Clock::now();
-  UpAxisEvidence up_evidence(read_bounds);  // fed the chunks as they are written, in order
-  for (std::size_t i = 0; i < materials.size(); ++i) writer.add_material(static_cast<std::uint32_t>(i), materials[i]);
-  for (const auto& s : sources) writer.add_source(s);
-  // Build chunks in parallel batches, write them in order (deterministic ids).
+// The chunk of the triangles in `r` (indices into `keys`). Exact duplicates
+// share shape hash and centroid; the first copy (lowest index) is kept.
+Chunk build_chunk_without_duplicates(const ChunkRange& r, const std::vector<TriangleKey>& keys,
+                                     const TriangleSpill& spill) {
+  std::vector<std::size_t> order;
+  order.reserve(r.end - r.begin);
+  for (std::size_t k = r.begin; k < r.end; ++k) order.push_back(k);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    if (keys[a].shape_hash != keys[b].shape_hash) return keys[a].shape_hash < keys[b].shape_hash;
+    return keys[a].index < keys[b].index;
+  });
+  std::vector<char> drop(r.end - r.begin, 0);
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    if (drop[order[i] - r.begin]) continue;
+    for (std::size_t j2 = i + 1; j2 < order.size() && keys[order[j2]].shape_hash == keys[order[i]].shape_hash; ++j2)
+      if (keys[order[j2]].centroid == keys[order[i]].centroid &&
+          same_corners(spill[keys[order[i]].index], spill[keys[order[j2]].index]))
+        drop[order[j2] - r.begin] = 1;
+  }
+  std::vector<const Triangle*> tris;
+  tris.reserve(r.end - r.begin);
+  for (std::size_t k = r.begin; k < r.end; ++k)
+    if (!drop[k - r.begin]) tris.push_back(&spill[keys[k].index]);
+  return build_chunk(tris);
+}
+
+// Builds the chunks in parallel batches and writes them in order
+// (deterministic ids), each with its simplified levels, counted in the report
+// and fed to the up-axis evidence; empty chunks are not written.
+void write_chunks(const std::vector<ChunkRange>& ranges, const std::vector<TriangleKey>& keys,
+                  const TriangleSpill& spill, const IngestParams& params, const ParallelFor& parallel_for,
+                  GeometryStoreWriter& writer, UpAxisEvidence& up_evidence, IngestReport& report,
+                  const ProgressCallback& progress) {
   constexpr std::size_t kBatch = 256;
   std::vector<Chunk> batch;
   std::vector<std::vector<ChunkLod>> batch_lods;
@@ -331,28 +349,7 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
     batch.assign(n, Chunk{});
     batch_lods.assign(n, {});
     parallel_for(n, [&](std::size_t j) {
-      const ChunkRange& r = ranges[first + j];
-      // Exact duplicates share shape hash and centroid; keep the first copy (lowest index).
-      std::vector<std::size_t> order;
-      order.reserve(r.end - r.begin);
-      for (std::size_t k = r.begin; k < r.end; ++k) order.push_back(k);
-      std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-        if (keys[a].shape_hash != keys[b].shape_hash) return keys[a].shape_hash < keys[b].shape_hash;
-        return keys[a].index < keys[b].index;
-      });
-      std::vector<char> drop(r.end - r.begin, 0);
-      for (std::size_t i = 0; i < order.size(); ++i) {
-        if (drop[order[i] - r.begin]) continue;
-        for (std::size_t j2 = i + 1; j2 < order.size() && keys[order[j2]].shape_hash == keys[order[i]].shape_hash; ++j2)
-          if (keys[order[j2]].centroid == keys[order[i]].centroid &&
-              same_corners(spill[keys[order[i]].index], spill[keys[order[j2]].index]))
-            drop[order[j2] - r.begin] = 1;
-      }
-      std::vector<const Triangle*> tris;
-      tris.reserve(r.end - r.begin);
-      for (std::size_t k = r.begin; k < r.end; ++k)
-        if (!drop[k - r.begin]) tris.push_back(&spill[keys[k].index]);
-      batch[j] = build_chunk(tris);
+      batch[j] = build_chunk_without_duplicates(ranges[first + j], keys, spill);
       // The far field's simplified levels (stages/chunk_lod.h).
       if (params.chunk_lods) batch_lods[j] = build_chunk_lods(batch[j], params.lod);
     });
@@ -370,11 +367,10 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
     }
     if (progress) progress("write", first + n, ranges.size());
   }
-  report.skipped_duplicate = spill.count() - report.triangles_stored;
-  report.content_hash = writer.content_hash();
+}
 
-  choose_up_axis(params.up, up_from_files, up_disagree, up_claims, up_evidence.guess(), report);
-
+// The store's summary row, from the report, and the store finished.
+void finish_store(GeometryStoreWriter& writer, const IngestReport& report, const IngestParams& params) {
   StoreSummary summary;
   summary.bounds = report.bounds;
   summary.triangles = report.triangles_stored;
@@ -387,6 +383,52 @@ IngestReport ingest_models(const std::vector<std::filesystem::path>& models, con
   summary.up = report.up;
   summary.up_source = report.up.empty() ? "" : report.up_source;
   writer.finish(summary);
+}
+
+}  // namespace
+
+IngestReport ingest_models(const std::vector<std::filesystem::path>& models, const std::filesystem::path& store,
+                           const IngestParams& params, const ParallelFor& parallel_for,
+                           const ProgressCallback& progress) {
+  if (models.empty()) throw std::invalid_argument("ingest: no model files given");
+  if (params.max_chunk_triangles < 1) throw std::invalid_argument("ingest: max_chunk_triangles must be >= 1");
+  IngestReport report;
+  const auto t_read = Clock::now();
+  const std::filesystem::path temp_dir =
+      params.temp_dir.empty() ? std::filesystem::absolute(store).parent_path() : params.temp_dir;
+  std::filesystem::create_directories(temp_dir);
+  TriangleSpill spill(temp_dir / (store.filename().string() + ".spill-" + std::to_string(::getpid())),
+                      params.memory_budget_bytes);
+
+  if (params.max_texture_size < 1) throw std::invalid_argument("ingest: max_texture_size must be >= 1");
+  GeometryStoreWriter writer(store);
+  ReadModels read;
+  if (!params.up.empty() && params.up != "z" && params.up != "y")
+    throw std::invalid_argument("ingest: up must be \"z\" or \"y\"");
+  for (const auto& model : models) read_one_model(model, params, spill, writer, read, report, progress);
+  spill.finish();
+  if (spill.count() == 0)
+    throw InputError(models.front().string(), "",
+                     report.triangles_read ? "model has only degenerate triangles" : "model contains no triangles");
+  report.read_seconds = seconds_since(t_read);
+
+  const auto t_chunk = Clock::now();
+  if (progress) progress("chunk", 0, 0);
+  const std::vector<ChunkRange> ranges = split_into_chunks(read.keys, params.max_chunk_triangles);
+  if (progress) progress("chunk", read.keys.size(), read.keys.size());
+  report.chunk_seconds = seconds_since(t_chunk);
+
+  const auto t_write = Clock::now();
+  UpAxisEvidence up_evidence(read.read_bounds);  // fed the chunks as they are written, in order
+  for (std::size_t i = 0; i < read.materials.size(); ++i)
+    writer.add_material(static_cast<std::uint32_t>(i), read.materials[i]);
+  for (const auto& s : read.sources) writer.add_source(s);
+  write_chunks(ranges, read.keys, spill, params, parallel_for, writer, up_evidence, report, progress);
+  report.skipped_duplicate = spill.count() - report.triangles_stored;
+  report.content_hash = writer.content_hash();
+
+  choose_up_axis(params.up, read.up_from_files, read.up_disagree, read.up_claims, up_evidence.guess(), report);
+  finish_store(writer, report, params);
   report.write_seconds = seconds_since(t_write);
   if (progress) progress("done", 0, 0);
   return report;

@@ -100,20 +100,23 @@ BakePlan plan_bake(const BakeConfig& given, const BakeOptions& options, const Ge
   return plan;
 }
 
-BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
-  const auto t0 = std::chrono::steady_clock::now();
-  validate_bake_config(given);
-  const int threads = options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
-  // Several single-threaded llvmpipe contexts use the cores better than one
-  // multi-threaded one (measured on the 2-core project machine); respect a user's own setting.
-  if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", threads > 1 ? "1" : "2", 1);
+namespace {
 
-  require_sound_store(given.store, options.check_store);  // a damaged store bakes nothing
-  GeometryStore store(given.store);
-  BakePlan plan = plan_bake(given, options, store);
+// The bake's thread count: --threads, else every core. Several single-threaded
+// llvmpipe contexts use the cores better than one multi-threaded one (measured
+// on the 2-core project machine), so LP_NUM_THREADS is set to match; a user's
+// own setting is respected.
+int bake_threads(const BakeOptions& options) {
+  const int threads = options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+  if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", threads > 1 ? "1" : "2", 1);
+  return threads;
+}
+
+// The plan's notes on stderr: the up-axis note (even with --quiet: it changes
+// the bake), the floors' eye heights, and a model that fits the near budget whole.
+void print_plan_notes(const BakePlan& plan, const BakeOptions& options) {
   const BakeConfig& config = plan.config;
-  const std::string& up_note = plan.up_note;
-  if (!up_note.empty()) std::fprintf(stderr, "%s\n", up_note.c_str());  // even with --quiet: it changes the bake
+  if (!plan.up_note.empty()) std::fprintf(stderr, "%s\n", plan.up_note.c_str());
   if (!options.quiet && !plan.floors.regions.empty()) {
     std::string eyes;
     int last = -1;
@@ -128,16 +131,17 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
     std::fprintf(stderr, "floors as regions (%g above each): %s\n", plan.floors.eye_height, eyes.c_str());
     for (const std::string& note : plan.floors.notes) std::fprintf(stderr, "note: %s\n", note.c_str());
   }
-  const std::uint64_t model_triangles = plan.model_triangles;
-  if (model_triangles <= config.near_budget && !options.quiet)
+  if (plan.model_triangles <= config.near_budget && !options.quiet)
     std::fprintf(stderr,
                  "note: the whole model (%llu triangles) fits the near-field budget (%llu): cells draw it as "
                  "geometry and have no far field\n",
-                 (unsigned long long)model_triangles, (unsigned long long)config.near_budget);
-  std::filesystem::create_directories(std::filesystem::absolute(config.database).parent_path());
-  CellDb db(config.database, CellDb::Mode::read_write);
-  const CellDbLock lock(config.database, "baked");  // one bake per database; a second one stops here
-  const std::string store_hash = store.summary().content_hash;
+                 (unsigned long long)plan.model_triangles, (unsigned long long)config.near_budget);
+}
+
+// The database's meta rows for this bake (store, its hash, config, up axis,
+// cell size, cell counts), after a note when it was baked from another store.
+void record_bake_meta(CellDb& db, const BakePlan& plan, const std::string& store_hash) {
+  const BakeConfig& config = plan.config;
   if (auto existing = db.meta("store_hash"); existing && *existing != store_hash)
     std::fprintf(stderr, "note: %s was baked from a different geometry store; affected cells will be recomputed\n",
                  config.database.c_str());
@@ -146,15 +150,18 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
   db.set_meta("config", describe_bake_config(config));
   db.set_meta("up", config.up);
   db.set_meta("cell_size", std::to_string(config.cell_size));
-
-  const std::vector<CellSpec>& cells = plan.cells;
   // The configuration's cell count, not this run's selection: `status` counts
   // what --cells or the other shards left out as pending.
   db.set_meta("cells_total", std::to_string(plan.cells_total));
-  db.set_meta("cells_selected", std::to_string(cells.size()));  // this run's (shard's) cells, for merge
+  db.set_meta("cells_selected", std::to_string(plan.cells.size()));  // this run's (shard's) cells, for merge
+}
 
-  BakeSummary summary;
-  summary.cells_selected = cells.size();
+// The cells to bake, each with its hashes. Unless `force`, a cell whose stored
+// row is done with the same input hash is skipped (counted up to date), and one
+// with the same cull hash reuses its stored cull box (counted).
+std::vector<std::unique_ptr<CellWork>> queue_cells(const std::vector<CellSpec>& cells, const BakeConfig& config,
+                                                   const std::string& store_hash, const CellDb& db, bool force,
+                                                   BakeSummary& summary) {
   const auto stamps = db.stamps();
   std::vector<std::unique_ptr<CellWork>> queued;  // owns every cell the graph passes along
   for (const auto& c : cells) {
@@ -162,7 +169,7 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
     work->cell = c;
     work->hashes = cell_hashes(c, config, store_hash);
     auto it = stamps.find(c.id);
-    if (it != stamps.end() && !options.force && it->second.status == "done" && it->second.error.empty()) {
+    if (it != stamps.end() && !force && it->second.status == "done" && it->second.error.empty()) {
       if (it->second.input_hash == work->hashes.input) {
         ++summary.cells_up_to_date;
         continue;
@@ -178,130 +185,176 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
     }
     queued.push_back(std::move(work));
   }
+  return queued;
+}
 
-  // The graph passes plain pointers into `queued`, which outlives it. TBB
-  // copies messages into tasks that other threads may steal, unseen by TSan:
-  // a plain pointer's copies are TBB's own accesses (tests/sanitizers/tsan.supp),
-  // a shared_ptr's would be libstdc++'s, reported as races in CI's tsan job.
-  using WorkPtr = CellWork*;
-  ProgressBar progress("bake", queued.size(), "cells");
+// The graph passes plain pointers into the queued cells, which outlive it. TBB
+// copies messages into tasks that other threads may steal, unseen by TSan:
+// a plain pointer's copies are TBB's own accesses (tests/sanitizers/tsan.supp),
+// a shared_ptr's would be libstdc++'s, reported as races in CI's tsan job.
+using WorkPtr = CellWork*;
+using ThreadSamplers = tbb::enumerable_thread_specific<std::unique_ptr<CubeSampler>>;
+
+// What the graph's node bodies share: the bake's inputs, the workers'
+// samplers, and where written cells are counted and reported.
+struct CellGraphContext {
+  const BakeConfig& config;
+  const BakeOptions& options;
+  const GeometryStore& store;
+  CellDb& db;
+  const CubeSamplerFactory& samplers;  // one sampler per worker thread, made on first use
+  ThreadSamplers& thread_samplers;
+  ProgressBar& progress;
+  BakeSummary& summary;
+  std::uint64_t done = 0;  // cells written so far (by the serial writer)
+};
+
+// Node body: stage cull_box.
+WorkPtr cull_cell(CellGraphContext& ctx, WorkPtr w) {
+  run_stage(*w, "cull_box", [&] { run_cull_box(*w, ctx.config, ctx.store); });
+  return w;
+}
+
+// Node body: stage sample, on this worker thread's own sampler.
+WorkPtr sample_cell(CellGraphContext& ctx, WorkPtr w) {
+  run_stage(*w, "sample", [&] {
+    auto& sampler = ctx.thread_samplers.local();
+    if (!sampler) sampler = ctx.samplers.make();
+    try {
+      run_sample(*w, ctx.config, ctx.store, *sampler);
+    } catch (...) {
+      sampler->end_work();
+      throw;
+    }
+    sampler->end_work();  // samplers are destroyed on another thread
+  });
+  return w;
+}
+
+// Node body: stages depth_mesh, far_choice and encode.
+WorkPtr mesh_cell(CellGraphContext& ctx, WorkPtr w) {
+  run_stage(*w, "depth_mesh", [&] { run_sample_tree(*w, ctx.config); });
+  run_stage(*w, "far_choice", [&] { run_far_choice(*w, ctx.config, ctx.store); });
+  run_stage(*w, "encode", [&] { run_encode(*w, ctx.config); });
+  return w;
+}
+
+// Node body of the serial writer: the cell's row committed and counted, its
+// error (or with --verbose its summary) printed, its memory freed.
+tbb::flow::continue_msg write_cell(CellGraphContext& ctx, WorkPtr w) {
+  tsan::after(&writes);
+  const CellRow row = finish_cell_row(*w);
+  ctx.db.put_cell(row);
+  if (row.status == "done") {
+    ++ctx.summary.cells_baked;
+    ctx.summary.cells_without_far_field += row.far_triangles == 0 && row.far_geometry_triangles == 0;
+  } else {
+    ++ctx.summary.cells_failed;
+    ctx.progress.line(row.error);
+  }
+  if (ctx.options.verbose) ctx.progress.line(describe_cell_row(row));
+  *w = CellWork{};  // free memory now; the pointer may linger in the graph
+  if (!ctx.options.quiet) ctx.progress.update(++ctx.done);
+  tsan::before(&writes);
+  return tbb::flow::continue_msg{};
+}
+
+// Runs the queued cells through the flow graph (bake_runner.h), at most
+// 2 * threads cells in flight, and returns when every cell is written.
+void run_cell_graph(const std::vector<std::unique_ptr<CellWork>>& queued, int threads, CellGraphContext& ctx) {
   std::atomic<std::size_t> next{0};
-  std::uint64_t done = 0;
+  tbb::flow::graph g;
+  // A node body as TBB runs it, with the hand-offs TSan cannot see marked.
+  const auto stage = [&](auto body) {
+    return [&, body](WorkPtr w) {
+      tsan::after(&graph_start);
+      tsan::after(w);
+      auto out = body(ctx, w);
+      tsan::before(w);
+      tsan::before(&graph_done);
+      return out;
+    };
+  };
+  tbb::flow::input_node<WorkPtr> source(g, [&](tbb::flow_control& fc) -> WorkPtr {
+    tsan::after(&graph_start);
+    const std::size_t i = next++;
+    tsan::before(&graph_done);
+    if (i >= queued.size()) {
+      fc.stop();
+      return {};
+    }
+    return queued[i].get();
+  });
+  // Bound the cells in flight (each holds a cube map and dense meshes).
+  tbb::flow::limiter_node<WorkPtr> limiter(g, std::size_t(2 * threads));
+  tbb::flow::function_node<WorkPtr, WorkPtr> cull(g, tbb::flow::unlimited, stage(cull_cell));
+  tbb::flow::function_node<WorkPtr, WorkPtr> sample(g, std::size_t(threads), stage(sample_cell));
+  tbb::flow::function_node<WorkPtr, WorkPtr> mesh(g, tbb::flow::unlimited, stage(mesh_cell));
+  tbb::flow::function_node<WorkPtr, tbb::flow::continue_msg> write(g, tbb::flow::serial, stage(write_cell));
+  tbb::flow::make_edge(source, limiter);
+  tbb::flow::make_edge(limiter, cull);
+  tbb::flow::make_edge(cull, sample);
+  tbb::flow::make_edge(sample, mesh);
+  tbb::flow::make_edge(mesh, write);
+  tbb::flow::make_edge(write, limiter.decrementer());
+  tsan::before(&graph_start);
+  source.activate();
+  g.wait_for_all();
+  tsan::after(&graph_done);
+#ifdef CELLBAKE_TSAN
+  // Every graph task ends by decrementing the graph's wait count (in TBB's
+  // headers, so TSan sees it); one more decrement here orders what TBB did
+  // after our bodies (its buffers, the input node's item) before the nodes'
+  // destruction below.
+  g.reserve_wait();
+  g.release_wait();
+#endif
+}
 
+// Who sampled (the first worker sampler's backend and device, into the
+// summary) and, with --verbose, the Embree backend's work in one line.
+void report_sampler_work(CellGraphContext& ctx) {
+  for (const auto& sampler : ctx.thread_samplers)
+    if (sampler) {
+      ctx.summary.sample_backend = sampler->backend_name();
+      ctx.summary.sample_device = sampler->device();
+      break;
+    }
+  if (ctx.options.verbose && ctx.samplers.bvh_cache()) {
+    CubeSamplerWork total;
+    for (const auto& sampler : ctx.thread_samplers)
+      if (sampler) total += sampler->work();
+    if (total.cube_maps > 0) ctx.progress.line(describe_embree_work(ctx.samplers.bvh_cache()->stats(), total));
+  }
+}
+
+// Bakes the queued cells on `threads` worker threads, each with its own sampler
+// (the Embree backend's BVH cache is shared by all of them).
+void bake_queued_cells(const std::vector<std::unique_ptr<CellWork>>& queued, int threads, const BakeConfig& config,
+                       const BakeOptions& options, const GeometryStore& store, CellDb& db, ProgressBar& progress,
+                       BakeSummary& summary) {
   tbb::task_arena arena(threads);
   arena.execute([&] {
-    // One sampler per worker thread; the Embree backend's BVH cache is shared by all of them.
     const CubeSamplerFactory samplers(parse_sample_backend(config.sample_backend),
                                       std::size_t(config.embree_cache_mb) << 20,
                                       std::size_t(config.texture_cache_mb) << 20);
     if (!options.quiet && parse_sample_backend(config.sample_backend) == SampleBackend::automatic &&
         !automatic_backend_note().empty())
       progress.line("note: " + automatic_backend_note());
-    tbb::enumerable_thread_specific<std::unique_ptr<CubeSampler>> thread_samplers;
-    tbb::flow::graph g;
-    // A node body as TBB runs it, with the hand-offs TSan cannot see marked.
-    const auto stage = [&](auto body) {
-      return [&, body](WorkPtr w) {
-        tsan::after(&graph_start);
-        tsan::after(w);
-        auto out = body(w);
-        tsan::before(w);
-        tsan::before(&graph_done);
-        return out;
-      };
-    };
-    tbb::flow::input_node<WorkPtr> source(g, [&](tbb::flow_control& fc) -> WorkPtr {
-      tsan::after(&graph_start);
-      const std::size_t i = next++;
-      tsan::before(&graph_done);
-      if (i >= queued.size()) {
-        fc.stop();
-        return {};
-      }
-      return queued[i].get();
-    });
-    // Bound the cells in flight (each holds a cube map and dense meshes).
-    tbb::flow::limiter_node<WorkPtr> limiter(g, std::size_t(2 * threads));
-    // The node bodies, each run as stage(body) (the TSan hand-offs above).
-    const auto cull_body = [&](WorkPtr w) {
-      run_stage(*w, "cull_box", [&] { run_cull_box(*w, config, store); });
-      return w;
-    };
-    const auto sample_body = [&](WorkPtr w) {
-      run_stage(*w, "sample", [&] {
-        auto& sampler = thread_samplers.local();
-        if (!sampler) sampler = samplers.make();
-        try {
-          run_sample(*w, config, store, *sampler);
-        } catch (...) {
-          sampler->end_work();
-          throw;
-        }
-        sampler->end_work();  // samplers are destroyed on another thread
-      });
-      return w;
-    };
-    const auto mesh_body = [&](WorkPtr w) {
-      run_stage(*w, "depth_mesh", [&] { run_sample_tree(*w, config); });
-      run_stage(*w, "far_choice", [&] { run_far_choice(*w, config, store); });
-      run_stage(*w, "encode", [&] { run_encode(*w, config); });
-      return w;
-    };
-    const auto write_body = [&](WorkPtr w) {
-      tsan::after(&writes);
-      const CellRow row = finish_cell_row(*w);
-      db.put_cell(row);
-      if (row.status == "done") {
-        ++summary.cells_baked;
-        summary.cells_without_far_field += row.far_triangles == 0 && row.far_geometry_triangles == 0;
-      } else {
-        ++summary.cells_failed;
-        progress.line(row.error);
-      }
-      if (options.verbose) progress.line(describe_cell_row(row));
-      *w = CellWork{};  // free memory now; the pointer may linger in the graph
-      if (!options.quiet) progress.update(++done);
-      tsan::before(&writes);
-      return tbb::flow::continue_msg{};
-    };
-    tbb::flow::function_node<WorkPtr, WorkPtr> cull(g, tbb::flow::unlimited, stage(cull_body));
-    tbb::flow::function_node<WorkPtr, WorkPtr> sample(g, std::size_t(threads), stage(sample_body));
-    tbb::flow::function_node<WorkPtr, WorkPtr> mesh(g, tbb::flow::unlimited, stage(mesh_body));
-    tbb::flow::function_node<WorkPtr, tbb::flow::continue_msg> write(g, tbb::flow::serial, stage(write_body));
-    tbb::flow::make_edge(source, limiter);
-    tbb::flow::make_edge(limiter, cull);
-    tbb::flow::make_edge(cull, sample);
-    tbb::flow::make_edge(sample, mesh);
-    tbb::flow::make_edge(mesh, write);
-    tbb::flow::make_edge(write, limiter.decrementer());
-    tsan::before(&graph_start);
-    source.activate();
-    g.wait_for_all();
-    tsan::after(&graph_done);
-    for (const auto& sampler : thread_samplers)
-      if (sampler) {
-        summary.sample_backend = sampler->backend_name();
-        summary.sample_device = sampler->device();
-        break;
-      }
-    if (options.verbose && samplers.bvh_cache()) {
-      CubeSamplerWork total;
-      for (const auto& sampler : thread_samplers)
-        if (sampler) total += sampler->work();
-      if (total.cube_maps > 0) progress.line(describe_embree_work(samplers.bvh_cache()->stats(), total));
-    }
-#ifdef CELLBAKE_TSAN
-    // Every graph task ends by decrementing the graph's wait count (in TBB's
-    // headers, so TSan sees it); one more decrement here orders what TBB did
-    // after our bodies (its buffers, the input node's item) before the nodes'
-    // destruction below.
-    g.reserve_wait();
-    g.release_wait();
-#endif
+    ThreadSamplers thread_samplers;
+    CellGraphContext ctx{config, options, store, db, samplers, thread_samplers, progress, summary};
+    run_cell_graph(queued, threads, ctx);
+    report_sampler_work(ctx);
   });
-  if (!options.quiet) progress.finish();
-  // A model larger than the budget with no far field anywhere: its chunks are
-  // too coarse (a cell's near field is every chunk reaching into its cull box).
+}
+
+// A model larger than the budget with no far field in any baked cell: its
+// chunks are too coarse (a cell's near field is every chunk reaching into its
+// cull box). A note suggests ingesting it again with smaller chunks.
+void note_chunks_too_coarse(const BakeSummary& summary, const BakePlan& plan, const GeometryStore& store,
+                            const BakeOptions& options) {
+  const BakeConfig& config = plan.config;
+  const std::uint64_t model_triangles = plan.model_triangles;
   const StoreSummary& facts = store.summary();
   if (!options.quiet && summary.cells_baked > 0 && summary.cells_without_far_field == summary.cells_baked &&
       model_triangles > config.near_budget && facts.chunks > 0) {
@@ -317,6 +370,34 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
                  (unsigned long long)facts.chunks, (unsigned long long)per_chunk, model.c_str(), config.store.c_str(),
                  (unsigned long long)suggested);
   }
+}
+
+}  // namespace
+
+BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  validate_bake_config(given);
+  const int threads = bake_threads(options);
+  require_sound_store(given.store, options.check_store);  // a damaged store bakes nothing
+  GeometryStore store(given.store);
+  const BakePlan plan = plan_bake(given, options, store);
+  const BakeConfig& config = plan.config;
+  print_plan_notes(plan, options);
+
+  std::filesystem::create_directories(std::filesystem::absolute(config.database).parent_path());
+  CellDb db(config.database, CellDb::Mode::read_write);
+  const CellDbLock lock(config.database, "baked");  // one bake per database; a second one stops here
+  const std::string store_hash = store.summary().content_hash;
+  record_bake_meta(db, plan, store_hash);
+
+  BakeSummary summary;
+  summary.cells_selected = plan.cells.size();
+  const std::vector<std::unique_ptr<CellWork>> queued =
+      queue_cells(plan.cells, config, store_hash, db, options.force, summary);
+  ProgressBar progress("bake", queued.size(), "cells");
+  bake_queued_cells(queued, threads, config, options, store, db, progress, summary);
+  if (!options.quiet) progress.finish();
+  note_chunks_too_coarse(summary, plan, store, options);
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return summary;
 }

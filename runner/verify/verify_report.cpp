@@ -417,27 +417,27 @@ void write_text_file_atomically(const std::filesystem::path& file, const std::st
   write_output_file(file, text, inputs);
 }
 
-VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const VerifyReportInput& input) {
-  VerifyReportFiles files;
-  std::filesystem::create_directories(dir / "plots");
-  const auto& cells = input.cells;
-  const nlohmann::json summary = summary_json(cells);
+namespace {
 
-  // report.json
+// report.json: {database, params, summary, cells[, walk]}.
+void write_report_json(const std::filesystem::path& dir, const VerifyReportInput& input,
+                       const nlohmann::json& summary, VerifyReportFiles& files) {
   nlohmann::json report{{"database", input.database}, {"params", input.params}, {"summary", summary}};
   report["cells"] = nlohmann::json::array();
-  for (const auto& c : cells) report["cells"].push_back(to_json(c));
+  for (const auto& c : input.cells) report["cells"].push_back(to_json(c));
   if (input.walk) report["walk"] = input.walk->summary;
   files.json = dir / "report.json";
   write_text_file_atomically(files.json, report.dump(1), input.inputs);
+}
 
-  // Plots.
+// The plots of median PSNR per cell, against bake seconds and against stored bytes.
+void write_per_cell_plots(const std::filesystem::path& dir, const VerifyReportInput& input, VerifyReportFiles& files) {
   const std::string psnr_label = "median PSNR per cell, dB (higher is better)";
   auto per_cell = [&](const std::string& name, const std::string& title, const std::string& x_label,
                       bool log_x, auto x_of) {
     ScatterPlot p{title, x_label, psnr_label, log_x, 640, 420, {}};
     PlotSeries s{"cells", "#1f77b4", {}};
-    for (const auto& c : cells)
+    for (const auto& c : input.cells)
       if (c.error.empty())
         s.points.push_back(
             {x_of(c), cell_median(c, &VerifyViewResult::psnr_db), "cell " + std::to_string(c.id)});
@@ -448,6 +448,14 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
            [](const VerifyCellResult& c) { return c.bake_seconds_total(); });
   per_cell("psnr_vs_bytes.svg", "Error vs stored bytes", "stored bytes per cell", false,
            [](const VerifyCellResult& c) { return double(c.bytes); });
+}
+
+// The plots per view: PSNR against triangles drawn, and PSNR and holes against
+// the distance from the sample point when the views lie at 3 or more distinct
+// distances (else they say nothing). Returns that number of distances.
+std::size_t write_per_view_plots(const std::filesystem::path& dir, const VerifyReportInput& input,
+                                 VerifyReportFiles& files) {
+  const auto& cells = input.cells;
   {
     ScatterPlot p{"Error vs triangles drawn", "triangles drawn (impostor: near + far field)",
                   "PSNR per view, dB (higher is better)", false, 640, 420,
@@ -455,40 +463,55 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
                                   [](const VerifyViewResult& v) { return v.psnr_db; })};
     write_svg(dir / "plots" / "psnr_vs_triangles.svg", scatter_plot_svg(p), files, input.inputs);
   }
-  // Error against distance says nothing when every view sits at (nearly) one distance.
   const std::size_t distances = distinct_sample_distances(cells);
-  const bool distance_plots = distances >= 3;
-  if (distance_plots) {
+  if (distances >= 3) {
     ScatterPlot p{"Error vs distance from the sample point", "eye distance from the nearest sample point (model units)",
                   "PSNR per view, dB (higher is better)", false, 640, 420,
                   per_view_series(cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return v.distance_from_sample; },
                                   [](const VerifyViewResult& v) { return v.psnr_db; })};
     write_svg(dir / "plots" / "psnr_vs_distance.svg", scatter_plot_svg(p), files, input.inputs);
   }
-  if (distance_plots) {
+  if (distances >= 3) {
     ScatterPlot p{"Holes vs distance from the sample point", "eye distance from the nearest sample point (model units)",
                   "hole fraction per view (lower is better)", false, 640, 420,
                   per_view_series(cells, [](const VerifyViewResult& v, const VerifyCellResult&) { return v.distance_from_sample; },
                                   [](const VerifyViewResult& v) { return v.hole_fraction; })};
     write_svg(dir / "plots" / "holes_vs_distance.svg", scatter_plot_svg(p), files, input.inputs);
   }
+  return distances;
+}
 
-  // The far-budget sweep's curve, when the views were drawn under several budgets.
+// The far-budget sweep's curve over the headline views drawn under several
+// budgets (empty when none was), and the median triangles their truth draws.
+struct FarBudgetSweep {
+  std::vector<FarBudgetSummary> rows;
+  double truth_triangles = kNaN;
+};
+
+// The sweep summarised, and its plot written when there is one.
+FarBudgetSweep write_far_budget_sweep_plot(const std::filesystem::path& dir, const VerifyReportInput& input,
+                                           VerifyReportFiles& files) {
   std::vector<std::vector<FarBudgetPoint>> sweep_views;
   std::vector<double> truth_triangles;
-  for (const auto& c : cells)
+  for (const auto& c : input.cells)
     for (const auto& v : c.views)
       if (is_headline_view(v.kind) && !v.truth_blank && !v.far_budget_sweep.empty()) {
         sweep_views.push_back(v.far_budget_sweep);
         truth_triangles.push_back(double(v.triangles_truth));
       }
-  const std::vector<FarBudgetSummary> sweep = summarise_far_budget_sweep(sweep_views);
-  const double sweep_truth_triangles = median_of(truth_triangles);
-  if (!sweep.empty())
+  FarBudgetSweep sweep;
+  sweep.rows = summarise_far_budget_sweep(sweep_views);
+  sweep.truth_triangles = median_of(truth_triangles);
+  if (!sweep.rows.empty())
     write_svg(dir / "plots" / "psnr_vs_triangles_far_budget.svg",
-              scatter_plot_svg(far_budget_sweep_plot(sweep, sweep_truth_triangles)), files, input.inputs);
+              scatter_plot_svg(far_budget_sweep_plot(sweep.rows, sweep.truth_triangles)), files, input.inputs);
+  return sweep;
+}
 
-  // Cell map in plan: drop the up axis (the one with the most cells sharing one value is not known
+// cell_map.svg: the cells in plan, coloured by median PSNR. Returns its SVG.
+std::string write_cell_map(const std::filesystem::path& dir, const VerifyReportInput& input,
+                           VerifyReportFiles& files) {
+  // Drop the up axis (the one with the most cells sharing one value is not known
   // here, so use the database's up from params when given, else z).
   const std::string up = input.params.value("up", std::string("z"));
   const int a = up == "y" ? 2 : 0, b = up == "y" ? 0 : 1;  // y up: plan (z, x); z up: plan (x, y)
@@ -497,7 +520,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
   map.value_label = "median PSNR (dB)";
   map.scale_worst = kVerifyPsnrRed, map.scale_best = kVerifyPsnrGreen, map.scale_unit = " dB";
   std::vector<const VerifyCellResult*> order;
-  for (const auto& c : cells) order.push_back(&c);
+  for (const auto& c : input.cells) order.push_back(&c);
   // Worst cells last, so the worst of a stack of layers shows on top.
   std::stable_sort(order.begin(), order.end(), [](const VerifyCellResult* x, const VerifyCellResult* y) {
     const double px = cell_median(*x, &VerifyViewResult::psnr_db),
@@ -510,9 +533,12 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
   files.cell_map = dir / "cell_map.svg";
   const std::string cell_map = cell_map_svg(map);
   write_text_file_atomically(files.cell_map, cell_map, input.inputs);
+  return cell_map;
+}
 
-  // report.html
-  std::ostringstream h;
+// The HTML head (title, inline CSS) and the introduction: database,
+// parameters, counts, lighting, blank truth views and what the metrics mean.
+void html_introduction(std::ostringstream& h, const VerifyReportInput& input, const nlohmann::json& summary) {
   h << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>cellbake verify: "
     << escape_xml(input.database)
     << "</title>\n<style>\n"
@@ -546,6 +572,11 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
        "is empty "
        "(fractions, lower is better); depth error = median relative depth error; ms = warm frame time of the "
        "software renderer while other views render in parallel.</p>\n";
+}
+
+// The Summary section: a row per measured metric (random views, then the
+// reference views apart), and the median bake time, bytes and triangles per cell.
+void html_summary(std::ostringstream& h, const std::vector<VerifyCellResult>& cells, const nlohmann::json& summary) {
   h << "<h2>Summary</h2>\n<p class=\"note\">The headline columns (median, worst, worst cell), the cell map, "
        "the "
        "per-cell figures and the worst views are over the <b>random views</b>: eyes drawn uniformly from "
@@ -579,20 +610,26 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
                                                        : summary["triangles_truth_median"].get<double>(),
            "%.0f")
     << ".</p>\n";
+}
 
-  // Everything inline: the report is one file that can be copied or mailed
-  // alone; inline SVG keeps the tooltips (<title>) that <img> would disable.
+// The sections with pictures: the cell map, the far-budget sweep, the plots
+// (read back from files.plots) and the walk. Everything inline: the report is
+// one file that can be copied or mailed alone; inline SVG keeps the tooltips
+// (<title>) that <img> would disable.
+void html_figures(std::ostringstream& h, const std::filesystem::path& dir, const VerifyReportInput& input,
+                  const VerifyReportFiles& files, const std::string& cell_map, const FarBudgetSweep& sweep,
+                  std::size_t distances) {
   h << "<h2>Cell map</h2>\n<p class=\"note\">Fixed colour scale: median PSNR &le; " << kVerifyPsnrRed
     << " dB red, " << 0.5 * (kVerifyPsnrRed + kVerifyPsnrGreen) << " dB yellow, &ge; " << kVerifyPsnrGreen
     << " dB green; perfect cells (impostor = truth, PSNR = &infin;) dark green, labelled perfect; grey: no "
        "data. Hover a cell for its id and value.</p>\n<div class=\"map\"><!-- cell_map.svg -->\n"
     << inline_svg(cell_map) << "</div>\n";
-  if (!sweep.empty())
+  if (!sweep.rows.empty())
     h << "<h2>Speed against error: far budget swept</h2>\n<p class=\"note\">Every random view drawn once more "
          "per far-field budget (the nearest sample with its ancestors, then more samples while the far field's "
          "triangles stay under the budget); the truth draws a median of "
-      << fmt(sweep_truth_triangles, "%.0f") << " triangles per view (frustum-culled).</p>\n"
-      << far_budget_sweep_table_html(sweep, sweep_truth_triangles);
+      << fmt(sweep.truth_triangles, "%.0f") << " triangles per view (frustum-culled).</p>\n"
+      << far_budget_sweep_table_html(sweep.rows, sweep.truth_triangles);
   h << "<h2>Plots</h2>\n<div class=\"plots\">\n";
   for (const auto& p : files.plots) {
     std::ifstream in(p, std::ios::binary);
@@ -603,7 +640,7 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
   h << "</div>\n<p class=\"note\">Views whose impostor equals the truth exactly (PSNR = &infin;) are not "
        "drawn in "
        "PSNR plots.</p>\n";
-  if (!distance_plots)
+  if (distances < 3)
     h << "<p class=\"note\">Error and holes vs distance from the sample point: not plotted, the views lie at "
       << distances << " distinct distance(s) from their cell's sample points (fewer than 3).</p>\n";
   if (input.walk) {
@@ -613,10 +650,13 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
     h << walk_section_html(*input.walk, input.walk->worst_png.empty() ? "" : png_data_uri(dir / input.walk->worst_png),
                            plot_svg.str());
   }
+}
 
-  // Worst views: each cell's worst view, worst first.
+// The Worst views section: each cell's worst view as a triptych, worst first,
+// at most input.worst_views of them.
+void html_worst_views(std::ostringstream& h, const std::filesystem::path& dir, const VerifyReportInput& input) {
   std::vector<const VerifyCellResult*> worst;
-  for (const auto& c : cells)
+  for (const auto& c : input.cells)
     if (c.worst_view >= 0 && c.worst_view < int(c.views.size()) && !c.triptych.empty()) worst.push_back(&c);
   std::stable_sort(worst.begin(), worst.end(), [](const VerifyCellResult* x, const VerifyCellResult* y) {
     const auto &vx = x->views[x->worst_view], &vy = y->views[y->worst_view];
@@ -637,7 +677,45 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
       << " from the sample point</p>\n<img src=\"" << png_data_uri(dir / c->triptych) << "\" alt=\"cell "
       << c->id << " (" << escape_xml(c->triptych) << ")\"></div>\n";
   }
+}
 
+// The median over a cell's views of a count field (all its views, blank ones included).
+double views_median(const VerifyCellResult& c, std::uint64_t VerifyViewResult::*field) {
+  std::vector<double> v;
+  for (auto& x : c.views) v.push_back(double(x.*field));
+  return median_of(v);
+}
+
+// One row of the Cells table; `bad` marks a failed cell or the worst one.
+void html_cell_row(std::ostringstream& h, const VerifyCellResult& c, bool bad) {
+  std::vector<double> psnr, holes, skins;
+  for (const auto& v : c.views)
+    psnr.push_back(v.psnr_db), holes.push_back(v.hole_fraction), skins.push_back(v.skin_fraction);
+  const double min_psnr = psnr.empty() ? kNaN : *std::min_element(psnr.begin(), psnr.end());
+  const double max_ratio = max_of(c, &VerifyViewResult::triangle_ratio);
+  h << "<tr" << (bad ? " class=\"bad\"" : "") << "><td>" << c.id << "</td><td>" << c.views.size()
+    << "</td><td>" << fmt(cell_median(c, &VerifyViewResult::psnr_db), "%.2f") << "</td><td>"
+    << fmt(min_psnr, "%.2f") << "</td><td>" << fmt(cell_median(c, &VerifyViewResult::ssim), "%.3f")
+    << "</td><td>" << fmt(holes.empty() ? kNaN : *std::max_element(holes.begin(), holes.end()), "%.4f")
+    << "</td><td>" << fmt(skins.empty() ? kNaN : *std::max_element(skins.begin(), skins.end()), "%.4f")
+    << "</td><td>" << fmt(cell_median(c, &VerifyViewResult::depth_error_median), "%.4f") << "</td><td>"
+    << fmt(views_median(c, &VerifyViewResult::triangles_impostor), "%.0f") << "</td><td>"
+    << fmt(views_median(c, &VerifyViewResult::triangles_truth), "%.0f")
+    << "</td><td>" << fmt(max_ratio, "%.2f") << (max_ratio > 1 ? " (draws more than the model)" : "")
+    << "</td><td>" << c.far_triangles << " / " << c.far_geometry_triangles << "</td><td>"
+    << fmt(cell_median(c, &VerifyViewResult::ms_impostor), "%.1f") << "</td><td>"
+    << fmt(cell_median(c, &VerifyViewResult::ms_truth), "%.1f") << "</td><td>"
+    << fmt(c.bake_seconds_total(), "%.2f") << "</td><td>" << c.bytes << "</td><td>"
+    << fmt(c.colour_bytes / 1024.0, "%.1f") << " / " << fmt(c.mesh_bytes / 1024.0, "%.1f") << " / "
+    << fmt(c.near_list_bytes / 1024.0, "%.1f") << "</td><td>" << c.void_curve.size() << "</td><td>"
+    << fmt(cell_median(c, &VerifyViewResult::psnr_db_root), "%.2f") << "</td><td>"
+    << fmt(max_of(c, &VerifyViewResult::hole_fraction_root), "%.4f") << "</td><td class=\"l\">"
+    << void_curve_text(c) << "</td><td class=\"l\">" << escape_xml(c.error) << "</td></tr>\n";
+}
+
+// The Cells table, a row per cell (the worst cell's and failed ones marked),
+// and the page's end.
+void html_cells_table(std::ostringstream& h, const std::vector<VerifyCellResult>& cells) {
   h << "<h2>Cells</h2>\n<table><tr><th>cell</th><th>views</th><th>median PSNR</th><th>min "
        "PSNR</th><th>median SSIM</th>"
        "<th>max holes</th><th>max skins</th><th>median depth err</th><th>tris impostor</th><th>tris "
@@ -648,45 +726,30 @@ VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const Ve
        "<th>median PSNR, root sample alone</th><th>max holes, root sample alone</th>"
        "<th class=\"l\">void curve (after each sample)</th><th class=\"l\">note</th></tr>\n";
   const MetricStats psnr_stats = metric_stats(cells, verify_metrics()[0]);
-  for (const auto& c : cells) {
-    std::vector<double> psnr, holes, skins;
-    for (const auto& v : c.views)
-      psnr.push_back(v.psnr_db), holes.push_back(v.hole_fraction), skins.push_back(v.skin_fraction);
-    const double min_psnr = psnr.empty() ? kNaN : *std::min_element(psnr.begin(), psnr.end());
-    const double max_ratio = max_of(c, &VerifyViewResult::triangle_ratio);
-    const bool bad = !c.error.empty() || (psnr_stats.count && c.id == psnr_stats.worst_cell);
-    h << "<tr" << (bad ? " class=\"bad\"" : "") << "><td>" << c.id << "</td><td>" << c.views.size()
-      << "</td><td>" << fmt(cell_median(c, &VerifyViewResult::psnr_db), "%.2f") << "</td><td>"
-      << fmt(min_psnr, "%.2f") << "</td><td>" << fmt(cell_median(c, &VerifyViewResult::ssim), "%.3f")
-      << "</td><td>" << fmt(holes.empty() ? kNaN : *std::max_element(holes.begin(), holes.end()), "%.4f")
-      << "</td><td>" << fmt(skins.empty() ? kNaN : *std::max_element(skins.begin(), skins.end()), "%.4f")
-      << "</td><td>" << fmt(cell_median(c, &VerifyViewResult::depth_error_median), "%.4f") << "</td><td>"
-      << fmt(median_of([&] {
-               std::vector<double> v;
-               for (auto& x : c.views) v.push_back(double(x.triangles_impostor));
-               return v;
-             }()),
-             "%.0f")
-      << "</td><td>"
-      << fmt(median_of([&] {
-               std::vector<double> v;
-               for (auto& x : c.views) v.push_back(double(x.triangles_truth));
-               return v;
-             }()),
-             "%.0f")
-      << "</td><td>" << fmt(max_ratio, "%.2f") << (max_ratio > 1 ? " (draws more than the model)" : "")
-      << "</td><td>" << c.far_triangles << " / " << c.far_geometry_triangles << "</td><td>"
-      << fmt(cell_median(c, &VerifyViewResult::ms_impostor), "%.1f") << "</td><td>"
-      << fmt(cell_median(c, &VerifyViewResult::ms_truth), "%.1f") << "</td><td>"
-      << fmt(c.bake_seconds_total(), "%.2f") << "</td><td>" << c.bytes << "</td><td>"
-      << fmt(c.colour_bytes / 1024.0, "%.1f") << " / " << fmt(c.mesh_bytes / 1024.0, "%.1f") << " / "
-      << fmt(c.near_list_bytes / 1024.0, "%.1f") << "</td><td>" << c.void_curve.size() << "</td><td>"
-      << fmt(cell_median(c, &VerifyViewResult::psnr_db_root), "%.2f") << "</td><td>"
-      << fmt(max_of(c, &VerifyViewResult::hole_fraction_root), "%.4f") << "</td><td class=\"l\">"
-      << void_curve_text(c) << "</td><td class=\"l\">" << escape_xml(c.error) << "</td></tr>\n";
-  }
+  for (const auto& c : cells)
+    html_cell_row(h, c, !c.error.empty() || (psnr_stats.count && c.id == psnr_stats.worst_cell));
   h << "</table>\n<p class=\"note\">Per-view numbers: <a "
        "href=\"report.json\">report.json</a>.</p>\n</body></html>\n";
+}
+
+}  // namespace
+
+VerifyReportFiles write_verify_report(const std::filesystem::path& dir, const VerifyReportInput& input) {
+  VerifyReportFiles files;
+  std::filesystem::create_directories(dir / "plots");
+  const nlohmann::json summary = summary_json(input.cells);
+  write_report_json(dir, input, summary, files);
+  write_per_cell_plots(dir, input, files);
+  const std::size_t distances = write_per_view_plots(dir, input, files);
+  const FarBudgetSweep sweep = write_far_budget_sweep_plot(dir, input, files);
+  const std::string cell_map = write_cell_map(dir, input, files);
+
+  std::ostringstream h;
+  html_introduction(h, input, summary);
+  html_summary(h, input.cells, summary);
+  html_figures(h, dir, input, files, cell_map, sweep, distances);
+  html_worst_views(h, dir, input);
+  html_cells_table(h, input.cells);
   files.html = dir / "report.html";
   write_text_file_atomically(files.html, h.str(), input.inputs);
   return files;

@@ -139,6 +139,422 @@ void draw_minimap(const CellIndex& index, const FlyCamera& fly, std::int64_t cur
   draw->AddLine(p, ImVec2(p.x + 12 * static_cast<float>(f[a]), p.y - 12 * static_cast<float>(f[b])), IM_COL32(255, 255, 255, 255));
 }
 
+// Turns the camera to look along `d` (yaw about up, pitch above the horizontal).
+void look_along(FlyCamera& fly, const Vec3d& d, const Vec3d& up) {
+  int a = 0, b = 1;
+  map_axes(up, a, b);
+  fly.yaw_deg = std::atan2(d[b], d[a]) * 180 / 3.14159265358979323846;
+  fly.pitch_deg = std::atan2(dot(d, up), std::hypot(d[a], d[b])) * 180 / 3.14159265358979323846;
+}
+
+// glfwTerminate when the run ends, however it ends.
+struct GlfwGuard {
+  ~GlfwGuard() { glfwTerminate(); }
+};
+
+// The OpenGL 3.3 core window (vsync only when interactive). Throws when there is none.
+GLFWwindow* open_window(int width, int height, const std::string& database, int total_frames) {
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  GLFWwindow* window = glfwCreateWindow(width, height, ("cellbake view " + database).c_str(), nullptr, nullptr);
+  if (!window) throw std::runtime_error("cannot create an OpenGL 3.3 core window");
+  glfwMakeContextCurrent(window);
+  glfwSwapInterval(total_frames > 0 ? 0 : 1);
+  return window;
+}
+
+// What a viewer run reads, set up before its window opens: the database's
+// meta (store, up axis, config), the store, the cell cache and the camera path.
+struct ViewerInputs {
+  const Options& opt;
+  const CellDb& meta_db;
+  const std::string& store_path;
+  const Vec3d up;
+  GeometryStore& store;
+  CellCache& cache;
+  const std::vector<PathView>& path;
+  int width = 0, height = 0;
+  bool scripted = false;     // --path: one view of the path per frame
+  bool staged = false;       // --switch staged
+  int total_frames = 0;      // frames to draw before exiting (0: until the window closes)
+  UploadBudget budget;       // staged switches' GPU uploads per frame
+};
+
+// A viewer session in its open window: the drawer, the display texture, the
+// camera, the panel's state, and per frame what was drawn (and with --path, the
+// frame log). run() is the frame loop.
+class ViewerSession {
+ public:
+  ViewerSession(const ViewerInputs& in, GLFWwindow* window);
+  // Draws frames until the window closes or the frames (--frames, --path) are
+  // drawn; then with --path prints the frame summary and writes the frame log,
+  // and deletes the display texture.
+  void run();
+
+ private:
+  void place_camera(const CellIndex& index);
+  void load_first_cell(const CellIndex& index);
+  void steer(int frame_number, double dt, const ImGuiIO& io);
+  std::shared_ptr<const DecodedCell> choose_cell(const CellIndex& index, UploadProgress& spent);
+  std::shared_ptr<const DecodedCell> choose_staged_cell(const CellIndex& index, const CellEntry& entry, double reach,
+                                                        UploadProgress& spent);
+  const std::vector<Rgba8>& draw_scene(const std::shared_ptr<const DecodedCell>& cell, int fw, int fh);
+  void show_image(const std::vector<Rgba8>& image, int fw, int fh);
+  void panel_stats(const std::shared_ptr<const DecodedCell>& cell);
+  void panel_controls(const CellIndex& index);
+  void save_screenshot(int fw, int fh);
+  void log_frame(int frame_number, std::chrono::steady_clock::time_point frame_start,
+                 const std::shared_ptr<const DecodedCell>& cell, const UploadProgress& spent,
+                 std::uint64_t uploaded_before);
+
+  const ViewerInputs& in_;
+  const Options& opt_;
+  GLFWwindow* window_;
+  std::shared_ptr<GlfwWindowContext> context_;
+  SceneDrawer drawer_;
+  std::uint64_t far_budget_ = 0;  // view.far_budget as the bake asked (older databases: the default)
+  GlFunctions gl_;
+  GLuint display_ = 0;            // the texture the frame is shown through
+  FlyCamera fly_;
+  Vec3d start_;
+  ViewerState state_;
+  FrameInfo info_;
+  ViewFrame frame_, truth_;
+  std::vector<Rgba8> shown_;
+  CellSwitch cell_switch_;
+  EyeMotion motion_;
+  std::vector<FrameRecord> log_;
+  std::int64_t previous_cell_ = 0;
+};
+
+ViewerSession::ViewerSession(const ViewerInputs& in, GLFWwindow* window)
+    : in_(in),
+      opt_(in.opt),
+      window_(window),
+      context_(std::make_shared<GlfwWindowContext>(window)),
+      drawer_(context_, in.store, SceneDrawerParams{}) {
+  drawer_.set_shading(shading_lights(shading_of_config_text(in.meta_db.meta("config").value_or("")), in.up));
+  far_budget_ = far_budget_of_config_text(in.meta_db.meta("config").value_or(""))
+                    .value_or(SampleSelectionParams{}.far_budget);
+  gl_ = load_gl_functions(*context_);
+  gl_.GenTextures(1, &display_);
+  gl_.BindTexture(GL_TEXTURE_2D, display_);
+  gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  gl_.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  const auto index0 = in_.cache.index();
+  place_camera(*index0);
+  state_.fov = static_cast<float>(opt_.fov);
+  if (in_.scripted) load_first_cell(*index0);
+}
+
+// The camera's start: the path's first view, else --eye (looking at --look),
+// else the first cell's centre, else the model's; walking on the model's floor.
+void ViewerSession::place_camera(const CellIndex& index) {
+  const Vec3d& up = in_.up;
+  fly_.up = up;
+  const Box3d model = in_.store.model_bounds();
+  fly_.floor = model.empty() ? 0 : dot(model.lo, up);
+  start_ = in_.scripted              ? in_.path.front().eye
+           : !opt_.eye.empty()       ? parse_point(opt_.eye, "--eye")
+           : !index.cells().empty() ? index.cells().front().bounds.center()
+                                     : model.center();
+  fly_.position = start_;
+  if (!opt_.look.empty() || in_.scripted)
+    look_along(fly_, (in_.scripted ? in_.path.front().look : parse_point(opt_.look, "--look")) - start_, up);
+  fly_.eye_height = dot(start_, up) - fly_.floor;
+  fly_.speed = std::max(0.5, 0.02 * length(model.extent()));
+}
+
+// Loading (--path): the first cell decoded and uploaded whole before the first frame.
+void ViewerSession::load_first_cell(const CellIndex& index) {
+  const auto t = std::chrono::steady_clock::now();
+  if (const CellEntry* first = index.containing(start_))
+    if (const auto cell = in_.cache.get_blocking(first->id)) {
+      drawer_.prepare(*cell);
+      while (!drawer_.upload_some(*cell, {std::numeric_limits<std::size_t>::max(), 1e300}).complete) {
+      }
+    }
+  std::printf("loading: first cell decoded and uploaded in %.1f ms\n", elapsed_ms(t));
+}
+
+// Moves the camera: to the path's view of this frame (--path), else by the
+// keys (unless the panel has them) and, held, the mouse.
+void ViewerSession::steer(int frame_number, double dt, const ImGuiIO& io) {
+  if (in_.scripted) {
+    // The path's view of this frame; the keys and the mouse move nothing.
+    const PathView& view = in_.path[static_cast<std::size_t>(frame_number)];
+    fly_.position = view.eye;
+    look_along(fly_, view.look - view.eye, in_.up);
+  } else if (!io.WantCaptureKeyboard) {
+    const auto key = [&](int k) { return glfwGetKey(window_, k) == GLFW_PRESS ? 1.0 : 0.0; };
+    // Esc or Ctrl+Q quits (Q alone moves down).
+    if (key(GLFW_KEY_ESCAPE) || ((key(GLFW_KEY_LEFT_CONTROL) || key(GLFW_KEY_RIGHT_CONTROL)) && key(GLFW_KEY_Q)))
+      glfwSetWindowShouldClose(window_, GLFW_TRUE);
+    const double boost = key(GLFW_KEY_LEFT_SHIFT) ? 4.0 : 1.0;
+    fly_.move((key(GLFW_KEY_W) - key(GLFW_KEY_S)) * boost, (key(GLFW_KEY_D) - key(GLFW_KEY_A)) * boost,
+              (key(GLFW_KEY_E) - key(GLFW_KEY_Q)) * boost, dt);
+  }
+  double mx = 0, my = 0;
+  glfwGetCursorPos(window_, &mx, &my);
+  const bool look_button = glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
+                           (glfwGetMouseButton(window_, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS && !io.WantCaptureMouse);
+  if (look_button && state_.mouse_look && !in_.scripted)
+    fly_.turn(-(mx - state_.last_x) * 0.2, -(my - state_.last_y) * 0.2);
+  state_.mouse_look = look_button;
+  state_.last_x = mx, state_.last_y = my;
+}
+
+// The eye's cell (or the frozen one) into info_, its decoded far field to draw
+// (null: draw the truth, info_.flag says why), and the neighbours prefetched.
+std::shared_ptr<const DecodedCell> ViewerSession::choose_cell(const CellIndex& index, UploadProgress& spent) {
+  const CellEntry* entry = state_.freeze ? index.find(state_.frozen_cell) : index.containing(fly_.position);
+  if (!state_.freeze && entry) state_.frozen_cell = entry->id;
+  std::shared_ptr<const DecodedCell> cell;
+  info_ = {};
+  if (!entry) {
+    info_.flag = "eye outside every baked cell";
+    return cell;
+  }
+  info_.cell_id = entry->id;
+  info_.cull_half_size = entry->cull_half_size;
+  const double reach = 1.01 * (entry->bounds.hi.x - entry->bounds.lo.x);
+  if (in_.staged) {
+    cell = choose_staged_cell(index, *entry, reach, spent);
+  } else {
+    cell = in_.total_frames > 0 ? in_.cache.get_blocking(entry->id) : in_.cache.get(entry->id);
+    std::vector<std::int64_t> neighbours;
+    for (const CellEntry& c : index.cells())
+      if (c.id != entry->id && distance_to_box(entry->bounds.center(), c.bounds) <= reach) neighbours.push_back(c.id);
+    in_.cache.prefetch(neighbours);
+  }
+  if (!cell && info_.flag.empty()) {
+    const std::string failure = in_.cache.failure(entry->id);
+    info_.flag = failure.empty() ? "loading" : failure;
+  }
+  return cell;
+}
+
+// --switch staged: the neighbours prefetched in walking order (as many as the
+// cache holds), and the cell to draw from the switch: the previous one while
+// the eye's cell uploads within the budget.
+std::shared_ptr<const DecodedCell> ViewerSession::choose_staged_cell(const CellIndex& index, const CellEntry& entry,
+                                                                     double reach, UploadProgress& spent) {
+  motion_.add(fly_.position);
+  PrefetchOrder order = prefetch_order(index, entry, fly_.position, motion_.velocity(), reach);
+  order.ids.resize(std::min(order.ids.size(), prefetch_limit(in_.cache.stats())));
+  in_.cache.prefetch(order.ids);
+  // Blocks only while nothing has been drawn yet (--frames, --path).
+  const bool wait = in_.total_frames > 0 && !cell_switch_.shown();
+  const auto target = wait ? in_.cache.get_blocking(entry.id) : in_.cache.get(entry.id);
+  const auto heading = order.heading ? in_.cache.peek(order.heading) : nullptr;
+  std::shared_ptr<const DecodedCell> cell;
+  if (target || in_.cache.failure(entry.id).empty()) {
+    try {
+      cell = cell_switch_.choose(target, heading, drawer_, in_.budget, spent);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "warning: cell %lld: %s; drawing ground truth\n", (long long)entry.id, e.what());
+      cell_switch_.reset();
+      info_.flag = std::string("uploading failed: ") + e.what();
+    }
+  }
+  return cell;
+}
+
+// Draws the frame at fw x fh as the panel asks (impostor, near or far field
+// only, or the truth; the truth when there is no cell or drawing it fails),
+// timed. Returns the image to show: the frame, or with "show holes" its error image.
+const std::vector<Rgba8>& ViewerSession::draw_scene(const std::shared_ptr<const DecodedCell>& cell, int fw, int fh) {
+  const RenderCamera camera = fly_.camera(state_.fov, fw, fh, opt_.near);
+  SceneDrawOptions options;
+  options.wireframe = state_.wireframe;
+  options.tint_by_cell = state_.tint_by_cell;
+  options.near_field = state_.mode != DrawMode::far_only;
+  options.far_field = state_.mode != DrawMode::near_only;
+  options.samples.far_budget = far_budget_;
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    if (state_.mode == DrawMode::truth || !cell) {
+      info_.stats = drawer_.draw_truth(camera, fw, fh, options, frame_);
+    } else {
+      info_.stats = drawer_.draw_impostor(camera, fw, fh, *cell, options, frame_);
+      info_.near_triangles = options.near_field ? cell->near_triangles : 0;
+    }
+  } catch (const std::exception& e) {
+    info_.flag = std::string("drawing failed: ") + e.what();
+    std::fprintf(stderr, "warning: cell %lld: %s; drawing ground truth\n", (long long)info_.cell_id, e.what());
+    info_.stats = drawer_.draw_truth(camera, fw, fh, options, frame_);
+  }
+  const std::vector<Rgba8>* image = &frame_.color;
+  if (state_.show_holes && cell && state_.mode != DrawMode::truth) {
+    drawer_.draw_truth(camera, fw, fh, SceneDrawOptions{}, truth_);
+    info_.holes = compare_frames(frame_, truth_);
+    shown_ = error_image(frame_, truth_);
+    image = &shown_;
+  }
+  info_.frame_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return *image;
+}
+
+// The image into the display texture, and the window's framebuffer cleared for it.
+void ViewerSession::show_image(const std::vector<Rgba8>& image, int fw, int fh) {
+  context_->make_current();
+  gl_.BindTexture(GL_TEXTURE_2D, display_);
+  gl_.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  gl_.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, fw, fh, 0, GL_RGBA, GL_UNSIGNED_BYTE, image.data());
+  gl_.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  gl_.Viewport(0, 0, fw, fh);
+  const float black[4] = {0, 0, 0, 1};
+  gl_.ClearBufferfv(GL_COLOR, 0, black);
+}
+
+// The panel's figures: the cell, why the truth is shown, triangles, far field,
+// times, the cell drawn meanwhile, the cache, GPU memory and holes.
+void ViewerSession::panel_stats(const std::shared_ptr<const DecodedCell>& cell) {
+  ImGui::Text("cell %lld   cull box half-size %.2f", (long long)info_.cell_id, info_.cull_half_size);
+  if (!info_.flag.empty()) ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "ground truth: %s", info_.flag.c_str());
+  ImGui::Text("near %llu tris   far %llu tris   chunks %llu (%llu tris)", (unsigned long long)info_.near_triangles,
+              (unsigned long long)info_.stats.far_triangles, (unsigned long long)info_.stats.chunks_drawn,
+              (unsigned long long)info_.stats.chunk_triangles);
+  ImGui::Text("far field: %llu samples drawn (budget %llu triangles)", (unsigned long long)info_.stats.samples_drawn,
+              (unsigned long long)far_budget_);
+  ImGui::Text("frame %.1f ms   draw %.1f ms", info_.frame_ms, info_.stats.milliseconds);
+  if (cell && cell->id != info_.cell_id)
+    ImGui::Text("drawing cell %lld while cell %lld uploads", (long long)cell->id, (long long)info_.cell_id);
+  const CellCacheStats cs = in_.cache.stats();
+  ImGui::Text("cache: %zu cells, %.1f MB, hits %llu, misses %llu, failed %llu", cs.cells, cs.bytes / 1048576.0,
+              (unsigned long long)cs.hits, (unsigned long long)cs.misses, (unsigned long long)cs.failures);
+  ImGui::Text("GPU: far field %.1f MB, chunks %.1f MB", drawer_.tdm_gpu_bytes() / 1048576.0,
+              drawer_.chunk_stats().cached_bytes / 1048576.0);
+  if (info_.holes)
+    ImGui::Text("holes %.4f  skins %.4f  PSNR %.1f dB", info_.holes->hole_fraction, info_.holes->skin_fraction,
+                info_.holes->psnr_db);
+}
+
+// The panel's controls: draw mode, display options, camera, the jump to a cell
+// (by number or a click on the mini-map) and the keys' help.
+void ViewerSession::panel_controls(const CellIndex& index) {
+  int mode = static_cast<int>(state_.mode);
+  ImGui::RadioButton("both", &mode, 0);
+  ImGui::SameLine();
+  ImGui::RadioButton("near only", &mode, 1);
+  ImGui::SameLine();
+  ImGui::RadioButton("far only", &mode, 2);
+  ImGui::SameLine();
+  ImGui::RadioButton("ground truth", &mode, 3);
+  state_.mode = static_cast<DrawMode>(mode);
+  ImGui::Checkbox("wireframe", &state_.wireframe);
+  ImGui::SameLine();
+  ImGui::Checkbox("colour by cell", &state_.tint_by_cell);
+  ImGui::Checkbox("show holes", &state_.show_holes);
+  ImGui::SameLine();
+  ImGui::Checkbox("freeze cell", &state_.freeze);
+  ImGui::Checkbox("walk", &fly_.walk);
+  float speed = static_cast<float>(fly_.speed), eye_height = static_cast<float>(fly_.eye_height);
+  ImGui::SliderFloat("speed", &speed, 0.1f, 200.0f, "%.1f", ImGuiSliderFlags_Logarithmic);
+  ImGui::SliderFloat("eye height", &eye_height, 0.1f, 10.0f);
+  ImGui::SliderFloat("fov", &state_.fov, 20.0f, 120.0f);
+  fly_.speed = speed, fly_.eye_height = eye_height;
+  ImGui::Text("eye %.2f %.2f %.2f", fly_.position.x, fly_.position.y, fly_.position.z);
+  ImGui::SetNextItemWidth(120);
+  ImGui::InputInt("##cell", &state_.jump_cell);
+  ImGui::SameLine();
+  bool jump = ImGui::Button("jump to cell");
+  const int before_click = state_.jump_cell;
+  draw_minimap(index, fly_, info_.cell_id, state_);  // a click on a cell sets jump_cell
+  jump = jump || state_.jump_cell != before_click;
+  if (jump) {
+    if (const CellEntry* target = index.find(state_.jump_cell)) {
+      fly_.position = target->bounds.center();
+      fly_.eye_height = dot(fly_.position, in_.up) - fly_.floor;
+    }
+  }
+  ImGui::TextUnformatted("WASD move, Q/E down/up, shift faster, right mouse look, Esc or Ctrl+Q quit");
+}
+
+// --screenshot: the window saved as a PNG after the last frame.
+void ViewerSession::save_screenshot(int fw, int fh) {
+  std::vector<Rgba8> pixels;
+  read_window(gl_, fw, fh, pixels);
+  write_png(opt_.screenshot, fw, fh, pixels, {opt_.database, opt_.store});
+  std::printf("screenshot %s (%dx%d) after %d frames, cell %lld%s\n", opt_.screenshot.c_str(), fw, fh,
+              in_.total_frames, (long long)info_.cell_id, info_.flag.empty() ? "" : " (ground truth)");
+}
+
+// --path: the frame's record (cell, switch, times, uploads, cache, triangles).
+void ViewerSession::log_frame(int frame_number, std::chrono::steady_clock::time_point frame_start,
+                              const std::shared_ptr<const DecodedCell>& cell, const UploadProgress& spent,
+                              std::uint64_t uploaded_before) {
+  FrameRecord r;
+  r.frame = frame_number;
+  r.cell_id = info_.cell_id;
+  r.drawn_cell = cell ? cell->id : 0;
+  r.switched = frame_number > 0 && info_.cell_id != previous_cell_;
+  r.frame_ms = elapsed_ms(frame_start);
+  r.draw_ms = info_.stats.milliseconds;
+  r.upload_ms = spent.milliseconds + info_.stats.prepare_milliseconds;
+  r.upload_bytes = drawer_.uploaded_bytes() - uploaded_before;
+  r.cache_bytes = in_.cache.stats().bytes;
+  r.triangles = info_.stats.chunk_triangles + info_.stats.far_triangles;
+  log_.push_back(r);
+  previous_cell_ = info_.cell_id;
+}
+
+void ViewerSession::run() {
+  auto last = std::chrono::steady_clock::now();
+  for (int frame_number = 0; !glfwWindowShouldClose(window_); ++frame_number) {
+    const auto frame_start = std::chrono::steady_clock::now();
+    const std::uint64_t uploaded_before = drawer_.uploaded_bytes();
+    UploadProgress spent;
+    glfwPollEvents();
+    const auto now = std::chrono::steady_clock::now();
+    const double dt = std::min(0.1, std::chrono::duration<double>(now - last).count());
+    last = now;
+    ImGuiIO& io = ImGui::GetIO();
+    steer(frame_number, dt, io);
+
+    // The eye's cell, its decoded far field, and prefetching of the neighbours.
+    const auto index = in_.cache.index();
+    const std::shared_ptr<const DecodedCell> cell = choose_cell(*index, spent);
+    int fw = 0, fh = 0;
+    glfwGetFramebufferSize(window_, &fw, &fh);
+    fw = std::max(fw, 1), fh = std::max(fh, 1);
+    show_image(draw_scene(cell, fw, fh), fw, fh);
+
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(display_)),
+                                             ImVec2(0, 0), io.DisplaySize);
+    ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
+    // Sized to its contents every frame: no stats line is clipped.
+    ImGui::Begin("cellbake", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
+    panel_stats(cell);
+    ImGui::Separator();
+    panel_controls(*index);
+    ImGui::End();
+    ImGui::Render();
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+
+    const bool last_frame = in_.total_frames > 0 && frame_number + 1 >= in_.total_frames;
+    if (last_frame && !opt_.screenshot.empty()) save_screenshot(fw, fh);
+    glfwSwapBuffers(window_);
+    if (in_.scripted) log_frame(frame_number, frame_start, cell, spent, uploaded_before);
+    if (last_frame) break;
+  }
+  if (in_.scripted) {
+    const CellCacheStats cs = in_.cache.stats();
+    std::printf("%s", frame_summary_text(summarize_frames(log_, cs.max_bytes)).c_str());
+    if (!opt_.frame_log.empty()) {
+      write_output_file(opt_.frame_log, frame_log_csv(log_), {opt_.database, in_.store_path, opt_.path});
+      std::printf("frame log: %s\n", opt_.frame_log.c_str());
+    }
+  }
+  context_->make_current();
+  gl_.DeleteTextures(1, &display_);
+}
+
 int run(const Options& opt) {
   CellDb meta_db(opt.database, CellDb::Mode::read_only);
   const std::string store_path = opt.store.empty() ? meta_db.meta("store").value_or("") : opt.store;
@@ -153,316 +569,30 @@ int run(const Options& opt) {
   const auto [width, height] = parse_image_size(opt.size);
   const std::vector<PathView> path = opt.path.empty() ? std::vector<PathView>{} : read_camera_path(opt.path);
   const bool scripted = !path.empty();
-  const bool staged = opt.switch_mode == "staged";
   const int total_frames = scripted ? static_cast<int>(path.size()) : opt.frames;
-  const UploadBudget budget{static_cast<std::size_t>(opt.upload_mb * 1048576.0), opt.upload_ms};
+  const ViewerInputs inputs{opt,    meta_db, store_path, up,      store,        cache,
+                            path,   width,   height,     scripted, opt.switch_mode == "staged", total_frames,
+                            UploadBudget{static_cast<std::size_t>(opt.upload_mb * 1048576.0), opt.upload_ms}};
 
   glfwSetErrorCallback([](int code, const char* text) { std::fprintf(stderr, "glfw error %d: %s\n", code, text); });
   if (!glfwInit()) throw std::runtime_error("cannot initialise GLFW (no display? run under xvfb-run)");
-  struct GlfwGuard {
-    ~GlfwGuard() { glfwTerminate(); }
-  } glfw_guard;
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
-  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
-  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
-  GLFWwindow* window = glfwCreateWindow(width, height, ("cellbake view " + opt.database).c_str(), nullptr, nullptr);
-  if (!window) throw std::runtime_error("cannot create an OpenGL 3.3 core window");
-  glfwMakeContextCurrent(window);
-  glfwSwapInterval(total_frames > 0 ? 0 : 1);
+  GlfwGuard glfw_guard;
+  GLFWwindow* window = open_window(width, height, opt.database, total_frames);
 
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
   ImGui::GetIO().IniFilename = nullptr;
   ImGui_ImplGlfw_InitForOpenGL(window, true);
   ImGui_ImplOpenGL3_Init("#version 330");
-
-  int exit_code = 0;
   {
-    auto context = std::make_shared<GlfwWindowContext>(window);
-    SceneDrawerParams drawer_params;
-    SceneDrawer drawer(context, store, drawer_params);
-    drawer.set_shading(shading_lights(shading_of_config_text(meta_db.meta("config").value_or("")), up));
-    // The far field as the bake asked: view.far_budget (older databases: the default).
-    const std::uint64_t far_budget = far_budget_of_config_text(meta_db.meta("config").value_or(""))
-                                         .value_or(SampleSelectionParams{}.far_budget);
-    const GlFunctions gl = load_gl_functions(*context);
-    GLuint display = 0;
-    gl.GenTextures(1, &display);
-    gl.BindTexture(GL_TEXTURE_2D, display);
-    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-
-    FlyCamera fly;
-    fly.up = up;
-    const Box3d model = store.model_bounds();
-    fly.floor = model.empty() ? 0 : dot(model.lo, up);
-    const auto index0 = cache.index();
-    const Vec3d start = scripted            ? path.front().eye
-                        : !opt.eye.empty() ? parse_point(opt.eye, "--eye")
-                        : !index0->cells().empty() ? index0->cells().front().bounds.center()
-                                                   : model.center();
-    fly.position = start;
-    if (!opt.look.empty() || scripted) {
-      const Vec3d d = (scripted ? path.front().look : parse_point(opt.look, "--look")) - start;
-      int a = 0, b = 1;
-      map_axes(up, a, b);
-      fly.yaw_deg = std::atan2(d[b], d[a]) * 180 / 3.14159265358979323846;
-      fly.pitch_deg = std::atan2(dot(d, up), std::hypot(d[a], d[b])) * 180 / 3.14159265358979323846;
-    }
-    fly.eye_height = dot(start, up) - fly.floor;
-    fly.speed = std::max(0.5, 0.02 * length(model.extent()));
-    ViewerState state;
-    state.fov = static_cast<float>(opt.fov);
-    FrameInfo info;
-    ViewFrame frame, truth;
-    std::vector<Rgba8> shown;
-    CellSwitch cell_switch;
-    EyeMotion motion;
-    std::vector<FrameRecord> log;
-    std::int64_t previous_cell = 0;
-    if (scripted) {
-      // Loading: the first cell decoded and uploaded whole before the first frame.
-      const auto t = std::chrono::steady_clock::now();
-      if (const CellEntry* first = index0->containing(start))
-        if (const auto cell = cache.get_blocking(first->id)) {
-          drawer.prepare(*cell);
-          while (!drawer.upload_some(*cell, {std::numeric_limits<std::size_t>::max(), 1e300}).complete) {
-          }
-        }
-      std::printf("loading: first cell decoded and uploaded in %.1f ms\n", elapsed_ms(t));
-    }
-    auto last = std::chrono::steady_clock::now();
-
-    for (int frame_number = 0; !glfwWindowShouldClose(window); ++frame_number) {
-      const auto frame_start = std::chrono::steady_clock::now();
-      const std::uint64_t uploaded_before = drawer.uploaded_bytes();
-      UploadProgress spent;
-      glfwPollEvents();
-      const auto now = std::chrono::steady_clock::now();
-      const double dt = std::min(0.1, std::chrono::duration<double>(now - last).count());
-      last = now;
-      ImGuiIO& io = ImGui::GetIO();
-      if (scripted) {
-        // The path's view of this frame; the keys and the mouse move nothing.
-        const PathView& view = path[static_cast<std::size_t>(frame_number)];
-        fly.position = view.eye;
-        const Vec3d d = view.look - view.eye;
-        int a = 0, b = 1;
-        map_axes(up, a, b);
-        fly.yaw_deg = std::atan2(d[b], d[a]) * 180 / 3.14159265358979323846;
-        fly.pitch_deg = std::atan2(dot(d, up), std::hypot(d[a], d[b])) * 180 / 3.14159265358979323846;
-      } else if (!io.WantCaptureKeyboard) {
-        const auto key = [&](int k) { return glfwGetKey(window, k) == GLFW_PRESS ? 1.0 : 0.0; };
-        // Esc or Ctrl+Q quits (Q alone moves down).
-        if (key(GLFW_KEY_ESCAPE) ||
-            ((key(GLFW_KEY_LEFT_CONTROL) || key(GLFW_KEY_RIGHT_CONTROL)) && key(GLFW_KEY_Q)))
-          glfwSetWindowShouldClose(window, GLFW_TRUE);
-        const double boost = key(GLFW_KEY_LEFT_SHIFT) ? 4.0 : 1.0;
-        fly.move((key(GLFW_KEY_W) - key(GLFW_KEY_S)) * boost, (key(GLFW_KEY_D) - key(GLFW_KEY_A)) * boost,
-                 (key(GLFW_KEY_E) - key(GLFW_KEY_Q)) * boost, dt);
-      }
-      double mx = 0, my = 0;
-      glfwGetCursorPos(window, &mx, &my);
-      const bool look_button = glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS ||
-                               (glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS && !io.WantCaptureMouse);
-      if (look_button && state.mouse_look && !scripted) fly.turn(-(mx - state.last_x) * 0.2, -(my - state.last_y) * 0.2);
-      state.mouse_look = look_button;
-      state.last_x = mx, state.last_y = my;
-
-      // The eye's cell, its decoded far field, and prefetching of the neighbours.
-      const auto index = cache.index();
-      const CellEntry* entry = state.freeze ? index->find(state.frozen_cell) : index->containing(fly.position);
-      if (!state.freeze && entry) state.frozen_cell = entry->id;
-      std::shared_ptr<const DecodedCell> cell;
-      info = {};
-      if (entry) {
-        info.cell_id = entry->id;
-        info.cull_half_size = entry->cull_half_size;
-        const double reach = 1.01 * (entry->bounds.hi.x - entry->bounds.lo.x);
-        if (staged) {
-          motion.add(fly.position);
-          PrefetchOrder order = prefetch_order(*index, *entry, fly.position, motion.velocity(), reach);
-          order.ids.resize(std::min(order.ids.size(), prefetch_limit(cache.stats())));
-          cache.prefetch(order.ids);
-          // Blocks only while nothing has been drawn yet (--frames, --path).
-          const bool wait = total_frames > 0 && !cell_switch.shown();
-          const auto target = wait ? cache.get_blocking(entry->id) : cache.get(entry->id);
-          const auto heading = order.heading ? cache.peek(order.heading) : nullptr;
-          if (target || cache.failure(entry->id).empty()) {
-            try {
-              cell = cell_switch.choose(target, heading, drawer, budget, spent);
-            } catch (const std::exception& e) {
-              std::fprintf(stderr, "warning: cell %lld: %s; drawing ground truth\n", (long long)entry->id, e.what());
-              cell_switch.reset();
-              info.flag = std::string("uploading failed: ") + e.what();
-            }
-          }
-        } else {
-          cell = total_frames > 0 ? cache.get_blocking(entry->id) : cache.get(entry->id);
-          std::vector<std::int64_t> neighbours;
-          for (const CellEntry& c : index->cells())
-            if (c.id != entry->id && distance_to_box(entry->bounds.center(), c.bounds) <= reach) neighbours.push_back(c.id);
-          cache.prefetch(neighbours);
-        }
-        if (!cell && info.flag.empty()) {
-          const std::string failure = cache.failure(entry->id);
-          info.flag = failure.empty() ? "loading" : failure;
-        }
-      } else {
-        info.flag = "eye outside every baked cell";
-      }
-
-      int fw = 0, fh = 0;
-      glfwGetFramebufferSize(window, &fw, &fh);
-      fw = std::max(fw, 1), fh = std::max(fh, 1);
-      const RenderCamera camera = fly.camera(state.fov, fw, fh, opt.near);
-      SceneDrawOptions options;
-      options.wireframe = state.wireframe;
-      options.tint_by_cell = state.tint_by_cell;
-      options.near_field = state.mode != DrawMode::far_only;
-      options.far_field = state.mode != DrawMode::near_only;
-      options.samples.far_budget = far_budget;
-      const auto t0 = std::chrono::steady_clock::now();
-      try {
-        if (state.mode == DrawMode::truth || !cell) {
-          info.stats = drawer.draw_truth(camera, fw, fh, options, frame);
-        } else {
-          info.stats = drawer.draw_impostor(camera, fw, fh, *cell, options, frame);
-          info.near_triangles = options.near_field ? cell->near_triangles : 0;
-        }
-      } catch (const std::exception& e) {
-        info.flag = std::string("drawing failed: ") + e.what();
-        std::fprintf(stderr, "warning: cell %lld: %s; drawing ground truth\n", (long long)info.cell_id, e.what());
-        info.stats = drawer.draw_truth(camera, fw, fh, options, frame);
-      }
-      const std::vector<Rgba8>* image = &frame.color;
-      if (state.show_holes && cell && state.mode != DrawMode::truth) {
-        drawer.draw_truth(camera, fw, fh, SceneDrawOptions{}, truth);
-        info.holes = compare_frames(frame, truth);
-        shown = error_image(frame, truth);
-        image = &shown;
-      }
-      info.frame_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-
-      context->make_current();
-      gl.BindTexture(GL_TEXTURE_2D, display);
-      gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
-      gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, fw, fh, 0, GL_RGBA, GL_UNSIGNED_BYTE, image->data());
-      gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
-      gl.Viewport(0, 0, fw, fh);
-      const float black[4] = {0, 0, 0, 1};
-      gl.ClearBufferfv(GL_COLOR, 0, black);
-
-      ImGui_ImplOpenGL3_NewFrame();
-      ImGui_ImplGlfw_NewFrame();
-      ImGui::NewFrame();
-      ImGui::GetBackgroundDrawList()->AddImage(reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(display)),
-                                               ImVec2(0, 0), io.DisplaySize);
-      ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
-      // Sized to its contents every frame: no stats line is clipped.
-      ImGui::Begin("cellbake", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
-      ImGui::Text("cell %lld   cull box half-size %.2f", (long long)info.cell_id, info.cull_half_size);
-      if (!info.flag.empty()) ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "ground truth: %s", info.flag.c_str());
-      ImGui::Text("near %llu tris   far %llu tris   chunks %llu (%llu tris)", (unsigned long long)info.near_triangles,
-                  (unsigned long long)info.stats.far_triangles, (unsigned long long)info.stats.chunks_drawn,
-                  (unsigned long long)info.stats.chunk_triangles);
-      ImGui::Text("far field: %llu samples drawn (budget %llu triangles)", (unsigned long long)info.stats.samples_drawn,
-                  (unsigned long long)far_budget);
-      ImGui::Text("frame %.1f ms   draw %.1f ms", info.frame_ms, info.stats.milliseconds);
-      if (cell && cell->id != info.cell_id)
-        ImGui::Text("drawing cell %lld while cell %lld uploads", (long long)cell->id, (long long)info.cell_id);
-      const CellCacheStats cs = cache.stats();
-      ImGui::Text("cache: %zu cells, %.1f MB, hits %llu, misses %llu, failed %llu", cs.cells, cs.bytes / 1048576.0,
-                  (unsigned long long)cs.hits, (unsigned long long)cs.misses, (unsigned long long)cs.failures);
-      ImGui::Text("GPU: far field %.1f MB, chunks %.1f MB", drawer.tdm_gpu_bytes() / 1048576.0,
-                  drawer.chunk_stats().cached_bytes / 1048576.0);
-      if (info.holes)
-        ImGui::Text("holes %.4f  skins %.4f  PSNR %.1f dB", info.holes->hole_fraction, info.holes->skin_fraction,
-                    info.holes->psnr_db);
-      ImGui::Separator();
-      int mode = static_cast<int>(state.mode);
-      ImGui::RadioButton("both", &mode, 0);
-      ImGui::SameLine();
-      ImGui::RadioButton("near only", &mode, 1);
-      ImGui::SameLine();
-      ImGui::RadioButton("far only", &mode, 2);
-      ImGui::SameLine();
-      ImGui::RadioButton("ground truth", &mode, 3);
-      state.mode = static_cast<DrawMode>(mode);
-      ImGui::Checkbox("wireframe", &state.wireframe);
-      ImGui::SameLine();
-      ImGui::Checkbox("colour by cell", &state.tint_by_cell);
-      ImGui::Checkbox("show holes", &state.show_holes);
-      ImGui::SameLine();
-      ImGui::Checkbox("freeze cell", &state.freeze);
-      ImGui::Checkbox("walk", &fly.walk);
-      float speed = static_cast<float>(fly.speed), eye_height = static_cast<float>(fly.eye_height);
-      ImGui::SliderFloat("speed", &speed, 0.1f, 200.0f, "%.1f", ImGuiSliderFlags_Logarithmic);
-      ImGui::SliderFloat("eye height", &eye_height, 0.1f, 10.0f);
-      ImGui::SliderFloat("fov", &state.fov, 20.0f, 120.0f);
-      fly.speed = speed, fly.eye_height = eye_height;
-      ImGui::Text("eye %.2f %.2f %.2f", fly.position.x, fly.position.y, fly.position.z);
-      ImGui::SetNextItemWidth(120);
-      ImGui::InputInt("##cell", &state.jump_cell);
-      ImGui::SameLine();
-      bool jump = ImGui::Button("jump to cell");
-      const int before_click = state.jump_cell;
-      draw_minimap(*index, fly, info.cell_id, state);  // a click on a cell sets jump_cell
-      jump = jump || state.jump_cell != before_click;
-      if (jump) {
-        if (const CellEntry* target = index->find(state.jump_cell)) {
-          fly.position = target->bounds.center();
-          fly.eye_height = dot(fly.position, up) - fly.floor;
-        }
-      }
-      ImGui::TextUnformatted("WASD move, Q/E down/up, shift faster, right mouse look, Esc or Ctrl+Q quit");
-      ImGui::End();
-      ImGui::Render();
-      ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
-
-      const bool last_frame = total_frames > 0 && frame_number + 1 >= total_frames;
-      if (last_frame && !opt.screenshot.empty()) {
-        std::vector<Rgba8> pixels;
-        read_window(gl, fw, fh, pixels);
-        write_png(opt.screenshot, fw, fh, pixels, {opt.database, opt.store});
-        std::printf("screenshot %s (%dx%d) after %d frames, cell %lld%s\n", opt.screenshot.c_str(), fw, fh,
-                    total_frames, (long long)info.cell_id, info.flag.empty() ? "" : " (ground truth)");
-      }
-      glfwSwapBuffers(window);
-      if (scripted) {
-        FrameRecord r;
-        r.frame = frame_number;
-        r.cell_id = info.cell_id;
-        r.drawn_cell = cell ? cell->id : 0;
-        r.switched = frame_number > 0 && info.cell_id != previous_cell;
-        r.frame_ms = elapsed_ms(frame_start);
-        r.draw_ms = info.stats.milliseconds;
-        r.upload_ms = spent.milliseconds + info.stats.prepare_milliseconds;
-        r.upload_bytes = drawer.uploaded_bytes() - uploaded_before;
-        r.cache_bytes = cache.stats().bytes;
-        r.triangles = info.stats.chunk_triangles + info.stats.far_triangles;
-        log.push_back(r);
-        previous_cell = info.cell_id;
-      }
-      if (last_frame) break;
-    }
-    if (scripted) {
-      const CellCacheStats cs = cache.stats();
-      std::printf("%s", frame_summary_text(summarize_frames(log, cs.max_bytes)).c_str());
-      if (!opt.frame_log.empty()) {
-        write_output_file(opt.frame_log, frame_log_csv(log), {opt.database, store_path, opt.path});
-        std::printf("frame log: %s\n", opt.frame_log.c_str());
-      }
-    }
-    context->make_current();
-    gl.DeleteTextures(1, &display);
+    ViewerSession session(inputs, window);
+    session.run();
   }
   ImGui_ImplOpenGL3_Shutdown();
   ImGui_ImplGlfw_Shutdown();
   ImGui::DestroyContext();
   glfwDestroyWindow(window);
-  return exit_code;
+  return 0;
 }
 
 }  // namespace
