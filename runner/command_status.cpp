@@ -228,7 +228,11 @@ std::map<std::int64_t, std::string> check_database(const CellDb& db, const std::
 void note_cell_states(const CellDb& db, const std::string& path, std::map<std::int64_t, std::string>& reasons,
                       ConfigCells& cells, StatusTotals& s) {
   for (const auto& [id, stamp] : db.stamps()) {
-    if (!stamp.error.empty() && !reasons.count(id)) reasons[id] = stamp.error.substr(stamp.error.find("near_chunks"));
+    if (!stamp.error.empty() && !reasons.count(id)) {
+      // The reason without the database and cell the stamp's error starts with.
+      const std::size_t blob = stamp.error.find("near_chunks");
+      reasons[id] = blob == std::string::npos ? stamp.error : stamp.error.substr(blob);
+    }
     const bool bad = reasons.count(id) > 0;
     note_state(cells.state[id], bad ? "damaged" : stamp.status);
     if (stamp.status == "done" && !bad) s.cell_hashes[id] = stamp.content_hash;

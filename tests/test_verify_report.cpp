@@ -166,6 +166,20 @@ TEST(VerifyStats, CellJsonRoundTripsIncludingInfinitePsnr) {
   EXPECT_EQ(r.views[0].eye, (Vec3d{1, 2, 3}));
 }
 
+TEST(VerifyStats, AnUnmeasuredLodCutStaysUnmeasuredThroughJson) {
+  VerifyCellResult c;
+  c.id = 4;
+  c.bounds = {{0, 0, 0}, {2, 2, 2}};
+  c.views = {view(VerifyViewKind::random, 35.0, 0.0), view(VerifyViewKind::random, 36.0, 0.0)};
+  c.views[1].psnr_db_cut = kInf;  // measured, and identical to the truth
+  c.views[1].psnr_gain_over_cut = psnr_difference(c.views[1].psnr_db, c.views[1].psnr_db_cut);
+  const VerifyCellResult r = cell_from_json(nlohmann::json::parse(to_json(c).dump()));
+  ASSERT_EQ(r.views.size(), 2u);
+  EXPECT_TRUE(std::isnan(r.views[0].psnr_db_cut));
+  EXPECT_TRUE(std::isnan(r.views[0].psnr_gain_over_cut));
+  EXPECT_EQ(r.views[1].psnr_db_cut, kInf);
+}
+
 TEST(SvgPlot, NiceTicks) {
   EXPECT_EQ(nice_ticks(0, 10, 5), (std::vector<double>{0, 2, 4, 6, 8, 10}));
   // (0.95 - 0.3) / 6 = 0.108: the next nice step is 0.2.

@@ -255,7 +255,7 @@ int worst_view_index(const std::vector<VerifyViewResult>& views) {
 }
 
 nlohmann::json to_json(const VerifyViewResult& v) {
-  return {{"kind", view_kind_name(v.kind)},
+  nlohmann::json j = {{"kind", view_kind_name(v.kind)},
           {"eye", vec_json(v.eye)},
           {"look", vec_json(v.look)},
           {"distance_from_sample", v.distance_from_sample},
@@ -285,6 +285,11 @@ nlohmann::json to_json(const VerifyViewResult& v) {
                    {{"far_budget", p.far_budget}, {"triangles", p.triangles}, {"psnr_db", number_or_null(p.psnr_db)}});
              return points;
            }()}};
+  // The cut's figures only where it was measured (--lod-cut): a null PSNR
+  // reads back as +infinity, which would count an unmeasured cut as identical.
+  if (std::isnan(v.psnr_db_cut))
+    for (const char* key : {"psnr_db_cut", "cut_error_px", "psnr_db_cut_1px", "triangles_cut_1px"}) j.erase(key);
+  return j;
 }
 
 nlohmann::json to_json(const VerifyCellResult& c) {

@@ -121,9 +121,10 @@ bool worse_view(const VerifyViewResult& a, const VerifyViewResult& b);
 // index; -1 when the cell has no random views.
 int worst_view_index(const std::vector<VerifyViewResult>& views);
 
-// JSON forms (non-finite numbers as null, read back as +infinity for psnr_db
-// and NaN otherwise). cell_from_json throws nlohmann::json::exception on a
-// malformed object.
+// JSON forms (non-finite numbers as null, read back as +infinity for the
+// PSNRs and NaN otherwise; the LOD cut's figures only where they were
+// measured, so they read back as NaN, not measured, when they were not).
+// cell_from_json throws nlohmann::json::exception on a malformed object.
 nlohmann::json to_json(const VerifyViewResult& view);
 nlohmann::json to_json(const VerifyCellResult& cell);
 VerifyCellResult cell_from_json(const nlohmann::json& j);
