@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The test command: installs what is missing (build and test packages, and the
 # Slurm daemons tests/test_slurm runs a one-node cluster with), builds with the
-# tests, and runs the whole suite with CTest; then the sanitizer jobs
+# tests (the runner library as a unity build, as the sanitizer jobs do: its
+# files' time is mostly CLI11's inline code, once per file), and runs the
+# whole suite with CTest; then the sanitizer jobs
 # (scripts/sanitize.sh: asan, whose build also replays the fuzz targets
 # under ASan + UBSan, and tsan), each in a build folder of its own
 # (BUILD-asan, BUILD-tsan); CELLBAKE_QUICK=1 or CELLBAKE_SANITIZE=0 skips
@@ -11,7 +13,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 start=$(date +%s)
 bash scripts/install-deps.sh build test slurm
-bash scripts/build.sh --no-deps -DCELLBAKE_BUILD_TESTS=ON -DCELLBAKE_BUILD_BENCH=OFF
+bash scripts/build.sh --no-deps -DCELLBAKE_BUILD_TESTS=ON -DCELLBAKE_BUILD_BENCH=OFF -DCELLBAKE_UNITY_RUNNER=ON
 echo "[test] packages and build: $(( $(date +%s) - start )) s"
 build_dir="${CELLBAKE_BUILD_DIR:-build}"
 failed=()
