@@ -14,6 +14,7 @@
 #include "pipeline/stratified_cells.h"
 #include "runner/console.h"
 #include "runner/measured_estimate.h"
+#include "runner/parallel.h"
 #include "storage/geometry_store.h"
 #include "storage/store_check.h"
 
@@ -189,8 +190,7 @@ void run_bake_dry_run(const BakeConfig& given, const BakeCommandOptions& options
   const GeometryStore store(given.store);
   const BakePlan plan = plan_bake(given, options.run, store);
   const BakeConfig& c = plan.config;
-  const int threads =
-      options.run.threads > 0 ? options.run.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+  const int threads = worker_threads(options.run.threads);
   const BakeEstimate e = estimate_bake(plan.cells.size(), c.face_size, threads, plan.model_triangles);
   const bool no_far_field = plan.model_triangles <= c.near_budget;
 

@@ -16,6 +16,7 @@
 #include "pipeline/cell_grid.h"
 #include "pipeline/cell_job.h"
 #include "pipeline/sample_backend.h"
+#include "runner/parallel.h"
 #include "runner/progress.h"
 #include "runner/shards.h"
 #include "stages/sample/cube_sampler.h"
@@ -101,16 +102,6 @@ BakePlan plan_bake(const BakeConfig& given, const BakeOptions& options, const Ge
 }
 
 namespace {
-
-// The bake's thread count: --threads, else every core. Several single-threaded
-// llvmpipe contexts use the cores better than one multi-threaded one (measured
-// on the 2-core project machine), so LP_NUM_THREADS is set to match; a user's
-// own setting is respected.
-int bake_threads(const BakeOptions& options) {
-  const int threads = options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
-  if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", threads > 1 ? "1" : "2", 1);
-  return threads;
-}
 
 // The plan's notes on stderr: the up-axis note (even with --quiet: it changes
 // the bake), the floors' eye heights, and a model that fits the near budget whole.
@@ -377,7 +368,7 @@ void note_chunks_too_coarse(const BakeSummary& summary, const BakePlan& plan, co
 BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   validate_bake_config(given);
-  const int threads = bake_threads(options);
+  const int threads = drawing_worker_threads(options.threads);
   require_sound_store(given.store, options.check_store);  // a damaged store bakes nothing
   GeometryStore store(given.store);
   const BakePlan plan = plan_bake(given, options, store);

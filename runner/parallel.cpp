@@ -2,6 +2,10 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <cstdlib>
+#include <thread>
+
 #include "stages/tsan_handoff.h"
 
 namespace cellbake {
@@ -28,6 +32,16 @@ ParallelFor tbb_parallel_for() {
     tbb::parallel_for(std::size_t(0), n, body);
     tsan::after(&join_token);
   };
+}
+
+int worker_threads(int requested) {
+  return requested > 0 ? requested : int(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+int drawing_worker_threads(int requested) {
+  const int threads = worker_threads(requested);
+  if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", threads > 1 ? "1" : "2", 1);
+  return threads;
 }
 
 }  // namespace cellbake

@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "pipeline/cell_grid.h"
+#include "runner/parallel.h"
 #include "runner/progress.h"
 #include "runner/verify/verify_report.h"
 #include "runner/walk/walk_runner.h"
@@ -132,16 +133,6 @@ void check_verify_options(const VerifyOptions& options) {
     throw std::invalid_argument("verify: image size must be at least 8x8");
   if (options.supersample < 1 || options.supersample > 4)
     throw std::invalid_argument("verify: --supersample must be 1 to 4");
-}
-
-// The verify's thread count: --threads, else every core. Like the bake, one
-// llvmpipe thread per context when there are several (LP_NUM_THREADS, unless
-// the user set it).
-int verify_threads(const VerifyOptions& options) {
-  const int threads =
-      options.threads > 0 ? options.threads : int(std::max(1u, std::thread::hardware_concurrency()));
-  if (!std::getenv("LP_NUM_THREADS")) setenv("LP_NUM_THREADS", threads > 1 ? "1" : "2", 1);
-  return threads;
 }
 
 // The geometry store to draw the truth from: --store, else the database's meta 'store'.
@@ -549,7 +540,7 @@ VerifySummary run_verify(const std::filesystem::path& database, const std::files
                          const VerifyOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   check_verify_options(options);
-  const int threads = verify_threads(options);
+  const int threads = drawing_worker_threads(options.threads);
 
   CellDb db(database, CellDb::Mode::read_only);
   const std::filesystem::path store_path = verify_store_path(db, database, options);
