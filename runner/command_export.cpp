@@ -107,6 +107,8 @@ void run_export(const Options& opt) {
                      {"cells", ids},
                      {"bytes", stats.bytes},
                      {"cells_stored_bytes", stored_bytes},
+                     {"store_chunks", stats.store_chunks},
+                     {"store_chunk_bytes", stats.store_chunk_bytes},
                      {"meshes", stats.meshes},
                      {"images", stats.images},
                      {"images_reencoded", stats.images_reencoded},
@@ -126,9 +128,14 @@ void run_export(const Options& opt) {
               (unsigned long long)stats.near_triangles, (unsigned long long)stats.far_geometry_triangles,
               (unsigned long long)stats.depth_mesh_triangles, (unsigned long long)stats.depth_mesh_triangles_out,
               stats.meshes);
-  std::printf("  %zu images, %llu bytes (%llu re-encoded as JPEG/PNG); the cells' rows hold %llu bytes\n", stats.images,
-              (unsigned long long)stats.image_bytes, (unsigned long long)stats.images_reencoded,
-              (unsigned long long)stored_bytes);
+  std::printf("  %zu images, %llu bytes (%llu re-encoded as JPEG/PNG)\n", stats.images,
+              (unsigned long long)stats.image_bytes, (unsigned long long)stats.images_reencoded);
+  const std::uint64_t stored_in_all = stored_bytes + stats.store_chunk_bytes;
+  std::printf("  stored: the cells' rows %llu bytes and the %llu store chunks (or levels) they draw %llu bytes; "
+              "the file is %.2fx that\n",
+              (unsigned long long)stored_bytes, (unsigned long long)stats.store_chunks,
+              (unsigned long long)stats.store_chunk_bytes,
+              stored_in_all > 0 ? double(stats.bytes) / double(stored_in_all) : 0.0);
 }
 
 }  // namespace
@@ -154,6 +161,11 @@ void add_export_command(CLI::App& app) {
                   "Largest position error of chunk geometry, model units: each mesh takes the fewest bits (8..16) "
                   "within it (0: 16 bits)")
       ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--position-tolerance-per-distance", opt->exporter.position_tolerance_per_distance,
+                  "... and no less than this fraction of the chunk's distance from the nearest exported cell "
+                  "(0: the fixed tolerance everywhere)")
+      ->check(CLI::Range(0.0, 0.1))
       ->capture_default_str();
   cmd->add_option("--depth-mesh-tolerance", opt->exporter.depth_mesh_tolerance,
                   "Largest position error of a depth mesh, as a fraction of its nearest vertex's distance from "

@@ -23,6 +23,7 @@
 #include "pipeline/export/cell_gltf_export.h"
 #include "pipeline/export/glb_builder.h"
 #include "pipeline/export/gltf_vertex_streams.h"
+#include "stages/chunk_lod.h"
 #include "stages/encode/encode.h"
 #include "storage/cell_db.h"
 #include "storage/chunk_codec.h"
@@ -327,13 +328,12 @@ struct Exported {
   DecodedCell cell;
 };
 
-Exported export_cell(const std::filesystem::path& db_path, bool compress) {
+Exported export_cell(const std::filesystem::path& db_path, bool compress, GltfExportOptions options = {}) {
   const CellDb db(db_path, CellDb::Mode::read_only);
   const GeometryStore store(baked().store);
   Exported e;
   e.row = *db.get_cell(1, true);
   e.cell = decode_cell(e.row, &store);
-  GltfExportOptions options;
   options.compress = compress;
   GltfSceneContext context;
   context.lights = shading_lights(ShadingParams{}, context.up);
@@ -441,6 +441,45 @@ TEST(Export, CellGlbHoldsTheCellsTrianglesWithinTheirBounds) {
   EXPECT_EQ(far_triangles, e.cell.far_geometry_triangles);
   EXPECT_EQ(e.stats.far_geometry_triangles, e.cell.far_geometry_triangles);
   EXPECT_EQ(e.stats.bytes, e.bytes.size());
+}
+
+// Chunk positions take the coarser of the fixed tolerance and a fraction of
+// the chunk's distance from the cell: every chunk within its own bound, the
+// distant ones coarser than the fixed one; with the fraction 0, none is. The
+// room's chunks all touch the baked cell, so the cell is moved 10 m away.
+TEST(Export, ChunkPositionsCoarsenWithDistanceFromTheCell) {
+  const GeometryStore store(baked().store);
+  Exported e = export_cell(baked().db("tdm"), false);
+  e.cell.bounds = Box3d{e.cell.bounds.lo + Vec3d{10, 0, 0}, e.cell.bounds.hi + Vec3d{10, 0, 0}};
+  GltfSceneContext context;
+  context.lights = shading_lights(ShadingParams{}, context.up);
+  for (const double per_distance : {0.0, 0.001}) {
+    GltfExportOptions options;
+    options.position_tolerance_per_distance = per_distance;
+    e.bytes = export_cells_glb({{&e.row, &e.cell}}, store, context, options, &e.stats);
+    const json doc = parse_glb(e.bytes).json;
+    const int root = doc["scenes"][0]["nodes"][0];
+    const int near = child_named(doc, doc["nodes"][root]["children"][0], "near field");
+    ASSERT_GE(near, 0);
+    std::vector<int> chunk_nodes;
+    collect(doc, near, "chunk ", chunk_nodes);
+    ASSERT_EQ(chunk_nodes.size(), e.cell.near_ids.size());
+    std::size_t coarser = 0;
+    for (std::size_t k = 0; k < chunk_nodes.size(); ++k) {
+      const json& node = doc["nodes"][chunk_nodes[k]];
+      const Vec3d t{node["translation"][0], node["translation"][1], node["translation"][2]};
+      const double error = position_error_bound({t, node["scale"][0].get<double>()});
+      const double distance = box_distance(e.cell.bounds, store.load(e.cell.near_ids[k])->bounds);
+      EXPECT_LE(error, std::max(options.position_tolerance, per_distance * distance)) << node["name"];
+      if (error > options.position_tolerance) ++coarser;
+    }
+    EXPECT_EQ(coarser > 0, per_distance > 0) << coarser << " of " << chunk_nodes.size() << " chunks coarser";
+    // What drawing the cell reads from the store: its near chunks as stored.
+    std::uint64_t stored = 0;
+    for (std::int64_t id : e.cell.near_ids) stored += encode_chunk_blob(*store.load(id)).size();
+    EXPECT_EQ(e.stats.store_chunk_bytes, stored);
+    EXPECT_EQ(e.stats.store_chunks, e.cell.near_ids.size());
+  }
 }
 
 TEST(Export, TexturedDepthMeshCarriesItsStoredImage) {

@@ -4,13 +4,16 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <set>
 #include <stdexcept>
 
 #include "pipeline/export/affine_face_mesh.h"
 #include "pipeline/export/glb_builder.h"
 #include "pipeline/export/gltf_image.h"
 #include "pipeline/export/gltf_vertex_streams.h"
+#include "stages/chunk_lod.h"
 #include "stages/encode/encode.h"
+#include "storage/chunk_codec.h"
 
 namespace cellbake {
 namespace {
@@ -37,8 +40,13 @@ struct PlacedMesh {
 class SceneWriter {
  public:
   SceneWriter(const ChunkSource& store, const GltfSceneContext& context, const GltfExportOptions& options,
-              const Vec3d& origin)
-      : store_(store), context_(context), options_(options), origin_(origin), materials_(store.materials()) {}
+              const Vec3d& origin, std::vector<Box3d> cell_boxes)
+      : store_(store),
+        context_(context),
+        options_(options),
+        origin_(origin),
+        cell_boxes_(std::move(cell_boxes)),
+        materials_(store.materials()) {}
 
   GlbBuilder& glb() { return glb_; }
   // The file, its pooled streams written.
@@ -69,7 +77,8 @@ class SceneWriter {
     const std::shared_ptr<const Chunk> chunk = store_.load(id);
     if (!chunk) throw std::runtime_error("chunk " + std::to_string(id) + ": the store returned no geometry");
     (near ? stats_.near_triangles : stats_.far_geometry_triangles) += chunk->triangle_count();
-    return chunk_meshes_[id] = chunk_mesh(*chunk, "chunk " + std::to_string(id));
+    count_stored(id, 0, *chunk);
+    return chunk_meshes_[id] = chunk_mesh(*chunk, "chunk " + std::to_string(id), chunk_tolerance(chunk->bounds));
   }
 
   // A far piece's mesh: levels are shared by cache id, cut pieces are the cell's own.
@@ -81,7 +90,11 @@ class SceneWriter {
     stats_.far_geometry_triangles += chunk->triangle_count();
     const std::string name = "chunk " + std::to_string(piece.chunk_id) +
                              (shared ? " level " + std::to_string(piece.level) : " (part)");
-    const PlacedMesh placed = chunk_mesh(*chunk, name);
+    if (shared)
+      count_stored(piece.chunk_id, piece.level, *chunk);
+    else if (!stored_blobs_.contains({piece.chunk_id, 0}))
+      count_stored(piece.chunk_id, 0, *store_.load(piece.chunk_id));  // a part is cut out of the whole
+    const PlacedMesh placed = chunk_mesh(*chunk, name, chunk_tolerance(piece.bounds));
     if (shared) level_meshes_[piece.cache_id] = placed;
     return placed;
   }
@@ -116,8 +129,24 @@ class SceneWriter {
   }
 
  private:
+  // Position tolerance of chunk geometry within `bounds`: the fixed one, or
+  // the distance fraction of its distance from the nearest exported cell.
+  double chunk_tolerance(const Box3d& bounds) const {
+    double distance = std::numeric_limits<double>::infinity();
+    for (const Box3d& cell : cell_boxes_) distance = std::min(distance, box_distance(cell, bounds));
+    if (!std::isfinite(distance)) distance = 0;
+    return std::max(options_.position_tolerance, options_.position_tolerance_per_distance * distance);
+  }
+
+  // Counts the stored blob of chunk `id` at `level` (0: the chunk) once.
+  void count_stored(std::int64_t id, int level, const Chunk& chunk) {
+    if (!stored_blobs_.insert({id, level}).second) return;
+    ++stats_.store_chunks;
+    stats_.store_chunk_bytes += encode_chunk_blob(chunk).size();
+  }
+
   // The chunk's triangles lit with the bake's light model, one primitive per material.
-  PlacedMesh chunk_mesh(const Chunk& c, const std::string& name) {
+  PlacedMesh chunk_mesh(const Chunk& c, const std::string& name, double tolerance) {
     std::map<int, ExportMesh> by_material;  // key: glTF material
     const Vec3d offset = c.origin - origin_;
     const std::size_t triangles = c.triangle_count();
@@ -157,7 +186,7 @@ class SceneWriter {
       primitives.push_back(std::move(e));
       material_of.push_back(material);
     }
-    return add_mesh(name, primitives, material_of, options_.position_tolerance);
+    return add_mesh(name, primitives, material_of, tolerance);
   }
 
   static Vec3d to_double(const Vec3f& p) { return {p.x, p.y, p.z}; }
@@ -303,11 +332,13 @@ class SceneWriter {
   GltfSceneContext context_;
   GltfExportOptions options_;
   Vec3d origin_;
+  std::vector<Box3d> cell_boxes_;  // the exported cells' bounds: where the eye may be
   std::vector<Material> materials_;
   GlbBuilder glb_;
   StreamPool streams_{glb_, options_.compress};
   GltfExportStats stats_;
   std::map<std::int64_t, PlacedMesh> chunk_meshes_, level_meshes_;
+  std::set<std::pair<std::int64_t, int>> stored_blobs_;  // (chunk, level) counted in stats_.store_chunk_bytes
   std::map<int, int> geometry_materials_;
   std::map<std::int64_t, int> store_textures_;
   std::map<std::array<int, 4>, int> samplers_;
@@ -347,7 +378,9 @@ std::vector<std::uint8_t> export_cells_glb(const std::vector<CellToExport>& cell
   for (const CellToExport& c : cells)
     if (!c.row || !c.cell) throw std::invalid_argument("glTF export: a cell without its row or decoded cell");
   const Vec3d origin = cells.front().cell->bounds.center();
-  SceneWriter w(store, context, options, origin);
+  std::vector<Box3d> cell_boxes;
+  for (const CellToExport& c : cells) cell_boxes.push_back(c.cell->bounds);
+  SceneWriter w(store, context, options, origin, std::move(cell_boxes));
 
   json root{{"name", "cellbake " + context.database_name}};
   // The model's up axis onto glTF's +Y: z-up turns -90 degrees about x, (x, y, z) -> (x, z, -y).
