@@ -15,8 +15,9 @@
 // an alpha test drops is traced again from just behind it.
 // The rays of one face against one batch are traced by face_tracer.h.
 // Supersampled faces go through downsample_face like the GL path's. When a
-// cube map's groups exceed ChunkBvhCache::batch_bytes (half the cache's cap)
-// it is traced batch by batch, nearest groups first, each batch's rays
+// cube map's groups exceed ChunkBvhCache::one_batch_bytes (half the cache's
+// cap) it is traced in batches of at most ChunkBvhCache::batch_bytes (a
+// quarter of the cap), nearest groups first, each batch's rays
 // limited to the nearest hit so far (a tie keeps the earlier batch's hit), so
 // memory stays bounded whatever the model size; a group whose bounds lie
 // behind every hit its projection covers is skipped unbuilt (occlusion
