@@ -356,6 +356,14 @@ int child_named(const json& doc, int parent, const std::string& name) {
   return -1;
 }
 
+// The chunk nodes under cell node `cell_node`'s "near field" group (none without one).
+std::vector<int> near_chunk_nodes(const json& doc, int cell_node) {
+  std::vector<int> nodes;
+  const int near = child_named(doc, cell_node, "near field");
+  if (near >= 0) collect(doc, near, "chunk ", nodes);
+  return nodes;
+}
+
 TEST(Export, CellGlbHoldsTheCellsTrianglesWithinTheirBounds) {
   const Exported e = export_cell(baked().db("geometry"), false);
   ASSERT_FALSE(e.cell.far_pieces.empty() && e.cell.far_whole_ids.empty());
@@ -379,10 +387,8 @@ TEST(Export, CellGlbHoldsTheCellsTrianglesWithinTheirBounds) {
   // Every near chunk of the cell is a node whose mesh holds the chunk's
   // triangles, its dequantised positions within the chunk's bounds.
   const GeometryStore store(baked().store);
-  const int near = child_named(doc, cell_node, "near field");
-  ASSERT_GE(near, 0);
-  std::vector<int> chunk_nodes;
-  collect(doc, near, "chunk ", chunk_nodes);
+  ASSERT_FALSE(e.cell.near_ids.empty());
+  const std::vector<int> chunk_nodes = near_chunk_nodes(doc, cell_node);
   ASSERT_EQ(chunk_nodes.size(), e.cell.near_ids.size());
   std::uint64_t triangles = 0;
   for (std::size_t k = 0; k < chunk_nodes.size(); ++k) {
@@ -459,10 +465,7 @@ TEST(Export, ChunkPositionsCoarsenWithDistanceFromTheCell) {
     e.bytes = export_cells_glb({{&e.row, &e.cell}}, store, context, options, &e.stats);
     const json doc = parse_glb(e.bytes).json;
     const int root = doc["scenes"][0]["nodes"][0];
-    const int near = child_named(doc, doc["nodes"][root]["children"][0], "near field");
-    ASSERT_GE(near, 0);
-    std::vector<int> chunk_nodes;
-    collect(doc, near, "chunk ", chunk_nodes);
+    const std::vector<int> chunk_nodes = near_chunk_nodes(doc, doc["nodes"][root]["children"][0]);
     ASSERT_EQ(chunk_nodes.size(), e.cell.near_ids.size());
     std::size_t coarser = 0;
     for (std::size_t k = 0; k < chunk_nodes.size(); ++k) {
