@@ -34,6 +34,7 @@
 #include "pipeline/cell_grid.h"
 #include "runner/verify/verify_report.h"
 #include "runner/verify/verify_views.h"
+#include "stages/sample/sample_points.h"
 #include "stages/render/chunk_renderer.h"
 #include "stages/render/gl_context.h"
 #include "storage/cell_db.h"
@@ -203,7 +204,6 @@ int run(int argc, char** argv) {
   CellDb db(args.database, CellDb::Mode::read_only);
   GeometryStore store(db.meta("store").value_or(""));
   const Vec3d up = up_axis(db.meta("up").value_or("z"));
-  const double cell_size = std::stod(db.meta("cell_size").value_or("0"));
   const auto regions = regions_of_config_text(db.meta("config").value_or(""));
   std::vector<CellSpec> specs;
   const CellIndex index(db);
@@ -224,10 +224,12 @@ int run(int argc, char** argv) {
   for (const auto& spec : specs) {
     const auto row = db.get_cell(spec.id, true);
     const DecodedCell cell = decode_cell(*row);
-    const bool flat = row->region >= 0 && row->region < int(regions.size()) &&
-                      region_is_flat(regions[row->region], up, cell_size);
-    // Same viewpoints as `cellbake verify --seed 1`.
-    const auto plans = plan_verify_views(row->bounds, flat, up, args.views, 1 * 0x9E3779B97F4A7C15ull + std::uint64_t(spec.id));
+    const Box3d navigable = row->region >= 0 && row->region < int(regions.size())
+                                ? navigable_part(row->bounds, regions[std::size_t(row->region)])
+                                : row->bounds;
+    // Same viewpoints as `cellbake verify --seed 1` (its random and reference views).
+    const auto plans = plan_verify_views(row->bounds, navigable.empty() ? row->bounds : navigable, up, args.views,
+                                         true, 1 * 0x9E3779B97F4A7C15ull + std::uint64_t(spec.id));
 
     auto t0 = std::chrono::steady_clock::now();
     const FarMesh far = far_field(store, cell.cull_box, row->bounds.center());

@@ -29,6 +29,52 @@ void hash_box(Hasher& h, const Box3d& b) {
   h.f64(b.lo.x).f64(b.lo.y).f64(b.lo.z).f64(b.hi.x).f64(b.hi.y).f64(b.hi.z);
 }
 
+// Whether the cell's first sample alone finds a far field drawn all as
+// geometry (sparse_far_field on a copy of what it saw, grown).
+bool first_sample_finds_sparse(CellWork& work, const BakeConfig& config, const ChunkSource& source) {
+  CellWork probe;
+  probe.chunk_facts = std::move(work.chunk_facts);  // learned for the later growth of every sample
+  probe.cell = work.cell;
+  probe.far_chunks = work.far_chunks;
+  probe.samples.resize(1);
+  const CubeSample& first = work.samples.front().cube;
+  CubeSample& copy = probe.samples.front().cube;
+  copy.eye = first.eye;
+  for (int f = 0; f < kCubeFaces; ++f) {
+    copy.faces[std::size_t(f)].size = first.faces[std::size_t(f)].size;
+    copy.faces[std::size_t(f)].depth = first.faces[std::size_t(f)].depth;
+    copy.faces[std::size_t(f)].seen = first.faces[std::size_t(f)].seen;
+  }
+  grow_seen_rings(probe, config, source, 0, 1);
+  const bool sparse = sparse_far_field(probe, config, source).has_value();
+  if (sparse) work.chunk_facts = std::move(probe.chunk_facts);  // else freed: run_far_choice grows much later
+  return sparse;
+}
+
+// After a cell took visibility samples: its seen sets grown, and the far
+// field drawn all as geometry kept for run_far_choice; or, when the samples
+// together see more than that allows, the small ones taken again at full
+// size (their seen sets grown in turn), for the per-tile choice.
+void settle_visibility_samples(CellWork& work, const BakeConfig& config, const ChunkSource& source,
+                               CubeSampler& sampler, const SampleParams& full, const Box3d& discard_box) {
+  grow_seen_rings(work, config, source, 0, work.samples.size());
+  work.seen_grown = true;
+  work.far = sparse_far_field(work, config, source);
+  if (work.far) {
+    work.chunk_facts.clear();
+    return;
+  }
+  for (std::size_t i = 0; i < work.samples.size(); ++i) {
+    SampleWork& s = work.samples[i];
+    if (s.cube.faces[0].size == full.face_size) continue;
+    const auto t0 = Clock::now();
+    s.cube = sampler.sample(s.cube.eye, discard_box, full, source);
+    s.seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+    grow_seen_rings(work, config, source, i, i + 1);
+  }
+  work.chunk_facts.clear();
+}
+
 }  // namespace
 
 CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::string& store_hash) {
@@ -54,6 +100,7 @@ CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& c, const std::str
   if (c.up != "z" && c.shading.mode != ShadingMode::unlit) in.text("up").text(c.up);
   in.text("samples").text(c.samples_initial).f64(c.samples_void_threshold).u64(c.samples_max);
   in.u64(c.samples_void_resolution);
+  if (const int v = visibility_face_size(c); v > 0) in.text("visibility_face_size").u64(std::uint64_t(v));
   in.f64(c.samples_redundancy_tolerance).u64(c.samples_keep_margin_px).f64(c.delta_boundary_error_px);
   in.u64(c.samples_min_island_px);
   // Where the samples may go: the cell's navigable part (not the whole region,
@@ -93,6 +140,11 @@ Box3d far_field_discard_box(const Box3d& cell_bounds, double cull_half_size, con
   const double cell_half_size = 0.5 * (cell_bounds.hi.x - cell_bounds.lo.x);
   const double shell = std::clamp(config.seam_shell_px * footprint, 0.0, std::max(0.0, cull_half_size - cell_half_size));
   return Box3d::cube(cell_bounds.center(), cull_half_size - shell);
+}
+
+int visibility_face_size(const BakeConfig& config) {
+  const int v = config.samples_visibility_face_size;
+  return v > 0 && v < config.face_size ? v : 0;
 }
 
 SampleParams cell_sample_params(const BakeConfig& config) {
@@ -135,14 +187,22 @@ void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& sou
     return;
   std::vector<Vec3d> points = initial_sample_points(nav, parse_initial_samples(config.samples_initial));
   if (points.size() > std::size_t(config.samples_max)) points.resize(std::size_t(config.samples_max));
+  // Once the first sample finds a far field drawn all as geometry, the rest
+  // only need to find what else is seen: they are taken smaller.
+  SampleParams visibility = p;
+  visibility.face_size = visibility_face_size(config);
+  bool small = false;
   const auto take = [&](const Vec3d& eye) {
     const auto t0 = Clock::now();
     SampleWork s;
-    s.cube = sampler.sample(eye, discard_box, p, source);
+    s.cube = sampler.sample(eye, discard_box, small ? visibility : p, source);
     s.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     work.samples.push_back(std::move(s));
   };
-  for (const Vec3d& eye : points) take(eye);
+  for (const Vec3d& eye : points) {
+    take(eye);
+    if (work.samples.size() == 1 && visibility.face_size > 0) small = first_sample_finds_sparse(work, config, source);
+  }
   // Best next view: the candidate that sees the most void, while it sees enough.
   VoidParams vp;
   vp.face_size = config.samples_void_resolution;
@@ -174,6 +234,7 @@ void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& sou
     take(*next);
     work.samples.back().seconds += seconds;
   }
+  if (small) settle_visibility_samples(work, config, source, sampler, p, discard_box);
 }
 
 void run_sample_tree(CellWork& work, const BakeConfig& /*config: the meshing keys are read on demand*/) {

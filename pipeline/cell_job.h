@@ -25,6 +25,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 
 #include "pipeline/bake_config.h"
 #include "pipeline/cell_grid.h"
@@ -98,7 +99,17 @@ struct CellWork {
   std::vector<ChunkRef> far_chunks;   // set by run_sample: every chunk outside the near field, by id
   std::vector<SampleWork> samples;    // set by run_sample, in the order taken (none when the far field is
                                       // drawn as geometry whole: empty or under far.geometry_below triangles)
-  std::optional<FarChoice> far;       // set by run_far_choice
+  std::optional<FarChoice> far;       // set by run_far_choice (or by run_sample: visibility_face_size)
+  bool seen_grown = false;            // the samples' seen sets have grown by far.seen_rings (grow_seen_rings)
+  // What growing seen sets and choosing levels learn of a chunk, kept while
+  // one stage asks more than once (run_sample's visibility samples); cleared
+  // by the stage.
+  struct ChunkFacts {
+    std::shared_ptr<const Chunk> chunk;
+    TriangleNeighbours neighbours;  // empty until grow_seen_rings needs them
+    double median_width = -1;   // median_triangle_width, -1 until choose_far_levels needs it
+  };
+  mutable std::unordered_map<std::int64_t, ChunkFacts> chunk_facts;
   bool redundancy_removed = false;    // remove_redundancy ran
   DepthMeshScratch depth_mesh_scratch;  // run_far_choice's memory for meshing faces one by one (freed after it)
   std::map<std::string, double> seconds;
@@ -142,6 +153,22 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
 // median over random views, levels everywhere 36.77, never 32.00).
 inline constexpr double kThinTrianglePixels = 1.0;
 void run_encode(CellWork& work, const BakeConfig& config);
+
+// The face size of the samples run_sample takes after a cell's first when
+// that one finds a far field drawn all as geometry (far.choice "cheapest" and
+// far.seen_geometry_* set): samples.visibility_face_size when it is between
+// 1 and sample.face_size (exclusive), else 0 (every sample at full size).
+int visibility_face_size(const BakeConfig& config);
+// Grows the seen sets of samples [first, last) of `work` by far.seen_rings
+// rings of neighbouring triangles (stages/far/far_choice.h
+// grow_seen_triangles; each chunk's neighbours found once per cell: work.chunk_facts).
+void grow_seen_rings(CellWork& work, const BakeConfig& config, const ChunkSource& source, std::size_t first,
+                     std::size_t last);
+// The far field drawn all as geometry when what the samples saw (their seen
+// sets as they are) is at most far.seen_geometry_below triangles and
+// far.seen_geometry_per_hit per pixel they hit, pixels of smaller faces
+// counted at sample.face_size (far.choice "cheapest"); else nullopt.
+std::optional<FarChoice> sparse_far_field(const CellWork& work, const BakeConfig& config, const ChunkSource& source);
 
 // The stages run_far_choice runs on demand, when it needs their output.
 

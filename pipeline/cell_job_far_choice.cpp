@@ -37,24 +37,33 @@ std::vector<char> seen_far_chunks(const CellWork& work) {
   return seen;
 }
 
-// What the samples saw, grown by far.seen_rings rings of neighbouring
-// triangles (each chunk's adjacency built once per cell).
-void grow_seen_rings(CellWork& work, const BakeConfig& config, const ChunkSource& source) {
+}  // namespace
+
+void grow_seen_rings(CellWork& work, const BakeConfig& config, const ChunkSource& source, std::size_t first,
+                     std::size_t last) {
   if (config.far_seen_rings <= 0) return;
-  std::unordered_map<std::int64_t, std::pair<std::shared_ptr<const Chunk>, VertexTriangles>> chunks;
   std::vector<std::uint16_t> scratch;
-  for (SampleWork& s : work.samples)
-    for (CubeFace& face : s.cube.faces)
+  for (std::size_t i = first; i < std::min(last, work.samples.size()); ++i)
+    for (CubeFace& face : work.samples[i].cube.faces)
       for (SeenChunk& seen : face.seen) {
         if (seen.whole()) continue;
-        auto it = chunks.find(seen.id);
-        if (it == chunks.end()) {
-          std::shared_ptr<const Chunk> chunk = source.load(seen.id);
-          VertexTriangles adjacency = vertex_triangles(*chunk);
-          it = chunks.emplace(seen.id, std::make_pair(std::move(chunk), std::move(adjacency))).first;
-        }
-        grow_seen_triangles(seen, *it->second.first, it->second.second, config.far_seen_rings, scratch);
+        CellWork::ChunkFacts& facts = work.chunk_facts[seen.id];
+        if (!facts.chunk) facts.chunk = source.load(seen.id);
+        if (facts.neighbours.offsets.empty()) facts.neighbours = triangle_neighbours(*facts.chunk);
+        grow_seen_triangles(seen, *facts.chunk, facts.neighbours, config.far_seen_rings, scratch);
       }
+}
+
+namespace {
+
+// median_triangle_width of chunk `id`, learned once per cell (work.chunk_facts).
+double median_width(const CellWork& work, const ChunkSource& source, std::int64_t id) {
+  CellWork::ChunkFacts& facts = work.chunk_facts[id];
+  if (facts.median_width < 0) {
+    if (!facts.chunk) facts.chunk = source.load(id);
+    facts.median_width = median_triangle_width(*facts.chunk);
+  }
+  return facts.median_width;
 }
 
 // Every eye the viewer may draw the cell from: the cell, and the samples in it.
@@ -89,7 +98,7 @@ std::vector<FarLodChoice> choose_far_levels(const CellWork& work, const BakeConf
       lods[i].replaces_exact = false;
     else if (config.far_lod_replaces_exact == "auto")
       lods[i].replaces_exact =
-          seen[i] && seen_subset_may_miss(median_triangle_width(*source.load(work.far_chunks[i].id)), distance,
+          seen[i] && seen_subset_may_miss(median_width(work, source, work.far_chunks[i].id), distance,
                                           kThinTrianglePixels, config.face_size);
   }
   return lods;
@@ -116,11 +125,15 @@ std::optional<FarChoice> sparse_seen_far_field(const CellWork& work, const BakeC
   FarChoice all = choose_far_field(eyes, work.far_chunks, seen_only, FarChoiceMode::geometry,
                                    config.far_geometry_factor, no_mesh, FarChoiceBoundSource{}, lods);
   if (all.geometry_triangles > config.far_seen_geometry_below) return std::nullopt;
-  std::uint64_t hits = 0;  // pixels of the samples that saw a far surface
+  double hits = 0;  // pixels of the samples that saw a far surface, at sample.face_size
   for (const SampleWork& s : work.samples)
-    for (const CubeFace& face : s.cube.faces)
-      for (const float d : face.depth) hits += d < kBackgroundDepth;
-  if (double(all.geometry_triangles) > config.far_seen_geometry_per_hit * double(hits)) return std::nullopt;
+    for (const CubeFace& face : s.cube.faces) {
+      std::uint64_t n = 0;
+      for (const float d : face.depth) n += d < kBackgroundDepth;
+      const double scale = face.size > 0 ? double(config.face_size) / double(face.size) : 1.0;
+      hits += double(n) * scale * scale;
+    }
+  if (double(all.geometry_triangles) > config.far_seen_geometry_per_hit * hits) return std::nullopt;
   return all;
 }
 
@@ -152,6 +165,10 @@ void choose_far(CellWork& work, const BakeConfig& config, const Box3d& eyes, std
   const FarChoiceMode mode = parse_far_choice_mode(config.far_choice);
   if (mode == FarChoiceMode::cheapest) work.far = sparse_seen_far_field(work, config, eyes, lods);
   if (work.far) return;
+  if (visibility_face_size(config) > 0)
+    for (const SampleWork& s : work.samples)
+      if (s.cube.faces[0].size != config.face_size)
+        throw std::logic_error("far choice: a visibility sample reached the per-tile choice");
   own_time.pause_during([&] { remove_redundancy(work, config); });
   const std::vector<FarChoiceSample> samples = far_choice_samples(work, config);
   work.far = choose_far_field(
@@ -224,17 +241,27 @@ void write_far_rows(CellWork& work, const ChunkSource& source) {
 
 }  // namespace
 
+std::optional<FarChoice> sparse_far_field(const CellWork& work, const BakeConfig& config, const ChunkSource& source) {
+  if (parse_far_choice_mode(config.far_choice) != FarChoiceMode::cheapest) return std::nullopt;
+  const Box3d eyes = viewer_eyes(work);
+  return sparse_seen_far_field(work, config, eyes, choose_far_levels(work, config, source, eyes));
+}
+
 void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource& source) {
   StageTimer own_time(work, "far_choice");  // paused while the stages run inside it time themselves
-  grow_seen_rings(work, config, source);
-  const Box3d eyes = viewer_eyes(work);
-  const std::vector<FarLodChoice> lods = choose_far_levels(work, config, source, eyes);
-  choose_far(work, config, eyes, lods, own_time);
+  if (!work.seen_grown) grow_seen_rings(work, config, source, 0, work.samples.size());
+  work.seen_grown = true;
+  if (!work.far) {  // run_sample may have found it already (visibility samples)
+    const Box3d eyes = viewer_eyes(work);
+    const std::vector<FarLodChoice> lods = choose_far_levels(work, config, source, eyes);
+    choose_far(work, config, eyes, lods, own_time);
+  }
   for (const char* stage : {"redundancy", "simplify"}) work.seconds.try_emplace(stage, 0.0);  // 0 when skipped
   for (SampleWork& s : work.samples)  // bounded faces the choice never meshed: drawn wholly as geometry
     for (auto& p : s.pending) p.reset();
   drop_replaced_and_measure_kept(work, config, own_time);
   work.depth_mesh_scratch = DepthMeshScratch{};
+  work.chunk_facts.clear();
   work.far_chunks.clear();
   write_far_rows(work, source);
 }

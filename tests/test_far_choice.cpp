@@ -17,6 +17,9 @@
 #include "fixture_memory_chunk_source.h"
 #include "fixture_room_obj.h"
 #include "pipeline/bake_config.h"
+#include "pipeline/cell_grid.h"
+#include "pipeline/cell_job.h"
+#include "pipeline/sample_backend.h"
 #include "runner/bake_runner.h"
 #include "stages/chunk_subset.h"
 #include "stages/far/far_choice.h"
@@ -686,9 +689,13 @@ TEST(FarChoiceGrow, OneRingAddsTheTrianglesSharingAVertexWithTheirTiles) {
   }
   for (std::uint32_t t = 0; t < 6; ++t)
     for (std::uint32_t v : {t, t + 1, t + 2}) strip.indices.push_back(v);
-  const VertexTriangles adjacency = vertex_triangles(strip);
-  ASSERT_EQ(adjacency.offsets.size(), 9u);
-  EXPECT_EQ(adjacency.offsets[8] - adjacency.offsets[7], 1u);  // the last vertex: triangle 5 only
+  const TriangleNeighbours adjacency = triangle_neighbours(strip);
+  ASSERT_EQ(adjacency.offsets.size(), 7u);  // one row per triangle
+  // Triangle 2's neighbours, each once, in the order its corners meet them.
+  EXPECT_EQ(std::vector<std::uint32_t>(adjacency.triangles.begin() + adjacency.offsets[2],
+                                       adjacency.triangles.begin() + adjacency.offsets[3]),
+            (std::vector<std::uint32_t>{0, 1, 3, 4}));
+  EXPECT_EQ(adjacency.offsets[6] - adjacency.offsets[5], 2u);  // the last triangle: 3 and 4
   std::vector<std::uint16_t> scratch;
   SeenChunk seen = seen_triangles(3, 0, 1, 1u << 2);
   grow_seen_triangles(seen, strip, adjacency, 1, scratch);
@@ -730,7 +737,7 @@ TEST(FarChoiceGrow, AScratchReusedAcrossChunksIsLeftZeroAndGivesTheFreshResult) 
     return strip;
   };
   const Chunk long_strip = make_strip(1, 40), short_strip = make_strip(2, 6);
-  const VertexTriangles long_adjacency = vertex_triangles(long_strip), short_adjacency = vertex_triangles(short_strip);
+  const TriangleNeighbours long_adjacency = triangle_neighbours(long_strip), short_adjacency = triangle_neighbours(short_strip);
   SeenChunk far_end = seen_triangles(1, 37, 1, 1u << 4);
   far_end.triangles.push_back(39);
   far_end.triangle_tiles.push_back(1u << 5);
@@ -1333,6 +1340,114 @@ TEST(FarChoiceBake, ASparselySeenFarFieldIsDrawnAsGeometryWithoutMeshing) {
   capped.far_seen_geometry_below = 1;
   ASSERT_EQ(test::bake_quietly(capped).cells_baked, 1u);
   EXPECT_GT(baked_cell(capped.database).stage_seconds.at("redundancy"), 0.0);
+}
+
+// A cell's first sample, then the rest, taken by the bake's own stages.
+CellWork sampled_cell(const BakeConfig& c, const GeometryStore& store) {
+  CellWork work;
+  work.cell = enumerate_cells(c.regions, c.cell_size).at(0);
+  run_cull_box(work, c, store);
+  const CubeSamplerFactory factory(SampleBackend::embree, std::size_t{64} << 20);
+  const std::unique_ptr<CubeSampler> sampler = factory.make();
+  run_sample(work, c, store, *sampler);
+  sampler->end_work();
+  return work;
+}
+
+// The geometry triangles of the all-geometry far field the first `samples`
+// of `work` saw, their seen sets grown (no cap on the count).
+std::uint64_t sparse_geometry_of(const CellWork& work, std::size_t samples, BakeConfig c, const GeometryStore& store) {
+  CellWork part;
+  part.cell = work.cell;
+  part.far_chunks = work.far_chunks;
+  for (std::size_t i = 0; i < samples; ++i) {
+    part.samples.emplace_back();
+    part.samples.back().cube = work.samples[i].cube;
+  }
+  grow_seen_rings(part, c, store, 0, samples);
+  c.far_seen_geometry_below = std::uint64_t{1} << 40;
+  const std::optional<FarChoice> all = sparse_far_field(part, c, store);
+  if (!all) throw std::runtime_error("the far field is not drawn as geometry");
+  return all->geometry_triangles;
+}
+
+// A cell whose first sample sees a far field of big triangles takes the rest
+// at samples.visibility_face_size: they only find what else is seen. The far
+// field is the same two wall triangles as with every sample at full size.
+TEST(FarChoiceBake, ASparseFirstSampleMakesTheLaterSamplesSmall) {
+  test::TempDir dir;
+  const auto path = write_store(dir, "s.db", {near_box(), wall()});
+  BakeConfig c = cell_config(dir, path, "embree");
+  c.face_size = 64;
+  c.samples_visibility_face_size = 16;
+  c.samples_max = 5;
+  const GeometryStore store(path);
+  const CellWork work = sampled_cell(c, store);
+  ASSERT_GE(work.samples.size(), 2u);
+  EXPECT_EQ(work.samples[0].cube.faces[0].size, 64);
+  for (std::size_t i = 1; i < work.samples.size(); ++i)
+    for (const CubeFace& f : work.samples[i].cube.faces) EXPECT_EQ(f.size, 16) << "sample " << i;
+  ASSERT_TRUE(work.far.has_value());  // found while sampling, kept for the far choice
+  EXPECT_TRUE(work.seen_grown);
+  EXPECT_TRUE(work.chunk_facts.empty());
+  EXPECT_EQ(work.far->geometry_triangles, 2u);
+
+  BakeConfig full = c;
+  full.samples_visibility_face_size = 0;
+  full.database = dir / "full.db";
+  ASSERT_EQ(test::bake_quietly(c).cells_baked, 1u);
+  ASSERT_EQ(test::bake_quietly(full).cells_baked, 1u);
+  const CellRow small = baked_cell(c.database), big = baked_cell(full.database);
+  ASSERT_EQ(small.status, "done") << small.error;
+  EXPECT_EQ(small.far_geometry_triangles, 2u);
+  EXPECT_EQ(big.far_geometry_triangles, 2u);
+  EXPECT_EQ(tdm_triangles(small), 0u);
+  EXPECT_NE(cell_hashes(work.cell, c, "h").input, cell_hashes(work.cell, full, "h").input);
+}
+
+// When the samples together see more than a far field drawn all as geometry
+// may hold, the small ones are taken again at full size before the per-tile
+// choice, their seen sets grown like the first's.
+TEST(FarChoiceBake, SmallSamplesAreTakenAgainWhenTogetherTheySeeTooMuch) {
+  test::TempDir dir;
+  std::vector<Chunk> chunks = {near_box()};
+  for (Chunk& ch : tiny_field()) chunks.push_back(std::move(ch));
+  const auto path = write_store(dir, "s.db", chunks);
+  BakeConfig c = cell_config(dir, path, "embree");
+  c.face_size = 64;
+  c.samples_max = 5;
+  c.samples_void_threshold = 0;  // every sample samples.max allows
+  c.far_seen_geometry_per_hit = 1e6;  // only the count decides
+  const GeometryStore store(path);
+  BakeConfig full = c;
+  full.samples_visibility_face_size = 0;
+  const CellWork reference = sampled_cell(full, store);
+  ASSERT_EQ(reference.samples.size(), 5u);
+  const std::uint64_t first = sparse_geometry_of(reference, 1, c, store);
+  const std::uint64_t all = sparse_geometry_of(reference, 5, c, store);
+  ASSERT_LT(first, all);
+  c.far_seen_geometry_below = first;  // the first sample alone qualifies, not all of them
+  c.samples_visibility_face_size = 16;
+  const CellWork work = sampled_cell(c, store);
+  ASSERT_EQ(work.samples.size(), 5u);
+  for (const SampleWork& s : work.samples)
+    for (const CubeFace& f : s.cube.faces) EXPECT_EQ(f.size, 64);
+  EXPECT_FALSE(work.far.has_value());
+  EXPECT_TRUE(work.seen_grown);
+  // Each sample's seen sets grew once: the retaken ones as much as the first.
+  CellWork retaken;
+  retaken.cell = work.cell;
+  retaken.far_chunks = work.far_chunks;
+  retaken.samples.emplace_back();
+  retaken.samples.back().cube = work.samples[0].cube;
+  BakeConfig uncapped = c;
+  uncapped.far_seen_geometry_below = std::uint64_t{1} << 40;
+  EXPECT_EQ(sparse_far_field(retaken, uncapped, store)->geometry_triangles, first);
+  c.database = dir / "cells.db";
+  ASSERT_EQ(test::bake_quietly(c).cells_baked, 1u);
+  const CellRow row = baked_cell(c.database);
+  ASSERT_EQ(row.status, "done") << row.error;
+  EXPECT_GT(row.stage_seconds.at("redundancy"), 0.0);  // the per-tile choice reduced the delta scans
 }
 
 TEST(FarChoiceBake, TheChoiceIsDeterministicAndPartOfTheInputHash) {
