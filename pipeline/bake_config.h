@@ -141,7 +141,7 @@ struct BakeConfig {
   // Faces of a cell's later samples when its first finds a far field drawn
   // all as geometry (far.seen_geometry_*): they only tell which triangles are
   // seen (0, or sample.face_size and above: full size).
-  int samples_visibility_face_size = 256;
+  int samples_visibility_face_size = 0;
   double samples_redundancy_tolerance = 5e-5;
   int samples_keep_margin_px = 2;         // kept pixels of a delta scan grow this many rings back over removed ones
   int samples_min_island_px = 4;          // kept specks of a delta scan smaller than this are dropped (before growing)  // relative inverse-depth agreement for "an ancestor already holds this pixel"

@@ -137,8 +137,9 @@ std::vector<BakeParameter> make_table() {
   t.push_back(field("samples.void_resolution", "samples.void_resolution", T::integer, 4, 256, {}, H::sample,
                     "Void rays per candidate: this^2 per cube face", &BakeConfig::samples_void_resolution));
   t.push_back(field("samples.visibility_face_size", "samples.visibility_face_size", T::integer, 0, 4096, {}, H::sample,
-                    "Face size of a cell's samples after its first when that one finds a far field drawn all as geometry "
-                    "(they only find the triangles seen; 0: sample.face_size)",
+                    "Face size of a cell's samples after its first when that one finds a far field drawn all as geometry: "
+                    "they only find the triangles seen, without colour (0: none such; sample.face_size and above: "
+                    "full size, the same rows)",
                     &BakeConfig::samples_visibility_face_size));
   t.push_back(field("samples.keep_margin_px", "samples.keep_margin_px", T::integer, 0, 16, {}, H::depth_mesh,
                     "Kept pixels of a delta scan grow this many rings back over removed ones",

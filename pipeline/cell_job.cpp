@@ -66,9 +66,10 @@ void settle_visibility_samples(CellWork& work, const BakeConfig& config, const C
   }
   for (std::size_t i = 0; i < work.samples.size(); ++i) {
     SampleWork& s = work.samples[i];
-    if (s.cube.faces[0].size == full.face_size) continue;
+    if (!s.visibility) continue;
     const auto t0 = Clock::now();
     s.cube = sampler.sample(s.cube.eye, discard_box, full, source);
+    s.visibility = false;
     s.seconds += std::chrono::duration<double>(Clock::now() - t0).count();
     grow_seen_rings(work, config, source, i, i + 1);
   }
@@ -143,8 +144,7 @@ Box3d far_field_discard_box(const Box3d& cell_bounds, double cull_half_size, con
 }
 
 int visibility_face_size(const BakeConfig& config) {
-  const int v = config.samples_visibility_face_size;
-  return v > 0 && v < config.face_size ? v : 0;
+  return std::clamp(config.samples_visibility_face_size, 0, config.face_size);
 }
 
 SampleParams cell_sample_params(const BakeConfig& config) {
@@ -188,20 +188,23 @@ void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& sou
   std::vector<Vec3d> points = initial_sample_points(nav, parse_initial_samples(config.samples_initial));
   if (points.size() > std::size_t(config.samples_max)) points.resize(std::size_t(config.samples_max));
   // Once the first sample finds a far field drawn all as geometry, the rest
-  // only need to find what else is seen: they are taken smaller.
+  // only need to find what else is seen: they are taken without colour (and
+  // smaller, with samples.visibility_face_size below sample.face_size).
   SampleParams visibility = p;
   visibility.face_size = visibility_face_size(config);
-  bool small = false;
+  visibility.colour = false;  // kept only while the far field stays all geometry: no image is stored
+  bool later_visibility = false;
   const auto take = [&](const Vec3d& eye) {
     const auto t0 = Clock::now();
     SampleWork s;
-    s.cube = sampler.sample(eye, discard_box, small ? visibility : p, source);
+    s.cube = sampler.sample(eye, discard_box, later_visibility ? visibility : p, source);
+    s.visibility = later_visibility;
     s.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
     work.samples.push_back(std::move(s));
   };
   for (const Vec3d& eye : points) {
     take(eye);
-    if (work.samples.size() == 1 && visibility.face_size > 0) small = first_sample_finds_sparse(work, config, source);
+    if (work.samples.size() == 1 && visibility.face_size > 0) later_visibility = first_sample_finds_sparse(work, config, source);
   }
   // Best next view: the candidate that sees the most void, while it sees enough.
   VoidParams vp;
@@ -234,7 +237,7 @@ void run_sample(CellWork& work, const BakeConfig& config, const ChunkSource& sou
     take(*next);
     work.samples.back().seconds += seconds;
   }
-  if (small) settle_visibility_samples(work, config, source, sampler, p, discard_box);
+  if (later_visibility) settle_visibility_samples(work, config, source, sampler, p, discard_box);
 }
 
 void run_sample_tree(CellWork& work, const BakeConfig& /*config: the meshing keys are read on demand*/) {

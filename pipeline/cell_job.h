@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -65,6 +66,19 @@ struct CellHashes {
 // Hashes of what determines a cell's rows (not thread count, shard or timing).
 CellHashes cell_hashes(const CellSpec& cell, const BakeConfig& config, const std::string& store_hash);
 
+// The median triangle widths (stages/chunk_lod.h median_triangle_width) of a
+// store's chunks, learned once per bake: every cell choosing far levels asks
+// for the same chunks'. Thread-safe.
+class ChunkWidths {
+ public:
+  // Chunk `id`'s median triangle width, loaded from `source` the first time.
+  double of(std::int64_t id, const ChunkSource& source);
+
+ private:
+  std::mutex mutex_;
+  std::unordered_map<std::int64_t, double> widths_;
+};
+
 // One panoramic sample of a cell in flight: taken by run_sample, linked into
 // the samples' tree by run_sample_tree, reduced to its delta scan and its
 // faces meshed and simplified on demand in run_far_choice, encoded.
@@ -74,6 +88,7 @@ struct SampleWork {
   double void_after = -1;                 // worst candidate's void fraction once this sample was taken (-1: not measured)
   std::uint64_t covered = 0, removed = 0; // pixels with a surface, and of those removed as redundant
   double seconds = 0;                     // this sample's share of the bake (render + redundancy + mesh + simplify + encode)
+  bool visibility = false;                // a visibility sample (no colour, maybe smaller): replaced before any meshing
   std::array<char, kCubeFaces> meshed{};  // face meshed and simplified (face_mesh), else `simplified` is empty
   std::array<FaceMesh, kCubeFaces> simplified;
   // Faces bounded but not meshed yet (face_mesh_bound): their simplification
@@ -106,10 +121,11 @@ struct CellWork {
   // by the stage.
   struct ChunkFacts {
     std::shared_ptr<const Chunk> chunk;
-    TriangleNeighbours neighbours;  // empty until grow_seen_rings needs them
+    VertexTriangles adjacency;  // empty until grow_seen_rings needs it
     double median_width = -1;   // median_triangle_width, -1 until choose_far_levels needs it
   };
   mutable std::unordered_map<std::int64_t, ChunkFacts> chunk_facts;
+  ChunkWidths* widths = nullptr;  // the bake's, when it shares one (else learned per cell in chunk_facts)
   bool redundancy_removed = false;    // remove_redundancy ran
   DepthMeshScratch depth_mesh_scratch;  // run_far_choice's memory for meshing faces one by one (freed after it)
   std::map<std::string, double> seconds;
@@ -154,14 +170,16 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
 inline constexpr double kThinTrianglePixels = 1.0;
 void run_encode(CellWork& work, const BakeConfig& config);
 
-// The face size of the samples run_sample takes after a cell's first when
-// that one finds a far field drawn all as geometry (far.choice "cheapest" and
-// far.seen_geometry_* set): samples.visibility_face_size when it is between
-// 1 and sample.face_size (exclusive), else 0 (every sample at full size).
+// The face size of the visibility samples run_sample takes after a cell's
+// first when that one finds a far field drawn all as geometry (far.choice
+// "cheapest" and far.seen_geometry_* set): without colour, at
+// samples.visibility_face_size up to sample.face_size; 0 when that is 0 (no
+// visibility samples). At sample.face_size the cell's rows are the same as
+// without them.
 int visibility_face_size(const BakeConfig& config);
 // Grows the seen sets of samples [first, last) of `work` by far.seen_rings
 // rings of neighbouring triangles (stages/far/far_choice.h
-// grow_seen_triangles; each chunk's neighbours found once per cell: work.chunk_facts).
+// grow_seen_triangles; each chunk's adjacency found once per cell: work.chunk_facts).
 void grow_seen_rings(CellWork& work, const BakeConfig& config, const ChunkSource& source, std::size_t first,
                      std::size_t last);
 // The far field drawn all as geometry when what the samples saw (their seen

@@ -39,6 +39,17 @@ std::vector<char> seen_far_chunks(const CellWork& work) {
 
 }  // namespace
 
+double ChunkWidths::of(std::int64_t id, const ChunkSource& source) {
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (const auto it = widths_.find(id); it != widths_.end()) return it->second;
+  }
+  // Computed outside the lock: two threads may both compute it, to the same value.
+  const double width = median_triangle_width(*source.load(id));
+  const std::lock_guard<std::mutex> lock(mutex_);
+  return widths_.try_emplace(id, width).first->second;
+}
+
 void grow_seen_rings(CellWork& work, const BakeConfig& config, const ChunkSource& source, std::size_t first,
                      std::size_t last) {
   if (config.far_seen_rings <= 0) return;
@@ -49,8 +60,8 @@ void grow_seen_rings(CellWork& work, const BakeConfig& config, const ChunkSource
         if (seen.whole()) continue;
         CellWork::ChunkFacts& facts = work.chunk_facts[seen.id];
         if (!facts.chunk) facts.chunk = source.load(seen.id);
-        if (facts.neighbours.offsets.empty()) facts.neighbours = triangle_neighbours(*facts.chunk);
-        grow_seen_triangles(seen, *facts.chunk, facts.neighbours, config.far_seen_rings, scratch);
+        if (facts.adjacency.offsets.empty()) facts.adjacency = vertex_triangles(*facts.chunk);
+        grow_seen_triangles(seen, *facts.chunk, facts.adjacency, config.far_seen_rings, scratch);
       }
 }
 
@@ -58,6 +69,7 @@ namespace {
 
 // median_triangle_width of chunk `id`, learned once per cell (work.chunk_facts).
 double median_width(const CellWork& work, const ChunkSource& source, std::int64_t id) {
+  if (work.widths) return work.widths->of(id, source);
   CellWork::ChunkFacts& facts = work.chunk_facts[id];
   if (facts.median_width < 0) {
     if (!facts.chunk) facts.chunk = source.load(id);
@@ -165,10 +177,8 @@ void choose_far(CellWork& work, const BakeConfig& config, const Box3d& eyes, std
   const FarChoiceMode mode = parse_far_choice_mode(config.far_choice);
   if (mode == FarChoiceMode::cheapest) work.far = sparse_seen_far_field(work, config, eyes, lods);
   if (work.far) return;
-  if (visibility_face_size(config) > 0)
-    for (const SampleWork& s : work.samples)
-      if (s.cube.faces[0].size != config.face_size)
-        throw std::logic_error("far choice: a visibility sample reached the per-tile choice");
+  for (const SampleWork& s : work.samples)
+    if (s.visibility) throw std::logic_error("far choice: a visibility sample reached the per-tile choice");
   own_time.pause_during([&] { remove_redundancy(work, config); });
   const std::vector<FarChoiceSample> samples = far_choice_samples(work, config);
   work.far = choose_far_field(
@@ -251,6 +261,7 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
   StageTimer own_time(work, "far_choice");  // paused while the stages run inside it time themselves
   if (!work.seen_grown) grow_seen_rings(work, config, source, 0, work.samples.size());
   work.seen_grown = true;
+  work.chunk_facts.clear();  // the chunks' memory back before meshing
   if (!work.far) {  // run_sample may have found it already (visibility samples)
     const Box3d eyes = viewer_eyes(work);
     const std::vector<FarLodChoice> lods = choose_far_levels(work, config, source, eyes);

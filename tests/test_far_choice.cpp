@@ -689,13 +689,9 @@ TEST(FarChoiceGrow, OneRingAddsTheTrianglesSharingAVertexWithTheirTiles) {
   }
   for (std::uint32_t t = 0; t < 6; ++t)
     for (std::uint32_t v : {t, t + 1, t + 2}) strip.indices.push_back(v);
-  const TriangleNeighbours adjacency = triangle_neighbours(strip);
-  ASSERT_EQ(adjacency.offsets.size(), 7u);  // one row per triangle
-  // Triangle 2's neighbours, each once, in the order its corners meet them.
-  EXPECT_EQ(std::vector<std::uint32_t>(adjacency.triangles.begin() + adjacency.offsets[2],
-                                       adjacency.triangles.begin() + adjacency.offsets[3]),
-            (std::vector<std::uint32_t>{0, 1, 3, 4}));
-  EXPECT_EQ(adjacency.offsets[6] - adjacency.offsets[5], 2u);  // the last triangle: 3 and 4
+  const VertexTriangles adjacency = vertex_triangles(strip);
+  ASSERT_EQ(adjacency.offsets.size(), 9u);
+  EXPECT_EQ(adjacency.offsets[8] - adjacency.offsets[7], 1u);  // the last vertex: triangle 5 only
   std::vector<std::uint16_t> scratch;
   SeenChunk seen = seen_triangles(3, 0, 1, 1u << 2);
   grow_seen_triangles(seen, strip, adjacency, 1, scratch);
@@ -737,7 +733,7 @@ TEST(FarChoiceGrow, AScratchReusedAcrossChunksIsLeftZeroAndGivesTheFreshResult) 
     return strip;
   };
   const Chunk long_strip = make_strip(1, 40), short_strip = make_strip(2, 6);
-  const TriangleNeighbours long_adjacency = triangle_neighbours(long_strip), short_adjacency = triangle_neighbours(short_strip);
+  const VertexTriangles long_adjacency = vertex_triangles(long_strip), short_adjacency = vertex_triangles(short_strip);
   SeenChunk far_end = seen_triangles(1, 37, 1, 1u << 4);
   far_end.triangles.push_back(39);
   far_end.triangle_tiles.push_back(1u << 5);
@@ -1403,6 +1399,24 @@ TEST(FarChoiceBake, ASparseFirstSampleMakesTheLaterSamplesSmall) {
   EXPECT_EQ(big.far_geometry_triangles, 2u);
   EXPECT_EQ(tdm_triangles(small), 0u);
   EXPECT_NE(cell_hashes(work.cell, c, "h").input, cell_hashes(work.cell, full, "h").input);
+}
+
+// Visibility samples at full size leave a cell's rows as they are without
+// them (only their colours, never stored, are skipped).
+TEST(FarChoiceBake, FullSizeVisibilitySamplesChangeNoRow) {
+  test::TempDir dir;
+  BakeConfig c = cell_config(dir, write_store(dir, "s.db", {near_box(), wall()}), "embree");
+  c.face_size = 64;
+  c.samples_max = 4;
+  BakeConfig full = c;
+  full.samples_visibility_face_size = 64;
+  full.database = dir / "full.db";
+  ASSERT_EQ(test::bake_quietly(c).cells_baked, 1u);
+  ASSERT_EQ(test::bake_quietly(full).cells_baked, 1u);
+  const CellRow a = baked_cell(c.database), b = baked_cell(full.database);
+  ASSERT_EQ(a.status, "done") << a.error;
+  EXPECT_EQ(a.content_hash, b.content_hash);
+  EXPECT_EQ(a.samples.size(), b.samples.size());
 }
 
 // When the samples together see more than a far field drawn all as geometry

@@ -644,38 +644,21 @@ void GreedyFarChoice::gather_pieces(FarChoice& out) const {
 
 }  // namespace
 
-TriangleNeighbours triangle_neighbours(const Chunk& chunk) {
-  // The triangles of each vertex, by triangle number.
-  std::vector<std::uint32_t> offsets(chunk.positions.size() + 1, 0), of_vertex;
+VertexTriangles vertex_triangles(const Chunk& chunk) {
+  VertexTriangles a;
+  a.offsets.assign(chunk.positions.size() + 1, 0);
   for (std::uint32_t i : chunk.indices)
-    if (i < chunk.positions.size()) ++offsets[i + 1];
-  for (std::size_t v = 1; v < offsets.size(); ++v) offsets[v] += offsets[v - 1];
-  of_vertex.resize(offsets.back());
-  std::vector<std::uint32_t> next(offsets.begin(), offsets.end() - 1);
+    if (i < chunk.positions.size()) ++a.offsets[i + 1];
+  for (std::size_t v = 1; v < a.offsets.size(); ++v) a.offsets[v] += a.offsets[v - 1];
+  a.triangles.resize(a.offsets.back());
+  std::vector<std::uint32_t> next(a.offsets.begin(), a.offsets.end() - 1);
   for (std::size_t k = 0; k < chunk.indices.size(); ++k)
     if (const std::uint32_t i = chunk.indices[k]; i < chunk.positions.size())
-      of_vertex[next[i]++] = std::uint32_t(k / 3);
-  // Each triangle's corners' lists joined, repeats and itself left out.
-  const std::size_t n = chunk.triangle_count();
-  TriangleNeighbours out;
-  out.offsets.reserve(n + 1);
-  out.offsets.push_back(0);
-  out.triangles.reserve(of_vertex.size() * 2);
-  std::vector<std::uint32_t> stamp(n, ~std::uint32_t{0});
-  for (std::uint32_t t = 0; t < n; ++t) {
-    stamp[t] = t;
-    for (int c = 0; c < 3; ++c) {
-      const std::uint32_t v = chunk.indices[3 * std::size_t(t) + std::size_t(c)];
-      if (v >= chunk.positions.size()) continue;
-      for (std::uint32_t k = offsets[v]; k < offsets[v + 1]; ++k)
-        if (const std::uint32_t u = of_vertex[k]; stamp[u] != t) stamp[u] = t, out.triangles.push_back(u);
-    }
-    out.offsets.push_back(std::uint32_t(out.triangles.size()));
-  }
-  return out;
+      a.triangles[next[i]++] = std::uint32_t(k / 3);
+  return a;
 }
 
-void grow_seen_triangles(SeenChunk& seen, const Chunk& chunk, const TriangleNeighbours& neighbours, int rings,
+void grow_seen_triangles(SeenChunk& seen, const Chunk& chunk, const VertexTriangles& adjacency, int rings,
                          std::vector<std::uint16_t>& scratch) {
   if (seen.whole() || rings <= 0) return;
   const std::size_t n = chunk.triangle_count();
@@ -694,15 +677,16 @@ void grow_seen_triangles(SeenChunk& seen, const Chunk& chunk, const TriangleNeig
   for (int ring = 0; ring < rings && !frontier.empty(); ++ring) {
     std::vector<std::uint32_t> added;
     for (std::uint32_t t : frontier) {
-      // Meeting the same neighbour again, or t itself, changes nothing (its
-      // tiles already hold t's): the deduplicated rows give the same result.
       const std::uint16_t tiles = scratch[t];
-      if (std::size_t(t) + 1 >= neighbours.offsets.size()) continue;
-      for (std::uint32_t k = neighbours.offsets[t]; k < neighbours.offsets[t + 1]; ++k) {
-        const std::uint32_t u = neighbours.triangles[k];
-        if ((scratch[u] | tiles) == scratch[u]) continue;
-        if (scratch[u] == 0) added.push_back(u), touched.push_back(u);
-        scratch[u] |= tiles;
+      for (int c = 0; c < 3; ++c) {
+        const std::uint32_t v = chunk.indices[3 * std::size_t(t) + std::size_t(c)];
+        if (v + 1 >= adjacency.offsets.size()) continue;
+        for (std::uint32_t k = adjacency.offsets[v]; k < adjacency.offsets[v + 1]; ++k) {
+          const std::uint32_t u = adjacency.triangles[k];
+          if ((scratch[u] | tiles) == scratch[u]) continue;
+          if (scratch[u] == 0) added.push_back(u), touched.push_back(u);
+          scratch[u] |= tiles;
+        }
       }
     }
     frontier = std::move(added);

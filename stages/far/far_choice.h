@@ -165,24 +165,21 @@ FarChoice choose_far_field(const Box3d& eyes, std::span<const ChunkRef> far_chun
                            const FarChoiceMeshSource& mesh_source, const FarChoiceBoundSource& bound_source,
                            std::span<const FarLodChoice> lods = {});
 
-// The triangles sharing a vertex with each triangle of a chunk (compressed
-// rows: triangle t's are triangles[offsets[t] .. offsets[t + 1])), each once
-// and not t itself, in the order its corners' vertices list them (corner 0's
-// triangles by number, then corner 1's, then corner 2's).
-struct TriangleNeighbours {
+// Which triangles use each vertex of a chunk (compressed rows: the triangles
+// of vertex v are triangles[offsets[v] .. offsets[v + 1])).
+struct VertexTriangles {
   std::vector<std::uint32_t> offsets, triangles;
 };
-TriangleNeighbours triangle_neighbours(const Chunk& chunk);
+VertexTriangles vertex_triangles(const Chunk& chunk);
 
 // Grows what a face saw of `chunk` (a SeenChunk listing triangles; whole
-// ones are left alone) by `rings` rings of triangles sharing a vertex
-// (`neighbours`: triangle_neighbours(chunk)), each added triangle taking the
-// tiles of the seen triangles it touches. Rays through pixel centres miss
-// thin slivers next to what they hit (the far side of a pipe, a rail's edge)
-// that an eye elsewhere in the cell sees. `scratch` is reused between calls:
-// all zero on entry (an empty vector is) and left all zero; it grows to the
-// chunk's triangle count.
-void grow_seen_triangles(SeenChunk& seen, const Chunk& chunk, const TriangleNeighbours& neighbours, int rings,
+// ones are left alone) by `rings` rings of triangles sharing a vertex, each
+// added triangle taking the tiles of the seen triangles it touches. Rays
+// through pixel centres miss thin slivers next to what they hit (the far
+// side of a pipe, a rail's edge) that an eye elsewhere in the cell sees.
+// `scratch` is reused between calls: all zero on entry (an empty vector is)
+// and left all zero; it grows to the chunk's triangle count.
+void grow_seen_triangles(SeenChunk& seen, const Chunk& chunk, const VertexTriangles& adjacency, int rings,
                          std::vector<std::uint16_t>& scratch);
 
 // Removes from `mesh` the triangles whose texture coordinates lie wholly

@@ -159,7 +159,7 @@ CubeSample EmbreeCubeSampler::trace_cube(const Vec3d& eye, const Box3d& cull_box
   std::array<FaceHits, kCubeFaces> faces;
   for (FaceHits& f : faces) f.clear(std::size_t(size) * std::size_t(size));
   FaceTracer tracer(shader_, texturer, eye_relative_box(cull_box, eye), params.near_plane, size, order_, coordinate_,
-                    inverse_coordinate_, face_slabs_, stats_);
+                    inverse_coordinate_, face_slabs_, stats_, params.colour);
   for (std::size_t next = 0; next < cube.groups.size();) {
     t0 = Clock::now();
     std::vector<std::size_t> batch = next_batch(cube, next, *cache_, eye, faces, size, stats_.groups_hidden);

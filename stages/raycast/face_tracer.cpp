@@ -67,11 +67,13 @@ void FaceHits::clear(std::size_t pixels) {
 
 FaceTracer::FaceTracer(const HitShader& shader, const HitTexturer& texturer, const EyeBox& box, double near_plane,
                        int size, std::span<const std::uint32_t> order, std::span<const double> coordinate,
-                       std::span<const double> inverse_coordinate, FaceSlabs& slabs, EmbreeSamplerStats& stats)
+                       std::span<const double> inverse_coordinate, FaceSlabs& slabs, EmbreeSamplerStats& stats,
+                       bool colour)
     : shader_(shader),
       texturer_(texturer),
       box_(box),
       near_plane_(near_plane),
+      colour_(colour),
       size_(size),
       pixels_(std::size_t(size) * std::size_t(size)),
       order_(order),
@@ -133,6 +135,11 @@ void FaceTracer::trace_second_segments(std::size_t start, unsigned count) {
 }
 
 void FaceTracer::shade_hits(std::size_t start, unsigned count) {
+  if (!colour_ && texturer_.untextured()) {  // only depths and triangles: nothing to prefetch
+    for (unsigned k = 0; k < count; ++k)
+      if (rays_[k].hit.geomID != RTC_INVALID_GEOMETRY_ID) shade_hit(order_[start + k], rays_[k]);
+    return;
+  }
   // Hits ahead: their triangles' indices, then (nearer) their corners'
   // attributes, so shading does not wait on each dependent load in turn.
   for (unsigned k = 0; k < count; ++k) {
@@ -207,7 +214,7 @@ void FaceTracer::trace_behind_dropped(const RTCRayHit& r, std::uint32_t p, const
 void FaceTracer::accept(std::uint32_t p, const SurfaceHit& hit, float t, const std::array<float, 4>* texel) {
   FaceHits& out = *out_;
   if (!(t < out.depth[p])) return;
-  out.color[p] = shader_.shade(hit, texel);
+  if (colour_) out.color[p] = shader_.shade(hit, texel);
   out.depth[p] = t;
   out.chunk[p] = hit.chunk->id;
   out.triangle[p] = hit.triangle;

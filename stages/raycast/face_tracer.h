@@ -50,11 +50,13 @@ class FaceTracer {
   // (inverse_coordinate[i] = 1.0 / coordinate[i]), rays limited to their
   // segments beyond `near_plane` outside `box` (the cull box relative to the
   // eye); `slabs` is scratch for the face being traced. Hits are shaded by
-  // `shader` and textured by `texturer`; rays, second rays, hits and alpha
-  // retraces are counted in `stats`.
+  // `shader` (unless not `colour`: colours stay transparent black) and
+  // textured by `texturer` (alpha tests apply either way); rays, second
+  // rays, hits and alpha retraces are counted in `stats`.
   FaceTracer(const HitShader& shader, const HitTexturer& texturer, const EyeBox& box, double near_plane, int size,
              std::span<const std::uint32_t> order, std::span<const double> coordinate,
-             std::span<const double> inverse_coordinate, FaceSlabs& slabs, EmbreeSamplerStats& stats);
+             std::span<const double> inverse_coordinate, FaceSlabs& slabs, EmbreeSamplerStats& stats,
+             bool colour = true);
 
   // Traces face `face`'s rays against `scene`, each limited to the depth in
   // `out` at its pixel, and keeps there every hit strictly nearer.
@@ -88,6 +90,7 @@ class FaceTracer {
   const HitTexturer& texturer_;
   EyeBox box_;
   double near_plane_;
+  bool colour_;
   int size_;
   std::size_t pixels_;
   std::span<const std::uint32_t> order_;

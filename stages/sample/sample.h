@@ -31,6 +31,10 @@ struct SampleParams {
   int supersample = 1;
   double depth_agreement = 0.05;
   double near_plane = 0.01;  // metres along each face's forward axis; nearer geometry is clipped
+  // False for samples whose colours nobody reads (visibility samples: only
+  // their depths and seen triangles count): a backend may leave the colour
+  // transparent black (the Embree backend does; the GL one draws it anyway).
+  bool colour = true;
 };
 
 // Throws std::invalid_argument unless `eye` is finite and `params` are valid
