@@ -385,6 +385,8 @@ BakeSummary run_bake(const BakeConfig& given, const BakeOptions& options) {
   summary.cells_selected = plan.cells.size();
   const std::vector<std::unique_ptr<CellWork>> queued =
       queue_cells(plan.cells, config, store_hash, db, options.force, summary);
+  ChunkWidths widths;  // outlives the cells' graph
+  for (const auto& w : queued) w->widths = &widths;
   ProgressBar progress("bake", queued.size(), "cells");
   bake_queued_cells(queued, threads, config, options, store, db, progress, summary);
   if (!options.quiet) progress.finish();
