@@ -1338,6 +1338,17 @@ TEST(FarChoiceBake, ASparselySeenFarFieldIsDrawnAsGeometryWithoutMeshing) {
   EXPECT_GT(baked_cell(capped.database).stage_seconds.at("redundancy"), 0.0);
 }
 
+// The cell of `c` baked, and baked again into DIR/other.db with
+// samples.visibility_face_size `visibility`.
+std::pair<CellRow, CellRow> bake_twice(const test::TempDir& dir, const BakeConfig& c, int visibility) {
+  BakeConfig other = c;
+  other.samples_visibility_face_size = visibility;
+  other.database = dir / "other.db";
+  if (test::bake_quietly(c).cells_baked != 1 || test::bake_quietly(other).cells_baked != 1)
+    throw std::runtime_error("bake_twice: a bake left its cell out");
+  return {baked_cell(c.database), baked_cell(other.database)};
+}
+
 // A cell's first sample, then the rest, taken by the bake's own stages.
 CellWork sampled_cell(const BakeConfig& c, const GeometryStore& store) {
   CellWork work;
@@ -1388,16 +1399,13 @@ TEST(FarChoiceBake, ASparseFirstSampleMakesTheLaterSamplesSmall) {
   EXPECT_TRUE(work.chunk_facts.empty());
   EXPECT_EQ(work.far->geometry_triangles, 2u);
 
-  BakeConfig full = c;
-  full.samples_visibility_face_size = 0;
-  full.database = dir / "full.db";
-  ASSERT_EQ(test::bake_quietly(c).cells_baked, 1u);
-  ASSERT_EQ(test::bake_quietly(full).cells_baked, 1u);
-  const CellRow small = baked_cell(c.database), big = baked_cell(full.database);
+  const auto [small, big] = bake_twice(dir, c, 0);
   ASSERT_EQ(small.status, "done") << small.error;
   EXPECT_EQ(small.far_geometry_triangles, 2u);
   EXPECT_EQ(big.far_geometry_triangles, 2u);
   EXPECT_EQ(tdm_triangles(small), 0u);
+  BakeConfig full = c;
+  full.samples_visibility_face_size = 0;
   EXPECT_NE(cell_hashes(work.cell, c, "h").input, cell_hashes(work.cell, full, "h").input);
 }
 
@@ -1408,12 +1416,7 @@ TEST(FarChoiceBake, FullSizeVisibilitySamplesChangeNoRow) {
   BakeConfig c = cell_config(dir, write_store(dir, "s.db", {near_box(), wall()}), "embree");
   c.face_size = 64;
   c.samples_max = 4;
-  BakeConfig full = c;
-  full.samples_visibility_face_size = 64;
-  full.database = dir / "full.db";
-  ASSERT_EQ(test::bake_quietly(c).cells_baked, 1u);
-  ASSERT_EQ(test::bake_quietly(full).cells_baked, 1u);
-  const CellRow a = baked_cell(c.database), b = baked_cell(full.database);
+  const auto [a, b] = bake_twice(dir, c, 64);
   ASSERT_EQ(a.status, "done") << a.error;
   EXPECT_EQ(a.content_hash, b.content_hash);
   EXPECT_EQ(a.samples.size(), b.samples.size());
