@@ -138,9 +138,10 @@ struct BakeConfig {
   double samples_void_threshold = 0.005;  // stop adding samples when the worst candidate's void is below this fraction of the sphere
   int samples_max = 8;                    // cap on samples per cell (initial set included); the 82 M plant's depth meshes were measured at 12
   int samples_void_resolution = 12;       // void rays per candidate: this^2 per cube face (16: the same PSNR at 1.8x the void rays)
-  // Faces of a cell's later samples when its first finds a far field drawn
-  // all as geometry (far.seen_geometry_*): they only tell which triangles are
-  // seen (0, or sample.face_size and above: full size).
+  // Faces of a cell's later samples, without colour, when its first finds a
+  // far field drawn all as geometry (far.seen_geometry_*): they only tell
+  // which triangles are seen (0: no such samples; sample.face_size and
+  // above: full size, the same rows).
   int samples_visibility_face_size = 0;
   double samples_redundancy_tolerance = 5e-5;
   int samples_keep_margin_px = 2;         // kept pixels of a delta scan grow this many rings back over removed ones

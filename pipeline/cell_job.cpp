@@ -60,11 +60,7 @@ void settle_visibility_samples(CellWork& work, const BakeConfig& config, const C
   grow_seen_rings(work, config, source, 0, work.samples.size());
   work.seen_grown = true;
   work.far = sparse_far_field(work, config, source);
-  if (work.far) {
-    work.chunk_facts.clear();
-    return;
-  }
-  for (std::size_t i = 0; i < work.samples.size(); ++i) {
+  for (std::size_t i = 0; i < work.samples.size() && !work.far; ++i) {
     SampleWork& s = work.samples[i];
     if (!s.visibility) continue;
     const auto t0 = Clock::now();

@@ -116,16 +116,15 @@ struct CellWork {
                                       // drawn as geometry whole: empty or under far.geometry_below triangles)
   std::optional<FarChoice> far;       // set by run_far_choice (or by run_sample: visibility_face_size)
   bool seen_grown = false;            // the samples' seen sets have grown by far.seen_rings (grow_seen_rings)
-  // What growing seen sets and choosing levels learn of a chunk, kept while
-  // one stage asks more than once (run_sample's visibility samples); cleared
-  // by the stage.
+  // The chunks growing seen sets loaded, with their adjacency, kept while one
+  // stage grows more than once (run_sample's visibility samples); cleared by
+  // the stage.
   struct ChunkFacts {
     std::shared_ptr<const Chunk> chunk;
-    VertexTriangles adjacency;  // empty until grow_seen_rings needs it
-    double median_width = -1;   // median_triangle_width, -1 until choose_far_levels needs it
+    VertexTriangles adjacency;
   };
-  mutable std::unordered_map<std::int64_t, ChunkFacts> chunk_facts;
-  ChunkWidths* widths = nullptr;  // the bake's, when it shares one (else learned per cell in chunk_facts)
+  std::unordered_map<std::int64_t, ChunkFacts> chunk_facts;
+  ChunkWidths* widths = nullptr;  // the bake's, when it shares one (else each width is computed when asked)
   bool redundancy_removed = false;    // remove_redundancy ran
   DepthMeshScratch depth_mesh_scratch;  // run_far_choice's memory for meshing faces one by one (freed after it)
   std::map<std::string, double> seconds;

@@ -59,23 +59,19 @@ void grow_seen_rings(CellWork& work, const BakeConfig& config, const ChunkSource
       for (SeenChunk& seen : face.seen) {
         if (seen.whole()) continue;
         CellWork::ChunkFacts& facts = work.chunk_facts[seen.id];
-        if (!facts.chunk) facts.chunk = source.load(seen.id);
-        if (facts.adjacency.offsets.empty()) facts.adjacency = vertex_triangles(*facts.chunk);
+        if (!facts.chunk) {
+          facts.chunk = source.load(seen.id);
+          facts.adjacency = vertex_triangles(*facts.chunk);
+        }
         grow_seen_triangles(seen, *facts.chunk, facts.adjacency, config.far_seen_rings, scratch);
       }
 }
 
 namespace {
 
-// median_triangle_width of chunk `id`, learned once per cell (work.chunk_facts).
+// median_triangle_width of chunk `id`: the bake's, learned once (work.widths), or computed.
 double median_width(const CellWork& work, const ChunkSource& source, std::int64_t id) {
-  if (work.widths) return work.widths->of(id, source);
-  CellWork::ChunkFacts& facts = work.chunk_facts[id];
-  if (facts.median_width < 0) {
-    if (!facts.chunk) facts.chunk = source.load(id);
-    facts.median_width = median_triangle_width(*facts.chunk);
-  }
-  return facts.median_width;
+  return work.widths ? work.widths->of(id, source) : median_triangle_width(*source.load(id));
 }
 
 // Every eye the viewer may draw the cell from: the cell, and the samples in it.
@@ -272,7 +268,6 @@ void run_far_choice(CellWork& work, const BakeConfig& config, const ChunkSource&
     for (auto& p : s.pending) p.reset();
   drop_replaced_and_measure_kept(work, config, own_time);
   work.depth_mesh_scratch = DepthMeshScratch{};
-  work.chunk_facts.clear();
   work.far_chunks.clear();
   write_far_rows(work, source);
 }
