@@ -25,21 +25,23 @@ std::string list_floors(const std::vector<double>& heights, const char* axis) {
 
 }  // namespace
 
-double rounded_eye_height(double eye, double cell_size) {
+double rounded_as_info_prints(double v, double cell_size) {
   // runner/info_report's region_step: hundredths, or three significant digits of a cell under 1.
   int digits = 2;
   if (cell_size > 0 && std::isfinite(cell_size))
     digits = std::max(2, 2 - int(std::floor(std::log10(cell_size))));
   char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", std::min(digits, 12), eye);
-  return std::strtod(buf, nullptr);
+  std::snprintf(buf, sizeof buf, "%.*f", std::min(digits, 12), v);
+  return std::strtod(buf, nullptr) + 0.0;  // no -0
 }
 
 FloorRegions floor_regions(const std::vector<double>& heights, const FloorSelection& selection,
                            const std::vector<Box3d>& footprints, int up_axis, double eye_height,
-                           const Box3d& model_bounds, double cell_size) {
+                           const Box3d& model_bounds, double cell_size,
+                           const std::vector<Box3d>& floor_footprints) {
   if (selection.empty()) throw std::invalid_argument("floor_regions: no floors selected");
-  if (footprints.empty()) throw std::invalid_argument("floor_regions: no footprint");
+  if (footprints.empty() && floor_footprints.size() != heights.size())
+    throw std::invalid_argument("floor_regions: no footprint, and not one per floor");
   const char* axis = up_axis == 1 ? "y" : "z";
   FloorRegions out;
   out.heights = heights;
@@ -59,7 +61,7 @@ FloorRegions floor_regions(const std::vector<double>& heights, const FloorSelect
     chosen = selection.indices;
   }
   for (int f : chosen) {
-    const double eye = rounded_eye_height(heights[std::size_t(f)] + eye_height, cell_size);
+    const double eye = rounded_as_info_prints(heights[std::size_t(f)] + eye_height, cell_size);
     if (selection.all && !model_bounds.empty() && eye > model_bounds.hi[up_axis] + cell_size) {
       out.notes.push_back("floor " + std::to_string(f) + " at " + axis + " = " + short_number(heights[std::size_t(f)]) +
                           " left out: its eyes (" + axis + " = " + short_number(eye) +
@@ -67,7 +69,8 @@ FloorRegions floor_regions(const std::vector<double>& heights, const FloorSelect
                           "); name it in --floors to bake it anyway with a larger cell size");
       continue;
     }
-    for (const Box3d& footprint : footprints) {
+    const std::vector<Box3d> own{footprints.empty() ? floor_footprints[std::size_t(f)] : Box3d{}};
+    for (const Box3d& footprint : footprints.empty() ? own : footprints) {
       FloorRegion r;
       r.floor = f;
       r.height = heights[std::size_t(f)];
@@ -109,9 +112,18 @@ FloorRegions find_floor_regions(const ChunkSource& source, const BakeConfig& con
   for (const Floor& f : floors.found.floors) heights.push_back(f.height);
   const double eye_height = config.eye_height > 0 ? config.eye_height : kEyeHeightMetres / floors.unit.metres;
   const Box3d bounds = source.model_bounds();
-  const std::vector<Box3d> footprints = config.regions.empty() ? std::vector<Box3d>{bounds} : config.regions;
+  std::vector<Box3d> walkable;  // used without configured regions: each floor's, as info suggests it
+  for (const Floor& f : floors.found.floors) {
+    Box3d b = walkable_extent(f);
+    for (int a = 0; a < 3; ++a) {
+      b.lo[a] = rounded_as_info_prints(b.lo[a], config.cell_size);
+      b.hi[a] = rounded_as_info_prints(b.hi[a], config.cell_size);
+    }
+    walkable.push_back(b);
+  }
   try {
-    FloorRegions r = floor_regions(heights, config.floors, footprints, up_axis, eye_height, bounds, config.cell_size);
+    FloorRegions r = floor_regions(heights, config.floors, config.regions, up_axis, eye_height, bounds,
+                                   config.cell_size, walkable);
     r.eye_height = eye_height;
     r.unit = floors.unit;
     return r;

@@ -107,7 +107,7 @@ Suggestion suggest_bake(const std::string& store_name, const GeometryStore& stor
   const Floor& floor = found.floors[best];
   s.found = true;
   s.floor = best;
-  s.region = floor.covered_extent.empty() ? floor.extent : floor.covered_extent;  // indoors, else all of it
+  s.region = walkable_extent(floor);
   s.cell_size = suggest_cell_size(unit.metres * (s.region.hi[ha] - s.region.lo[ha]),
                                   unit.metres * (s.region.hi[hb] - s.region.lo[hb]));
   if (unit.metres != 1) {  // back to model units, two significant digits (350 cm, 140 inches)

@@ -93,6 +93,8 @@ std::vector<ChunkLod> build_chunk_lods(const Chunk& chunk, const ChunkLodParams&
   const float* xyz = &c.positions[0].x;
   const float scale = meshopt_simplifyScale(xyz, c.positions.size(), sizeof(Vec3f));
   std::size_t previous = triangles;
+  double previous_error = 0;
+  bool locked = true;
   std::vector<std::uint32_t> out(c.indices.size());
   for (int level = 1; level <= params.max_levels && previous >= 2 * params.min_triangles; ++level) {
     const auto target = std::size_t(std::llround(double(previous) * params.ratio));
@@ -101,9 +103,14 @@ std::vector<ChunkLod> build_chunk_lods(const Chunk& chunk, const ChunkLodParams&
     // records the error it has.
     const std::size_t n = meshopt_simplify(out.data(), c.indices.data(), c.indices.size(), xyz, c.positions.size(),
                                            sizeof(Vec3f), 3 * std::max<std::size_t>(target, 1), 1.0f,
-                                           meshopt_SimplifyLockBorder, &relative_error);
+                                           locked ? meshopt_SimplifyLockBorder : 0u, &relative_error);
     const std::size_t kept = n / 3;
-    if (kept == 0 || double(kept) > params.min_reduction * double(previous)) break;
+    if (kept == 0 || double(kept) > params.min_reduction * double(previous)) {
+      if (!locked || !params.unlocked_levels) break;
+      locked = false;  // the same level again, borders free to move along themselves
+      --level;
+      continue;
+    }
     // Triangles in vertex-cache order, vertices in first-use order: drawn
     // faster and stored smaller (the chunk codec codes index deltas).
     std::vector<std::uint32_t> ordered(n);
@@ -111,10 +118,12 @@ std::vector<ChunkLod> build_chunk_lods(const Chunk& chunk, const ChunkLodParams&
     ChunkLod lod;
     lod.chunk = compact_level(split, ordered);
     lod.ref.level = level;
-    lod.ref.error = double(relative_error) * double(scale);
+    const double error = double(relative_error) * double(scale) * (locked ? 1.0 : params.unlocked_error_scale);
+    lod.ref.error = std::max(previous_error, error);
     lod.ref.triangle_count = std::uint32_t(kept);
     levels.push_back(std::move(lod));
     previous = kept;
+    previous_error = lod.ref.error;
   }
   return levels;
 }

@@ -1,8 +1,10 @@
 // The far field's chunk levels (stages/chunk_lod.h): halving levels, locked
-// borders (no cracks between chunks at different levels), materials kept,
-// and the level a distance allows.
+// borders (no cracks between chunks at different levels), then unlocked ones
+// whose gaps the recorded error bounds, materials kept, and the level a
+// distance allows.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -56,7 +58,9 @@ std::set<Edge> border_edges(const Chunk& c) {
 
 TEST(ChunkLod, LevelsHalveTheTrianglesAndKeepTheBorderExactly) {
   const Chunk chunk = bumpy_patch(40, false);  // 3200 triangles, 160 border edges
-  const std::vector<ChunkLod> levels = build_chunk_lods(chunk);
+  ChunkLodParams locked_only;
+  locked_only.unlocked_levels = false;
+  const std::vector<ChunkLod> levels = build_chunk_lods(chunk, locked_only);
   ASSERT_GE(levels.size(), 3u);
   const std::set<Edge> border = border_edges(chunk);
   std::size_t previous = chunk.triangle_count();
@@ -77,6 +81,49 @@ TEST(ChunkLod, LevelsHalveTheTrianglesAndKeepTheBorderExactly) {
   }
   // The border's 160 edges bound how far levels can go.
   EXPECT_GE(levels.back().ref.triangle_count, 80u);
+}
+
+// The distance from `p` to the nearest of `edges` (as segments).
+double distance_to_edges(const Vec3f& p, const std::set<Edge>& edges) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& [ax, ay, az, bx, by, bz] : edges) {
+    const Vec3d a{ax, ay, az}, ab = Vec3d{bx, by, bz} - a, ap = Vec3d{p.x, p.y, p.z} - a;
+    const double t = std::clamp(dot(ap, ab) / std::max(dot(ab, ab), 1e-30), 0.0, 1.0);
+    best = std::min(best, length(ap - ab * t));
+  }
+  return best;
+}
+
+TEST(ChunkLod, PastTheLockedLevelsBordersMoveWithinHalfTheRecordedError) {
+  const Chunk chunk = bumpy_patch(80, false);  // 12800 triangles, 320 border edges: the lock stops the levels
+  ChunkLodParams locked_only;
+  locked_only.unlocked_levels = false;
+  const std::vector<ChunkLod> locked = build_chunk_lods(chunk, locked_only);
+  ChunkLodParams gaps_only;  // errors doubled for the gaps alone, not for thin parts
+  gaps_only.unlocked_error_scale = 2;
+  const std::vector<ChunkLod> levels = build_chunk_lods(chunk, gaps_only);
+  ASSERT_GT(levels.size(), locked.size());
+  // The locked levels come first, the same; then levels the border lock stopped.
+  for (std::size_t k = 0; k < locked.size(); ++k) {
+    EXPECT_EQ(levels[k].ref.triangle_count, locked[k].ref.triangle_count);
+    EXPECT_EQ(levels[k].ref.error, locked[k].ref.error);
+  }
+  EXPECT_LT(double(levels.back().ref.triangle_count), 0.5 * double(locked.back().ref.triangle_count));
+  const std::set<Edge> border = border_edges(chunk);
+  double previous_error = locked.back().ref.error;
+  for (std::size_t k = locked.size(); k < levels.size(); ++k) {
+    const ChunkLod& l = levels[k];
+    EXPECT_EQ(l.ref.level, int(k) + 1);
+    EXPECT_GE(l.ref.error, previous_error) << "level " << l.ref.level;
+    EXPECT_LT(l.ref.error, 0.2) << "level " << l.ref.level;
+    // A neighbour's border moves as far the other way: each side stays within
+    // half the recorded error of where the chunks met, so the gap within all of it.
+    for (const auto& [ax, ay, az, bx, by, bz] : border_edges(l.chunk)) {
+      const Vec3f mid{0.5f * (ax + bx), 0.5f * (ay + by), 0.5f * (az + bz)};
+      EXPECT_LE(distance_to_edges(mid, border), 0.5 * l.ref.error + 1e-6) << "level " << l.ref.level;
+    }
+    previous_error = l.ref.error;
+  }
 }
 
 TEST(ChunkLod, AFlatPatchCollapsesWithoutError) {

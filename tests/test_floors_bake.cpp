@@ -101,10 +101,10 @@ TEST(FloorSelection, ConfigKeyTakesAllOrAnArrayAndNeedsNoRegions) {
 // ---------------------------------------------------------------- regions
 
 TEST(FloorRegions, EyeHeightIsRoundedAsInfoPrintsIt) {
-  EXPECT_EQ(rounded_eye_height(0.0049 + 1.7, 2.0), std::strtod("1.70", nullptr));
-  EXPECT_EQ(rounded_eye_height(1.23456, 1.0), std::strtod("1.23", nullptr));
-  EXPECT_EQ(rounded_eye_height(1.23456, 0.5), std::strtod("1.235", nullptr));  // finer under a cell of 1
-  EXPECT_EQ(rounded_eye_height(-2.3051, 4.0), std::strtod("-2.31", nullptr));
+  EXPECT_EQ(rounded_as_info_prints(0.0049 + 1.7, 2.0), std::strtod("1.70", nullptr));
+  EXPECT_EQ(rounded_as_info_prints(1.23456, 1.0), std::strtod("1.23", nullptr));
+  EXPECT_EQ(rounded_as_info_prints(1.23456, 0.5), std::strtod("1.235", nullptr));  // finer under a cell of 1
+  EXPECT_EQ(rounded_as_info_prints(-2.3051, 4.0), std::strtod("-2.31", nullptr));
 }
 
 TEST(FloorRegions, EachSelectedFloorIsALayerAtEyeHeightOverEachFootprint) {
@@ -321,6 +321,19 @@ TEST_F(FloorsBake, AllFloorsAndTheErrors) {
     next = f["last_id"].get<std::int64_t>() + 1;
   }
   EXPECT_EQ(all["cells_total"].get<std::int64_t>(), next - 1);
+  // Without regions a floor's footprint is where people walk on it: the main
+  // floor's region is the one info suggests (rounded as info prints it).
+  const auto& suggested = info["suggested"];
+  ASSERT_TRUE(suggested.is_object()) << info.dump();
+  bool main_floor_seen = false;
+  for (std::size_t i = 0; i < floors["selected"].size(); ++i) {
+    const int f = floors["selected"][i]["floor"];
+    if (info["floors"][f]["height"] != suggested["floor"]) continue;
+    main_floor_seen = true;
+    for (int k : {0, 1, 3, 4})
+      EXPECT_NEAR(all["regions"][i][k].get<double>(), suggested["region"][k].get<double>(), 0.0051) << k;
+  }
+  EXPECT_TRUE(main_floor_seen) << all.dump();
   // The same from a configuration file, and with --cells.
   TempDir dir;
   test::write_text(dir / "floors.toml", "[model]\nstore = " + nlohmann::json((*dir_ / "house.store.db").string()).dump() +

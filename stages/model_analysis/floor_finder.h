@@ -37,6 +37,14 @@ struct Floor {
   Box3d covered_extent;            // the covered hit points' box (empty when none is covered)
 };
 
+// Where people walk on `floor`: its covered extent (hit points with something
+// above them: indoors), or, with nothing covered (a roof, open ground), all of
+// its extent. `cellbake info`'s suggested region and a `--floors` bake without
+// regions both use it.
+inline const Box3d& walkable_extent(const Floor& floor) {
+  return floor.covered_extent.empty() ? floor.extent : floor.covered_extent;
+}
+
 struct FloorFinderResult {
   std::vector<Floor> floors;   // ascending height; empty when no ray hit an upward-facing surface
   std::uint64_t rays = 0;      // grid rays cast
