@@ -246,13 +246,15 @@ TEST_F(BakedBox, AScriptedWalkUnderXvfbLogsEveryFrameAndCountsTheSwitches) {
     EXPECT_EQ(rows[0].front(), "frame");
     std::size_t switches = 0;
     for (std::size_t k = 1; k < rows.size(); ++k) {
-      ASSERT_EQ(rows[k].size(), 10u);
+      ASSERT_EQ(rows[k].size(), 12u);
       EXPECT_EQ(std::stoul(rows[k][0]), k - 1);  // every frame, in order
       EXPECT_EQ(std::stoll(rows[k][1]), index.containing(views[k - 1].eye)->id);
       switches += rows[k][3] == "1";
       EXPECT_GT(std::stod(rows[k][4]), 0.0);
       EXPECT_LE(std::stoull(rows[k][8]), 16u << 20);  // cache bytes within --cache-mb
       EXPECT_GT(std::stoull(rows[k][9]), 0u);         // triangles drawn
+      EXPECT_LE(std::stoull(rows[k][10]), std::stoull(rows[k][9]));  // of them exact far geometry
+      EXPECT_GT(std::stoull(rows[k][11]), 0u);  // the frame-time budget (default 85 ms), from the first frame on
     }
     EXPECT_EQ(switches, crossings);
     unsigned long frames = 0, summary_switches = 0;

@@ -3,6 +3,12 @@
 #include <algorithm>
 #include <chrono>
 
+#ifdef __linux__
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+#endif
+
 #include "storage/cell_db.h"
 
 namespace cellbake {
@@ -119,6 +125,10 @@ void CellCache::store(std::int64_t id, std::shared_ptr<const DecodedCell> cell) 
 }
 
 void CellCache::run() {
+#ifdef __linux__
+  // Per thread on Linux: lowers this thread alone (failure leaves it as it was).
+  if (params_.loader_nice > 0) setpriority(PRIO_PROCESS, id_t(syscall(SYS_gettid)), params_.loader_nice);
+#endif
   using Clock = std::chrono::steady_clock;
   auto last_refresh = Clock::now();
   std::unique_ptr<CellDb> db;

@@ -30,6 +30,10 @@ struct CellCacheParams {
   // chunks through `source` on the loader thread, so that a store with a
   // chunk cache (GeometryStore) has them decoded before the drawing thread asks.
   bool load_chunks = false;
+  // The loader thread's nice value (Linux; 0 leaves it): above the drawing
+  // threads', so that decoding ahead waits for a frame rather than slowing it
+  // (llvmpipe rasterises on every core).
+  int loader_nice = 10;
 };
 
 struct CellCacheStats {

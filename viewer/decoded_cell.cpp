@@ -62,6 +62,14 @@ std::shared_ptr<const Chunk> far_piece_chunk(const DecodedFarPiece& piece, const
   }
 }
 
+std::uint32_t far_piece_triangles(const DecodedFarPiece& piece, const ChunkSource& source) {
+  if (piece.chunk) return std::uint32_t(piece.chunk->triangle_count());
+  if (piece.level == 0) return std::uint32_t(piece.triangles.size());
+  for (const ChunkLodRef& l : source.lods(piece.chunk_id))
+    if (l.level == piece.level) return l.triangle_count;
+  return 0;
+}
+
 namespace {
 
 // Reorders the face's triangles tile by tile (stable within a tile) on a

@@ -64,6 +64,11 @@ std::int64_t lod_cache_id(std::int64_t chunk_id, int level);
 // a triangle number is out of range for the stored chunk.
 std::shared_ptr<const Chunk> far_piece_chunk(const DecodedFarPiece& piece, const ChunkSource& source);
 
+// The triangles `piece` draws: its chunk's when cut or loaded already, else
+// its triangle numbers' count (level 0) or the level's count `source` lists
+// (0 when the source lists no such level). Loads nothing.
+std::uint32_t far_piece_triangles(const DecodedFarPiece& piece, const ChunkSource& source);
+
 struct DecodedCell {
   std::int64_t id = 0;
   Box3d bounds;

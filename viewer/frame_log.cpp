@@ -39,13 +39,15 @@ FrameSummary summarize_frames(const std::vector<FrameRecord>& frames, std::uint6
 }
 
 std::string frame_log_csv(const std::vector<FrameRecord>& frames) {
-  std::string text = "frame,cell,drawn_cell,switched,frame_ms,draw_ms,upload_ms,upload_bytes,cache_bytes,triangles\n";
+  std::string text = "frame,cell,drawn_cell,switched,frame_ms,draw_ms,upload_ms,upload_bytes,cache_bytes,triangles,far_geometry_triangles,"
+      "chunk_budget\n";
   char line[256];
   for (const FrameRecord& f : frames) {
-    std::snprintf(line, sizeof line, "%d,%lld,%lld,%d,%.3f,%.3f,%.3f,%llu,%llu,%llu\n", f.frame, (long long)f.cell_id,
+    std::snprintf(line, sizeof line, "%d,%lld,%lld,%d,%.3f,%.3f,%.3f,%llu,%llu,%llu,%llu,%llu\n", f.frame, (long long)f.cell_id,
                   (long long)f.drawn_cell, f.switched ? 1 : 0, f.frame_ms, f.draw_ms, f.upload_ms,
                   (unsigned long long)f.upload_bytes, (unsigned long long)f.cache_bytes,
-                  (unsigned long long)f.triangles);
+                  (unsigned long long)f.triangles, (unsigned long long)f.far_geometry_triangles,
+                  (unsigned long long)f.chunk_budget);
     text += line;
   }
   return text;

@@ -21,6 +21,8 @@ struct FrameRecord {
   std::uint64_t upload_bytes = 0;  // bytes uploaded to the GPU during the frame (faces and chunks)
   std::uint64_t cache_bytes = 0;   // decoded cells held by the cache after the frame
   std::uint64_t triangles = 0;     // submitted by the draw: chunks (near field, far geometry) and depth meshes
+  std::uint64_t far_geometry_triangles = 0;  // of those, exact far geometry
+  std::uint64_t chunk_budget = 0;            // chunk triangles the frame time budget allowed (0: no limit)
 };
 
 struct FrameSummary {
@@ -41,7 +43,8 @@ double nearest_rank_percentile(std::vector<double> values, double p);
 // Summarises `frames`; `window` frames after each switch count as near it.
 FrameSummary summarize_frames(const std::vector<FrameRecord>& frames, std::uint64_t cache_cap_bytes, int window = 10);
 
-// "frame,cell,drawn_cell,switched,frame_ms,draw_ms,upload_ms,upload_bytes,cache_bytes,triangles" and one line per record.
+// "frame,cell,drawn_cell,switched,frame_ms,draw_ms,upload_ms,upload_bytes,cache_bytes,triangles,
+// far_geometry_triangles,chunk_budget" and one line per record.
 std::string frame_log_csv(const std::vector<FrameRecord>& frames);
 
 // The summary as "key: value" lines under "walk summary:" (what the tests parse).

@@ -7,11 +7,20 @@
 #include "stages/chunk_lod.h"
 #include "stages/render/gl_functions.h"
 #include "viewer/decoded_cell.h"
+#include "viewer/chunk_level_budget.h"
 #include "viewer/shared_gl_context.h"
 #include "viewer/view_camera.h"
 
 namespace cellbake {
 namespace {
+
+// The ids of `ids` found in `sorted` (ascending), in their order.
+std::vector<std::int64_t> ids_among(const std::vector<std::int64_t>& ids, const std::vector<std::int64_t>& sorted) {
+  std::vector<std::int64_t> out;
+  for (std::int64_t id : ids)
+    if (std::binary_search(sorted.begin(), sorted.end(), id)) out.push_back(id);
+  return out;
+}
 
 double now_ms() {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -102,6 +111,10 @@ UploadProgress SceneDrawer::upload_some(const DecodedCell& cell, const UploadBud
     partial_.emplace_front(cell.id, PartialCell{});
     // Resident faces (drawn before) are not uploaded again: start at the chunks.
     if (cells_.contains(cell.id)) partial_.front().second.next_item = cell.faces.size();
+    PartialCell& fresh = partial_.front().second;
+    fresh.coarser = coarser_levels_ahead(cell);
+    for (const auto& entry : fresh.coarser) fresh.coarser_ids.push_back(entry.first);
+    std::sort(fresh.coarser_ids.begin(), fresh.coarser_ids.end());
     while (partial_.size() > 4) {
       for (std::uint64_t h : partial_.back().second.handles) tdm_.erase(h);
       partial_.pop_back();
@@ -111,7 +124,8 @@ UploadProgress SceneDrawer::upload_some(const DecodedCell& cell, const UploadBud
   }
   PartialCell& p = partial_.front().second;
   const std::size_t faces = cell.faces.size(), near = cell.near_ids.size(), pieces = cell.far_pieces.size();
-  const std::size_t items = faces + near + pieces + cell.far_whole_ids.size();
+  const std::size_t whole = cell.far_whole_ids.size(), own = faces + near + pieces + whole;
+  const std::size_t items = own + p.coarser_ids.size();
   const ChunkLoader load = [this](std::int64_t id) { return source_.load(id); };
   try {
     while (p.next_item < items) {
@@ -127,8 +141,16 @@ UploadProgress SceneDrawer::upload_some(const DecodedCell& cell, const UploadBud
       } else if (k < faces + near + pieces) {
         const DecodedFarPiece& piece = cell.far_pieces[k - faces - near];
         bytes = chunks_.upload_ahead(piece.cache_id, [&](std::int64_t) { return far_piece_chunk(piece, source_); });
-      } else {
+      } else if (k < own) {
         bytes = chunks_.upload_ahead(cell.far_whole_ids[k - faces - near - pieces], load);
+      } else {
+        const std::int64_t id = p.coarser_ids[k - own];
+        const auto [chunk_id, level] = p.coarser.at(id);
+        bytes = chunks_.upload_ahead(id, [&, chunk_id = chunk_id, level = level](std::int64_t) {
+          auto loaded = std::make_shared<Chunk>(*source_.load_lod(chunk_id, level));
+          loaded->id = id;
+          return std::shared_ptr<const Chunk>(std::move(loaded));
+        });
       }
       if (k < faces) p.bytes += bytes;
       ++p.next_item;
@@ -191,26 +213,49 @@ SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width
     // far field (which also reaches a shell inside the box) is resolved by
     // the depth test.
     // Chunks of the store in the view frustum (near field, whole far chunks).
+    std::vector<ChunkRef> refs_in_view;  // by id
     std::vector<std::int64_t> in_view;
     if (options.near_field || (options.far_field && !cell.far_whole_ids.empty())) {
-      in_view = chunks_in_view(camera, source_);
-      std::sort(in_view.begin(), in_view.end());
+      refs_in_view = chunk_refs_in_view(camera, source_);
+      std::sort(refs_in_view.begin(), refs_in_view.end(),
+                [](const ChunkRef& a, const ChunkRef& b) { return a.id < b.id; });
+      for (const ChunkRef& r : refs_in_view) in_view.push_back(r.id);
     }
-    const auto visible = [&in_view](const std::vector<std::int64_t>& ids) {
-      std::vector<std::int64_t> out;
-      for (std::int64_t id : ids)
-        if (std::binary_search(in_view.begin(), in_view.end(), id)) out.push_back(id);
-      return out;
-    };
+    const auto visible = [&in_view](const std::vector<std::int64_t>& ids) { return ids_among(ids, in_view); };
     const ChunkLoader load = [this](std::int64_t id) { return source_.load(id); };
-    if (options.near_field) chunks_.draw(camera, Box3d{}, visible(cell.near_ids), load);
-    if (options.far_field && (!cell.far_pieces.empty() || !cell.far_whole_ids.empty())) {
-      // Exact far geometry, frustum-culled like the truth.
-      const std::uint64_t drawn_before = chunks_.stats().triangles_drawn;
-      std::vector<std::int64_t> pieces;
+    // What the cell draws of the store's chunks in view: its near field, and
+    // its exact far geometry (pieces of chunks, whole chunks), frustum-culled
+    // like the truth.
+    const bool far_geometry = options.far_field && (!cell.far_pieces.empty() || !cell.far_whole_ids.empty());
+    std::vector<std::int64_t> near = options.near_field ? visible(cell.near_ids) : std::vector<std::int64_t>{};
+    std::vector<std::int64_t> pieces, whole;
+    if (far_geometry) {
       for (const DecodedFarPiece& p : cell.far_pieces)
         if (box_in_view(camera, p.bounds)) pieces.push_back(p.cache_id);
+      whole = visible(cell.far_whole_ids);
+    }
+    last_camera_ = camera, last_height_ = height, last_max_chunk_triangles_ = options.max_chunk_triangles;
+    // Over the frame's budget: coarser store levels, drawn under their own cache ids.
+    const CoarserLevels coarser =
+        options.max_chunk_triangles > 0
+            ? coarser_levels(camera, height, cell, refs_in_view, options.max_chunk_triangles, near, pieces, whole)
+            : CoarserLevels{};
+    const auto load_coarser = [&](std::int64_t id) -> std::shared_ptr<const Chunk> {
+      const auto it = coarser.find(id);
+      if (it == coarser.end()) return nullptr;
+      auto level = std::make_shared<Chunk>(*source_.load_lod(it->second.first, it->second.second));
+      level->id = id;
+      return level;
+    };
+    const ChunkLoader load_chunk = [&](std::int64_t id) {
+      if (auto level = load_coarser(id)) return level;
+      return source_.load(id);
+    };
+    if (!near.empty()) chunks_.draw(camera, Box3d{}, near, load_chunk);
+    if (far_geometry) {
+      const std::uint64_t drawn_before = chunks_.stats().triangles_drawn;
       const ChunkLoader load_piece = [&](std::int64_t cache_id) {
+        if (auto level = load_coarser(cache_id)) return level;
         const auto it = std::find_if(cell.far_pieces.begin(), cell.far_pieces.end(),
                                      [cache_id](const DecodedFarPiece& p) { return p.cache_id == cache_id; });
         // Cells decoded without a source: cut out of the store's chunk, or the
@@ -218,7 +263,7 @@ SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width
         return far_piece_chunk(*it, source_);
       };
       chunks_.draw(camera, Box3d{}, pieces, load_piece);
-      if (!cell.far_whole_ids.empty()) chunks_.draw(camera, Box3d{}, visible(cell.far_whole_ids), load);
+      if (!whole.empty()) chunks_.draw(camera, Box3d{}, whole, load_chunk);
       stats.far_geometry_triangles = chunks_.stats().triangles_drawn - drawn_before;
     }
     if (options.far_field) {
@@ -259,6 +304,55 @@ SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width
   set_wireframe(false);
   stats.prepare_milliseconds = prepared - start;
   return finish(stats, before, start, width, height, out);
+}
+
+SceneDrawer::CoarserLevels SceneDrawer::coarser_levels(const RenderCamera& camera, int height,
+                                                      const DecodedCell& cell,
+                                                      const std::vector<ChunkRef>& refs_in_view,
+                                                      std::uint64_t max_triangles, std::vector<std::int64_t>& near,
+                                                      std::vector<std::int64_t>& pieces,
+                                                      std::vector<std::int64_t>& whole) const {
+  std::vector<ChunkDrawItem> items;
+  std::vector<std::int64_t*> ids;  // the list entry each item's id is in
+  const auto add_chunks = [&](std::vector<std::int64_t>& list) {
+    for (std::int64_t& id : list) {
+      const auto it = std::lower_bound(refs_in_view.begin(), refs_in_view.end(), id,
+                                       [](const ChunkRef& r, std::int64_t v) { return r.id < v; });
+      if (it == refs_in_view.end() || it->id != id) continue;
+      items.push_back({id, 0, it->triangle_count, it->bounds});
+      ids.push_back(&id);
+    }
+  };
+  add_chunks(near);
+  for (std::int64_t& id : pieces) {
+    const auto it = std::find_if(cell.far_pieces.begin(), cell.far_pieces.end(),
+                                 [id](const DecodedFarPiece& p) { return p.cache_id == id; });
+    items.push_back({it->chunk_id, it->level, far_piece_triangles(*it, source_), it->bounds});
+    ids.push_back(&id);
+  }
+  add_chunks(whole);
+  const double per_distance = (camera.tan_top - camera.tan_bottom) / double(std::max(height, 1));
+  const std::vector<int> levels = levels_for_triangle_budget(items, source_, camera.eye, per_distance, max_triangles);
+  CoarserLevels coarser;
+  for (std::size_t i = 0; i < items.size(); ++i)
+    if (levels[i] != items[i].level) {
+      *ids[i] = lod_cache_id(items[i].chunk_id, levels[i]);
+      coarser.emplace(*ids[i], std::make_pair(items[i].chunk_id, levels[i]));
+    }
+  return coarser;
+}
+
+SceneDrawer::CoarserLevels SceneDrawer::coarser_levels_ahead(const DecodedCell& cell) const {
+  if (last_max_chunk_triangles_ == 0) return {};
+  std::vector<ChunkRef> refs = chunk_refs_in_view(last_camera_, source_);
+  std::sort(refs.begin(), refs.end(), [](const ChunkRef& a, const ChunkRef& b) { return a.id < b.id; });
+  std::vector<std::int64_t> in_view;
+  for (const ChunkRef& r : refs) in_view.push_back(r.id);
+  const auto visible = [&in_view](const std::vector<std::int64_t>& ids) { return ids_among(ids, in_view); };
+  std::vector<std::int64_t> near = visible(cell.near_ids), whole = visible(cell.far_whole_ids), pieces;
+  for (const DecodedFarPiece& p : cell.far_pieces)
+    if (box_in_view(last_camera_, p.bounds)) pieces.push_back(p.cache_id);
+  return coarser_levels(last_camera_, last_height_, cell, refs, last_max_chunk_triangles_, near, pieces, whole);
 }
 
 SceneFrameStats SceneDrawer::draw_truth(const RenderCamera& camera, int width, int height,

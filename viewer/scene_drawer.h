@@ -44,6 +44,11 @@ struct SceneDrawOptions {
   // image except where two surfaces tie exactly in depth, at a fraction of
   // the drawing where walls hide most of the model. Ignored in wireframe.
   bool truth_occlusion_culling = false;
+  // draw_impostor: at most this many triangles of the store's chunks in view
+  // (near field and exact far geometry), drawing them at coarser store levels
+  // where needed, least projected error first (viewer/chunk_level_budget.h);
+  // 0: as the cell stored them.
+  std::uint64_t max_chunk_triangles = 0;
 };
 
 // A frame's allowance for GPU uploads ahead of drawing (SceneDrawer::upload_some).
@@ -85,7 +90,10 @@ class SceneDrawer {
   // that order, resuming where the previous call for the cell stopped, and
   // stops before the next face or chunk once `budget` bytes or milliseconds
   // are spent (the first one always goes, so every call makes progress).
-  // Chunks already cached cost nothing. Once its faces are uploaded the cell
+  // Chunks already cached cost nothing. When the last impostor frame drew
+  // under a chunk budget, the coarser levels the cell's chunks in view would
+  // draw from that frame's camera under it come last (a switch then finds the
+  // levels it draws uploaded). Once its faces are uploaded the cell
   // is prepared (prepare()'s eviction applies). `complete` when nothing is
   // left; later calls for the cell start over (finding everything cached).
   // Up to four cells are kept part-uploaded; a fifth frees the oldest's faces.
@@ -132,13 +140,30 @@ class SceneDrawer {
     std::size_t bytes = 0;
     std::list<std::int64_t>::iterator recency;
   };
+  // Chunk id -> (store chunk, level) of what a frame draws at a coarser level.
+  using CoarserLevels = std::unordered_map<std::int64_t, std::pair<std::int64_t, int>>;
+  // draw_impostor over `max_triangles`: the `near` chunk ids, far `pieces`
+  // (cache ids) and `whole` far chunk ids in view that draw a coarser store
+  // level (viewer/chunk_level_budget.h) have their ids replaced by
+  // lod_cache_id, mapped here to what they draw. `refs_in_view` sorted by id.
+  CoarserLevels coarser_levels(const RenderCamera& camera, int height, const DecodedCell& cell,
+                               const std::vector<ChunkRef>& refs_in_view, std::uint64_t max_triangles,
+                               std::vector<std::int64_t>& near, std::vector<std::int64_t>& pieces,
+                               std::vector<std::int64_t>& whole) const;
   // A cell upload_some() has begun: its faces uploaded so far and the next item
   // (faces first, then near chunks, far pieces, whole far chunks).
   struct PartialCell {
     std::vector<std::uint64_t> handles;
     std::size_t bytes = 0;
     std::size_t next_item = 0;
+    // Past the cell's own items: the coarser levels its chunks in view would
+    // draw from the last frame's camera under its budget (coarser_levels).
+    std::vector<std::int64_t> coarser_ids;
+    CoarserLevels coarser;
   };
+  // The coarser levels `cell` would draw from the last impostor frame's camera
+  // under its chunk budget (none when that frame had no budget).
+  CoarserLevels coarser_levels_ahead(const DecodedCell& cell) const;
   // Makes `resident` (all of `cell_id`'s faces) resident as the most recent cell, evicting beyond the cap.
   void make_resident(std::int64_t cell_id, ResidentCell resident);
   // Uploads face `index` of `cell`, appending its handle and adding its bytes.
@@ -157,6 +182,10 @@ class SceneDrawer {
   std::list<std::int64_t> lru_;
   std::size_t resident_bytes_ = 0;
   std::list<std::pair<std::int64_t, PartialCell>> partial_;  // front = most recently continued
+  // The last draw_impostor's camera, height and chunk budget (0: none).
+  RenderCamera last_camera_{};
+  int last_height_ = 0;
+  std::uint64_t last_max_chunk_triangles_ = 0;
 };
 
 }  // namespace cellbake

@@ -37,6 +37,7 @@
 #include "viewer/cell_switch.h"
 #include "viewer/fly_camera.h"
 #include "viewer/frame_log.h"
+#include "viewer/frame_time_budget.h"
 #include "viewer/image_metrics.h"
 #include "viewer/interactive/glfw_window_context.h"
 #include "viewer/png_file.h"
@@ -51,6 +52,7 @@ struct Options {
   std::string database, store, size = "1280x720", eye, look, screenshot, path, frame_log, switch_mode = "staged";
   int frames = 0;
   double fov = 60, near = 0.05, cache_mb = 1024, upload_mb = 8, upload_ms = 6;
+  double frame_ms = 85;  // frame time aimed at: chunks drawn at coarser levels to fit (0: drawn as baked)
 };
 
 double elapsed_ms(std::chrono::steady_clock::time_point since) {
@@ -227,6 +229,9 @@ class ViewerSession {
   EyeMotion motion_;
   std::vector<FrameRecord> log_;
   std::int64_t previous_cell_ = 0;
+  std::optional<FrameTimeBudget> frame_budget_;  // --frame-ms > 0
+  std::uint64_t chunk_budget_ = 0;               // this frame's chunk triangles allowed (0: no limit)
+  SceneFrameStats last_stats_;                   // the last frame drawn (info_ starts afresh each frame)
 };
 
 ViewerSession::ViewerSession(const ViewerInputs& in, GLFWwindow* window)
@@ -246,6 +251,7 @@ ViewerSession::ViewerSession(const ViewerInputs& in, GLFWwindow* window)
   const auto index0 = in_.cache.index();
   place_camera(*index0);
   state_.fov = static_cast<float>(opt_.fov);
+  if (opt_.frame_ms > 0) frame_budget_.emplace(opt_.frame_ms);
   if (in_.scripted) load_first_cell(*index0);
 }
 
@@ -275,8 +281,19 @@ void ViewerSession::load_first_cell(const CellIndex& index) {
       drawer_.prepare(*cell);
       while (!drawer_.upload_some(*cell, {std::numeric_limits<std::size_t>::max(), 1e300}).complete) {
       }
+      // Two frames drawn unseen: the first measures the frame time budget,
+      // the second uploads the levels it draws, so the first frame shown is
+      // budgeted and finds them ready.
+      for (int warm = 0; frame_budget_ && warm < 2; ++warm) {
+        int fw = 0, fh = 0;
+        glfwGetFramebufferSize(window_, &fw, &fh);
+        const auto d = std::chrono::steady_clock::now();
+        draw_scene(cell, std::max(fw, 1), std::max(fh, 1));
+        frame_budget_->add(elapsed_ms(d), info_.stats.chunk_triangles + info_.stats.far_triangles);
+      }
     }
-  std::printf("loading: first cell decoded and uploaded in %.1f ms\n", elapsed_ms(t));
+  std::printf("loading: first cell decoded and uploaded%s in %.1f ms\n",
+              frame_budget_ ? ", two frames drawn unseen for the frame time budget," : "", elapsed_ms(t));
 }
 
 // Moves the camera: to the path's view of this frame (--path), else by the
@@ -373,6 +390,10 @@ const std::vector<Rgba8>& ViewerSession::draw_scene(const std::shared_ptr<const 
   options.near_field = state_.mode != DrawMode::far_only;
   options.far_field = state_.mode != DrawMode::near_only;
   options.samples.far_budget = far_budget_;
+  if (frame_budget_) {  // the last frame's depth-mesh triangles are taken as this frame's too
+    options.max_chunk_triangles = chunk_allowance(frame_budget_->triangles(), last_stats_.far_triangles);
+  }
+  chunk_budget_ = options.max_chunk_triangles;
   const auto t0 = std::chrono::steady_clock::now();
   try {
     if (state_.mode == DrawMode::truth || !cell) {
@@ -394,6 +415,7 @@ const std::vector<Rgba8>& ViewerSession::draw_scene(const std::shared_ptr<const 
     image = &shown_;
   }
   info_.frame_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  last_stats_ = info_.stats;
   return *image;
 }
 
@@ -419,6 +441,9 @@ void ViewerSession::panel_stats(const std::shared_ptr<const DecodedCell>& cell) 
               (unsigned long long)info_.stats.chunk_triangles);
   ImGui::Text("far field: %llu samples drawn (budget %llu triangles)", (unsigned long long)info_.stats.samples_drawn,
               (unsigned long long)far_budget_);
+  if (frame_budget_)
+    ImGui::Text("frame time budget %.0f ms: %s", frame_budget_->target_ms(),
+                chunk_budget_ ? ("chunks up to " + std::to_string(chunk_budget_) + " tris").c_str() : "no limit yet");
   ImGui::Text("frame %.1f ms   draw %.1f ms", info_.frame_ms, info_.stats.milliseconds);
   if (cell && cell->id != info_.cell_id)
     ImGui::Text("drawing cell %lld while cell %lld uploads", (long long)cell->id, (long long)info_.cell_id);
@@ -497,6 +522,8 @@ void ViewerSession::log_frame(int frame_number, std::chrono::steady_clock::time_
   r.upload_bytes = drawer_.uploaded_bytes() - uploaded_before;
   r.cache_bytes = in_.cache.stats().bytes;
   r.triangles = info_.stats.chunk_triangles + info_.stats.far_triangles;
+  r.far_geometry_triangles = info_.stats.far_geometry_triangles;
+  r.chunk_budget = chunk_budget_;
   log_.push_back(r);
   previous_cell_ = info_.cell_id;
 }
@@ -540,6 +567,8 @@ void ViewerSession::run() {
     const bool last_frame = in_.total_frames > 0 && frame_number + 1 >= in_.total_frames;
     if (last_frame && !opt_.screenshot.empty()) save_screenshot(fw, fh);
     glfwSwapBuffers(window_);
+    if (frame_budget_)
+      frame_budget_->add(elapsed_ms(frame_start), info_.stats.chunk_triangles + info_.stats.far_triangles);
     if (in_.scripted) log_frame(frame_number, frame_start, cell, spent, uploaded_before);
     if (last_frame) break;
   }
@@ -628,6 +657,12 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--upload-ms", opt.upload_ms, "Staged switches: GPU upload budget per frame, milliseconds")
       ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--frame-ms", opt.frame_ms,
+                 "Frame time to aim at: chunks drawn at coarser store levels, least projected error first, while "
+                 "frames take longer (the triangles a frame may draw follow recent frames' time per triangle); "
+                 "0: as baked")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   try {
