@@ -93,6 +93,8 @@ TEST(FrameLog, SummaryCountsSwitchesAndFindsTheWorstFrameNearOne) {
     f.upload_bytes = 100;
     f.cache_bytes = 1000 + k;
     f.triangles = 7;
+    f.far_geometry_triangles = 5;
+    f.chunk_budget = k == 40 ? 0 : 9;
     frames.push_back(f);
   }
   const FrameSummary s = summarize_frames(frames, 5000, 10);
@@ -110,7 +112,8 @@ TEST(FrameLog, SummaryCountsSwitchesAndFindsTheWorstFrameNearOne) {
   const std::string csv = frame_log_csv(frames);
   EXPECT_EQ(test::count_of(csv, "\n"), 101u);
   EXPECT_NE(csv.find("\n40,2,1,1,10.000,"), std::string::npos) << csv.substr(0, 200);
-  EXPECT_NE(csv.find(",1040,7\n"), std::string::npos) << csv.substr(0, 200);
+  EXPECT_NE(csv.find(",1040,7,5,0\n"), std::string::npos) << csv.substr(0, 200);
+  EXPECT_NE(csv.find(",1041,7,5,9\n"), std::string::npos) << csv.substr(0, 200);
   const std::string text = frame_summary_text(s);
   EXPECT_NE(text.find("switches: 2\n"), std::string::npos) << text;
   EXPECT_NE(text.find("p99 / median: 4.00"), std::string::npos) << text;
