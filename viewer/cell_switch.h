@@ -22,7 +22,9 @@ class CellSwitch {
   // `target`: the eye's cell, decoded (null while it loads: the previous cell
   // stays). `heading`: the next cell of the walk if decoded (null: none),
   // uploaded ahead with what is left of `budget` once the target is drawn,
-  // while the drawer's GPU caches are at most half full.
+  // while the drawer's GPU caches are at most half full, and not on the frame
+  // that switches. A target whose upload ahead completed is switched to at
+  // once, without scanning it again.
   // Adds the frame's uploads to `spent`. Throws as SceneDrawer::upload_some.
   std::shared_ptr<const DecodedCell> choose(const std::shared_ptr<const DecodedCell>& target,
                                             const std::shared_ptr<const DecodedCell>& heading, SceneDrawer& drawer,
