@@ -52,7 +52,7 @@ struct Options {
   std::string database, store, size = "1280x720", eye, look, screenshot, path, frame_log, switch_mode = "staged";
   int frames = 0;
   double fov = 60, near = 0.05, cache_mb = 1024, upload_mb = 8, upload_ms = 6;
-  double frame_ms = 85;  // frame time aimed at: chunks drawn at coarser levels to fit (0: drawn as baked)
+  double frame_ms = 66;  // frame time aimed at while moving: chunks drawn at coarser levels to fit (0: as baked)
 };
 
 double elapsed_ms(std::chrono::steady_clock::time_point since) {
@@ -232,6 +232,9 @@ class ViewerSession {
   std::optional<FrameTimeBudget> frame_budget_;  // --frame-ms > 0
   std::uint64_t chunk_budget_ = 0;               // this frame's chunk triangles allowed (0: no limit)
   SceneFrameStats last_stats_;                   // the last frame drawn (info_ starts afresh each frame)
+  static constexpr int kStillFramesToRefine = 3;  // frames of one view before it is drawn as baked
+  FlyCamera last_view_;
+  int still_frames_ = 0;
 };
 
 ViewerSession::ViewerSession(const ViewerInputs& in, GLFWwindow* window)
@@ -281,19 +284,20 @@ void ViewerSession::load_first_cell(const CellIndex& index) {
       drawer_.prepare(*cell);
       while (!drawer_.upload_some(*cell, {std::numeric_limits<std::size_t>::max(), 1e300}).complete) {
       }
-      // Two frames drawn unseen: the first measures the frame time budget,
-      // the second uploads the levels it draws, so the first frame shown is
-      // budgeted and finds them ready.
-      for (int warm = 0; frame_budget_ && warm < 2; ++warm) {
+      // Four frames drawn unseen: the first measures the frame time budget,
+      // the others settle it and upload the levels they draw, so the first
+      // frame shown is budgeted and finds them ready.
+      for (int warm = 0; frame_budget_ && warm < 4; ++warm) {
         int fw = 0, fh = 0;
         glfwGetFramebufferSize(window_, &fw, &fh);
         const auto d = std::chrono::steady_clock::now();
+        still_frames_ = 0;  // the same view each time, but budgeted like a walk's
         draw_scene(cell, std::max(fw, 1), std::max(fh, 1));
         frame_budget_->add(elapsed_ms(d), info_.stats.chunk_triangles + info_.stats.far_triangles);
       }
     }
   std::printf("loading: first cell decoded and uploaded%s in %.1f ms\n",
-              frame_budget_ ? ", two frames drawn unseen for the frame time budget," : "", elapsed_ms(t));
+              frame_budget_ ? ", four frames drawn unseen for the frame time budget," : "", elapsed_ms(t));
 }
 
 // Moves the camera: to the path's view of this frame (--path), else by the
@@ -390,7 +394,14 @@ const std::vector<Rgba8>& ViewerSession::draw_scene(const std::shared_ptr<const 
   options.near_field = state_.mode != DrawMode::far_only;
   options.far_field = state_.mode != DrawMode::near_only;
   options.samples.far_budget = far_budget_;
-  if (frame_budget_) {  // the last frame's depth-mesh triangles are taken as this frame's too
+  // A view held still for a few frames is drawn as baked (refined); a moving
+  // one within the frame-time budget.
+  const bool same_view = fly_.position == last_view_.position && fly_.yaw_deg == last_view_.yaw_deg &&
+                         fly_.pitch_deg == last_view_.pitch_deg;
+  still_frames_ = same_view ? still_frames_ + 1 : 0;
+  last_view_ = fly_;
+  if (frame_budget_ && still_frames_ < kStillFramesToRefine) {
+    // The last frame's depth-mesh triangles are taken as this frame's too.
     options.max_chunk_triangles = chunk_allowance(frame_budget_->triangles(), last_stats_.far_triangles);
   }
   chunk_budget_ = options.max_chunk_triangles;
@@ -443,7 +454,9 @@ void ViewerSession::panel_stats(const std::shared_ptr<const DecodedCell>& cell) 
               (unsigned long long)far_budget_);
   if (frame_budget_)
     ImGui::Text("frame time budget %.0f ms: %s", frame_budget_->target_ms(),
-                chunk_budget_ ? ("chunks up to " + std::to_string(chunk_budget_) + " tris").c_str() : "no limit yet");
+                chunk_budget_                             ? ("chunks up to " + std::to_string(chunk_budget_) + " tris").c_str()
+                : still_frames_ >= kStillFramesToRefine ? "still: drawn as baked"
+                                                        : "no limit yet");
   ImGui::Text("frame %.1f ms   draw %.1f ms", info_.frame_ms, info_.stats.milliseconds);
   if (cell && cell->id != info_.cell_id)
     ImGui::Text("drawing cell %lld while cell %lld uploads", (long long)cell->id, (long long)info_.cell_id);
@@ -659,9 +672,9 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   app.add_option("--frame-ms", opt.frame_ms,
-                 "Frame time to aim at: chunks drawn at coarser store levels, least projected error first, while "
-                 "frames take longer (the triangles a frame may draw follow recent frames' time per triangle); "
-                 "0: as baked")
+                 "Frame time to aim at while the view moves: chunks drawn at coarser store levels, least projected "
+                 "error first, while frames take longer (the triangles a frame may draw follow recent frames' time "
+                 "per triangle); a view held still for 3 frames is drawn as baked; 0: always as baked")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
