@@ -50,8 +50,9 @@ struct BakeConfig {
   // Floors whose eye layers become the regions (plan_bake, before cell ids are
   // given): `floors` of those `cellbake info` finds, eyes `eye_height` above
   // each (0: 1.7 m in the units info takes the model in: 1.7, or 170 for
-  // centimetres), over the regions' horizontal extent (no regions: the
-  // model's). Not hashed or described: the regions they become are.
+  // centimetres), over the regions' horizontal extent (no regions: each
+  // floor's walkable extent, as info suggests it). Not hashed or described:
+  // the regions they become are.
   FloorSelection floors;
   double eye_height = 0;
 

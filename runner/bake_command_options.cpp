@@ -21,7 +21,7 @@ void add_bake_options(CLI::App& cmd, BakeCommandOptions& opt) {
   cmd.add_option("--floors", opt.floors,
                  "Bake whole floors: all, or indices like 0,2 of the floors `cellbake info` finds (0 = the lowest); "
                  "eyes [cells] eye_height above each (default 1.7 m in the units `info` takes the model in), over the "
-                 "--region's x/y extent (none: the model's)");
+                 "--region's x/y extent (none: each floor's walkable extent, the region `info` suggests for the main floor)");
   cmd.add_option("--cell-size", opt.cell_size, "Edge of a cubic view cell, model units")->check(CLI::PositiveNumber);
   cmd.add_option("--near-budget", opt.near_budget,
                  "Near-field triangle budget per cell (default: [near] budget, 100000, or near.budget_fraction of a "
