@@ -12,19 +12,19 @@ std::vector<int> levels_for_triangle_budget(std::span<const ChunkDrawItem> items
   levels.reserve(items.size());
   for (const ChunkDrawItem& item : items) levels.push_back(item.level);
   if (max_triangles == 0) return levels;
+  std::uint64_t total = 0;
+  for (const ChunkDrawItem& item : items) total += item.triangles;
+  if (total <= max_triangles) return levels;
   std::vector<LodCutChunk> chunks;
   chunks.reserve(items.size());
-  std::uint64_t total = 0;
   for (const ChunkDrawItem& item : items) {
     LodCutChunk c;
     c.pixel_size = box_distance(Box3d{eye, eye}, item.bounds) * metres_per_pixel_per_metre;
     c.triangles = item.triangles;
     for (const ChunkLodRef& l : source.lods(item.chunk_id))
       if (l.level > item.level && l.triangle_count < item.triangles) c.levels.push_back(l);
-    total += item.triangles;
     chunks.push_back(std::move(c));
   }
-  if (total <= max_triangles) return levels;
   const LodCut cut = lod_cut_for_triangles(chunks, max_triangles);
   for (std::size_t i = 0; i < items.size(); ++i)
     if (cut.levels[i] > 0) levels[i] = cut.levels[i];

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <stdexcept>
 
 #include "stages/chunk_lod.h"
 #include "stages/render/gl_functions.h"
@@ -324,10 +325,13 @@ SceneDrawer::CoarserLevels SceneDrawer::coarser_levels(const RenderCamera& camer
     }
   };
   add_chunks(near);
+  // The cell's pieces by cache id (pieces lists some of them, in the cell's order).
+  std::size_t next = 0;
   for (std::int64_t& id : pieces) {
-    const auto it = std::find_if(cell.far_pieces.begin(), cell.far_pieces.end(),
-                                 [id](const DecodedFarPiece& p) { return p.cache_id == id; });
-    items.push_back({it->chunk_id, it->level, far_piece_triangles(*it, source_), it->bounds});
+    while (next < cell.far_pieces.size() && cell.far_pieces[next].cache_id != id) ++next;
+    if (next == cell.far_pieces.size()) throw std::logic_error("coarser_levels: a piece not of the cell, or out of order");
+    const DecodedFarPiece& p = cell.far_pieces[next];
+    items.push_back({p.chunk_id, p.level, far_piece_triangles(p, source_), p.bounds});
     ids.push_back(&id);
   }
   add_chunks(whole);

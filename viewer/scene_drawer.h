@@ -145,7 +145,8 @@ class SceneDrawer {
   // draw_impostor over `max_triangles`: the `near` chunk ids, far `pieces`
   // (cache ids) and `whole` far chunk ids in view that draw a coarser store
   // level (viewer/chunk_level_budget.h) have their ids replaced by
-  // lod_cache_id, mapped here to what they draw. `refs_in_view` sorted by id.
+  // lod_cache_id, mapped here to what they draw. `refs_in_view` sorted by id;
+  // `pieces` in the order of cell.far_pieces.
   CoarserLevels coarser_levels(const RenderCamera& camera, int height, const DecodedCell& cell,
                                const std::vector<ChunkRef>& refs_in_view, std::uint64_t max_triangles,
                                std::vector<std::int64_t>& near, std::vector<std::int64_t>& pieces,
