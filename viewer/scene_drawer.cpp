@@ -15,12 +15,26 @@
 namespace cellbake {
 namespace {
 
-// The ids of `ids` found in `sorted` (ascending), in their order.
-std::vector<std::int64_t> ids_among(const std::vector<std::int64_t>& ids, const std::vector<std::int64_t>& sorted) {
+// Chunk `id`'s reference in `refs` (sorted by id); null when not there.
+const ChunkRef* find_ref(const std::vector<ChunkRef>& refs, std::int64_t id) {
+  const auto it =
+      std::lower_bound(refs.begin(), refs.end(), id, [](const ChunkRef& r, std::int64_t v) { return r.id < v; });
+  return it == refs.end() || it->id != id ? nullptr : &*it;
+}
+
+// The ids of `ids` found in `refs` (sorted by id), in their order.
+std::vector<std::int64_t> ids_among(const std::vector<std::int64_t>& ids, const std::vector<ChunkRef>& refs) {
   std::vector<std::int64_t> out;
   for (std::int64_t id : ids)
-    if (std::binary_search(sorted.begin(), sorted.end(), id)) out.push_back(id);
+    if (find_ref(refs, id)) out.push_back(id);
   return out;
+}
+
+// Level `level` of store chunk `chunk_id`, drawn and cached under `id`.
+std::shared_ptr<const Chunk> level_as(const ChunkSource& source, std::int64_t chunk_id, int level, std::int64_t id) {
+  auto chunk = std::make_shared<Chunk>(*source.load_lod(chunk_id, level));
+  chunk->id = id;
+  return chunk;
 }
 
 double now_ms() {
@@ -147,11 +161,8 @@ UploadProgress SceneDrawer::upload_some(const DecodedCell& cell, const UploadBud
       } else {
         const std::int64_t id = p.coarser_ids[k - own];
         const auto [chunk_id, level] = p.coarser.at(id);
-        bytes = chunks_.upload_ahead(id, [&, chunk_id = chunk_id, level = level](std::int64_t) {
-          auto loaded = std::make_shared<Chunk>(*source_.load_lod(chunk_id, level));
-          loaded->id = id;
-          return std::shared_ptr<const Chunk>(std::move(loaded));
-        });
+        bytes = chunks_.upload_ahead(
+            id, [&, chunk_id = chunk_id, level = level](std::int64_t) { return level_as(source_, chunk_id, level, id); });
       }
       if (k < faces) p.bytes += bytes;
       ++p.next_item;
@@ -213,46 +224,25 @@ SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width
     // band wherever the eye is not at a sample point; the overlap with the
     // far field (which also reaches a shell inside the box) is resolved by
     // the depth test.
-    // Chunks of the store in the view frustum (near field, whole far chunks).
-    std::vector<ChunkRef> refs_in_view;  // by id
-    std::vector<std::int64_t> in_view;
-    if (options.near_field || (options.far_field && !cell.far_whole_ids.empty())) {
-      refs_in_view = chunk_refs_in_view(camera, source_);
-      std::sort(refs_in_view.begin(), refs_in_view.end(),
-                [](const ChunkRef& a, const ChunkRef& b) { return a.id < b.id; });
-      for (const ChunkRef& r : refs_in_view) in_view.push_back(r.id);
-    }
-    const auto visible = [&in_view](const std::vector<std::int64_t>& ids) { return ids_among(ids, in_view); };
-    const ChunkLoader load = [this](std::int64_t id) { return source_.load(id); };
     // What the cell draws of the store's chunks in view: its near field, and
     // its exact far geometry (pieces of chunks, whole chunks), frustum-culled
     // like the truth.
     const bool far_geometry = options.far_field && (!cell.far_pieces.empty() || !cell.far_whole_ids.empty());
-    std::vector<std::int64_t> near = options.near_field ? visible(cell.near_ids) : std::vector<std::int64_t>{};
-    std::vector<std::int64_t> pieces, whole;
-    if (far_geometry) {
-      for (const DecodedFarPiece& p : cell.far_pieces)
-        if (box_in_view(camera, p.bounds)) pieces.push_back(p.cache_id);
-      whole = visible(cell.far_whole_ids);
-    }
+    CellChunksInView drawn = cell_chunks_in_view(camera, cell, options.near_field, far_geometry);
     last_camera_ = camera, last_height_ = height, last_max_chunk_triangles_ = options.max_chunk_triangles;
     // Over the frame's budget: coarser store levels, drawn under their own cache ids.
-    const CoarserLevels coarser =
-        options.max_chunk_triangles > 0
-            ? coarser_levels(camera, height, cell, refs_in_view, options.max_chunk_triangles, near, pieces, whole)
-            : CoarserLevels{};
+    const CoarserLevels coarser = options.max_chunk_triangles > 0
+                                      ? coarser_levels(camera, height, cell, options.max_chunk_triangles, drawn)
+                                      : CoarserLevels{};
     const auto load_coarser = [&](std::int64_t id) -> std::shared_ptr<const Chunk> {
       const auto it = coarser.find(id);
-      if (it == coarser.end()) return nullptr;
-      auto level = std::make_shared<Chunk>(*source_.load_lod(it->second.first, it->second.second));
-      level->id = id;
-      return level;
+      return it == coarser.end() ? nullptr : level_as(source_, it->second.first, it->second.second, id);
     };
     const ChunkLoader load_chunk = [&](std::int64_t id) {
       if (auto level = load_coarser(id)) return level;
       return source_.load(id);
     };
-    if (!near.empty()) chunks_.draw(camera, Box3d{}, near, load_chunk);
+    if (!drawn.near.empty()) chunks_.draw(camera, Box3d{}, drawn.near, load_chunk);
     if (far_geometry) {
       const std::uint64_t drawn_before = chunks_.stats().triangles_drawn;
       const ChunkLoader load_piece = [&](std::int64_t cache_id) {
@@ -263,8 +253,8 @@ SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width
         // store's level loaded (shared by every cell drawing it: one cache id).
         return far_piece_chunk(*it, source_);
       };
-      chunks_.draw(camera, Box3d{}, pieces, load_piece);
-      if (!whole.empty()) chunks_.draw(camera, Box3d{}, whole, load_chunk);
+      chunks_.draw(camera, Box3d{}, drawn.pieces, load_piece);
+      if (!drawn.whole.empty()) chunks_.draw(camera, Box3d{}, drawn.whole, load_chunk);
       stats.far_geometry_triangles = chunks_.stats().triangles_drawn - drawn_before;
     }
     if (options.far_field) {
@@ -307,34 +297,42 @@ SceneFrameStats SceneDrawer::draw_impostor(const RenderCamera& camera, int width
   return finish(stats, before, start, width, height, out);
 }
 
+SceneDrawer::CellChunksInView SceneDrawer::cell_chunks_in_view(const RenderCamera& camera, const DecodedCell& cell,
+                                                               bool near_field, bool far_geometry) const {
+  CellChunksInView v;
+  if (near_field || (far_geometry && !cell.far_whole_ids.empty())) v.refs = chunk_refs_in_view(camera, source_);
+  if (near_field) v.near = ids_among(cell.near_ids, v.refs);
+  if (far_geometry) {
+    for (const DecodedFarPiece& p : cell.far_pieces)
+      if (box_in_view(camera, p.bounds)) v.pieces.push_back(p.cache_id);
+    v.whole = ids_among(cell.far_whole_ids, v.refs);
+  }
+  return v;
+}
+
 SceneDrawer::CoarserLevels SceneDrawer::coarser_levels(const RenderCamera& camera, int height,
-                                                      const DecodedCell& cell,
-                                                      const std::vector<ChunkRef>& refs_in_view,
-                                                      std::uint64_t max_triangles, std::vector<std::int64_t>& near,
-                                                      std::vector<std::int64_t>& pieces,
-                                                      std::vector<std::int64_t>& whole) const {
+                                                      const DecodedCell& cell, std::uint64_t max_triangles,
+                                                      CellChunksInView& drawn) const {
   std::vector<ChunkDrawItem> items;
   std::vector<std::int64_t*> ids;  // the list entry each item's id is in
   const auto add_chunks = [&](std::vector<std::int64_t>& list) {
-    for (std::int64_t& id : list) {
-      const auto it = std::lower_bound(refs_in_view.begin(), refs_in_view.end(), id,
-                                       [](const ChunkRef& r, std::int64_t v) { return r.id < v; });
-      if (it == refs_in_view.end() || it->id != id) continue;
-      items.push_back({id, 0, it->triangle_count, it->bounds});
-      ids.push_back(&id);
-    }
+    for (std::int64_t& id : list)
+      if (const ChunkRef* r = find_ref(drawn.refs, id)) {
+        items.push_back({id, 0, r->triangle_count, r->bounds});
+        ids.push_back(&id);
+      }
   };
-  add_chunks(near);
+  add_chunks(drawn.near);
   // The cell's pieces by cache id (pieces lists some of them, in the cell's order).
   std::size_t next = 0;
-  for (std::int64_t& id : pieces) {
+  for (std::int64_t& id : drawn.pieces) {
     while (next < cell.far_pieces.size() && cell.far_pieces[next].cache_id != id) ++next;
     if (next == cell.far_pieces.size()) throw std::logic_error("coarser_levels: a piece not of the cell, or out of order");
     const DecodedFarPiece& p = cell.far_pieces[next];
     items.push_back({p.chunk_id, p.level, far_piece_triangles(p, source_), p.bounds});
     ids.push_back(&id);
   }
-  add_chunks(whole);
+  add_chunks(drawn.whole);
   const double per_distance = (camera.tan_top - camera.tan_bottom) / double(std::max(height, 1));
   const std::vector<int> levels = levels_for_triangle_budget(items, source_, camera.eye, per_distance, max_triangles);
   CoarserLevels coarser;
@@ -348,15 +346,8 @@ SceneDrawer::CoarserLevels SceneDrawer::coarser_levels(const RenderCamera& camer
 
 SceneDrawer::CoarserLevels SceneDrawer::coarser_levels_ahead(const DecodedCell& cell) const {
   if (last_max_chunk_triangles_ == 0) return {};
-  std::vector<ChunkRef> refs = chunk_refs_in_view(last_camera_, source_);
-  std::sort(refs.begin(), refs.end(), [](const ChunkRef& a, const ChunkRef& b) { return a.id < b.id; });
-  std::vector<std::int64_t> in_view;
-  for (const ChunkRef& r : refs) in_view.push_back(r.id);
-  const auto visible = [&in_view](const std::vector<std::int64_t>& ids) { return ids_among(ids, in_view); };
-  std::vector<std::int64_t> near = visible(cell.near_ids), whole = visible(cell.far_whole_ids), pieces;
-  for (const DecodedFarPiece& p : cell.far_pieces)
-    if (box_in_view(last_camera_, p.bounds)) pieces.push_back(p.cache_id);
-  return coarser_levels(last_camera_, last_height_, cell, refs, last_max_chunk_triangles_, near, pieces, whole);
+  CellChunksInView drawn = cell_chunks_in_view(last_camera_, cell, true, true);
+  return coarser_levels(last_camera_, last_height_, cell, last_max_chunk_triangles_, drawn);
 }
 
 SceneFrameStats SceneDrawer::draw_truth(const RenderCamera& camera, int width, int height,
@@ -414,9 +405,7 @@ SceneFrameStats SceneDrawer::draw_lod_cut(const RenderCamera& camera, int width,
     chunks_.draw(camera, Box3d{}, ids, [&](std::int64_t id) {
       const auto it = level_of_id.find(id);
       if (it == level_of_id.end()) return source_.load(id);
-      auto level = std::make_shared<Chunk>(*source_.load_lod(it->second.first, it->second.second));
-      level->id = id;  // drawn and cached under its level's id
-      return std::shared_ptr<const Chunk>(std::move(level));
+      return level_as(source_, it->second.first, it->second.second, id);  // cached under its level's id
     });
   } catch (...) {
     set_wireframe(false);

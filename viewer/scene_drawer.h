@@ -142,15 +142,21 @@ class SceneDrawer {
   };
   // Chunk id -> (store chunk, level) of what a frame draws at a coarser level.
   using CoarserLevels = std::unordered_map<std::int64_t, std::pair<std::int64_t, int>>;
-  // draw_impostor over `max_triangles`: the `near` chunk ids, far `pieces`
-  // (cache ids) and `whole` far chunk ids in view that draw a coarser store
-  // level (viewer/chunk_level_budget.h) have their ids replaced by
-  // lod_cache_id, mapped here to what they draw. `refs_in_view` sorted by id;
-  // `pieces` in the order of cell.far_pieces.
+  // What draw_impostor draws of the store's chunks from `camera`: the chunks
+  // in view (by id), and of the cell's, the near chunks (with `near_field`),
+  // far pieces (cache ids, in the cell's order) and whole far chunks (with
+  // `far_geometry`) in view.
+  struct CellChunksInView {
+    std::vector<ChunkRef> refs;
+    std::vector<std::int64_t> near, pieces, whole;
+  };
+  CellChunksInView cell_chunks_in_view(const RenderCamera& camera, const DecodedCell& cell, bool near_field,
+                                       bool far_geometry) const;
+  // draw_impostor over `max_triangles`: the ids in `drawn` that draw a
+  // coarser store level (viewer/chunk_level_budget.h) are replaced by
+  // lod_cache_id, mapped here to what they draw.
   CoarserLevels coarser_levels(const RenderCamera& camera, int height, const DecodedCell& cell,
-                               const std::vector<ChunkRef>& refs_in_view, std::uint64_t max_triangles,
-                               std::vector<std::int64_t>& near, std::vector<std::int64_t>& pieces,
-                               std::vector<std::int64_t>& whole) const;
+                               std::uint64_t max_triangles, CellChunksInView& drawn) const;
   // A cell upload_some() has begun: its faces uploaded so far and the next item
   // (faces first, then near chunks, far pieces, whole far chunks).
   struct PartialCell {

@@ -55,6 +55,9 @@ struct Options {
   double frame_ms = 66;  // frame time aimed at while moving: chunks drawn at coarser levels to fit (0: as baked)
 };
 
+// The triangles a frame drew: chunks (near field, far geometry) and depth meshes.
+std::uint64_t drawn_triangles(const SceneFrameStats& s) { return s.chunk_triangles + s.far_triangles; }
+
 double elapsed_ms(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since).count();
 }
@@ -293,7 +296,7 @@ void ViewerSession::load_first_cell(const CellIndex& index) {
         const auto d = std::chrono::steady_clock::now();
         still_frames_ = 0;  // the same view each time, but budgeted like a walk's
         draw_scene(cell, std::max(fw, 1), std::max(fh, 1));
-        frame_budget_->add(elapsed_ms(d), info_.stats.chunk_triangles + info_.stats.far_triangles);
+        frame_budget_->add(elapsed_ms(d), drawn_triangles(info_.stats));
       }
     }
   std::printf("loading: first cell decoded and uploaded%s in %.1f ms\n",
@@ -534,7 +537,7 @@ void ViewerSession::log_frame(int frame_number, std::chrono::steady_clock::time_
   r.upload_ms = spent.milliseconds + info_.stats.prepare_milliseconds;
   r.upload_bytes = drawer_.uploaded_bytes() - uploaded_before;
   r.cache_bytes = in_.cache.stats().bytes;
-  r.triangles = info_.stats.chunk_triangles + info_.stats.far_triangles;
+  r.triangles = drawn_triangles(info_.stats);
   r.far_geometry_triangles = info_.stats.far_geometry_triangles;
   r.chunk_budget = chunk_budget_;
   log_.push_back(r);
@@ -581,7 +584,7 @@ void ViewerSession::run() {
     if (last_frame && !opt_.screenshot.empty()) save_screenshot(fw, fh);
     glfwSwapBuffers(window_);
     if (frame_budget_)
-      frame_budget_->add(elapsed_ms(frame_start), info_.stats.chunk_triangles + info_.stats.far_triangles);
+      frame_budget_->add(elapsed_ms(frame_start), drawn_triangles(info_.stats));
     if (in_.scripted) log_frame(frame_number, frame_start, cell, spent, uploaded_before);
     if (last_frame) break;
   }
